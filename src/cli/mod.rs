@@ -1,0 +1,8 @@
+//! Command-line front ends: one module per stage (clap args → typed config → library call →
+//! outputs), plus the conventions they share (exit codes, progress bars, error reporting).
+
+pub mod common;
+pub mod convert;
+pub mod envinput;
+pub mod sh_project;
+pub mod umbrella;

@@ -1,0 +1,29 @@
+//! The umbrella binary `prtkit <stage> …`: the same code as the stand-alone binaries.
+
+use super::common::run_stage;
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// prtkit bakes assets for real-time rendering and measures how accurate each bake is.
+#[derive(Debug, Parser)]
+#[command(name = "prtkit", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    stage: Stage,
+}
+
+#[derive(Debug, Subcommand)]
+enum Stage {
+    /// Resample an environment map into another layout.
+    Convert(super::convert::Args),
+    /// Project an environment map onto spherical harmonics.
+    ShProject(super::sh_project::Args),
+}
+
+/// Parses `prtkit <stage> …` and runs the stage.
+pub fn main() -> ExitCode {
+    match Cli::parse().stage {
+        Stage::Convert(args) => run_stage("convert", || super::convert::run(args)),
+        Stage::ShProject(args) => run_stage("sh-project", || super::sh_project::run(args)),
+    }
+}

@@ -1,0 +1,323 @@
+//! Environment-map parameterizations: per-texel direction and exact solid angle, lookup by
+//! direction, layout detection and resampling. Mappings to the +Z-up frame are documented in
+//! `docs/envmap-layouts.md`.
+
+mod cube;
+mod layout;
+mod probe;
+mod resample;
+
+pub use cube::{Face, FACES};
+pub use layout::Layout;
+pub use resample::resample;
+
+use crate::io::RgbImage;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Errors about environment-map geometry.
+#[derive(Debug, thiserror::Error)]
+pub enum EnvMapError {
+    /// The image size does not fit the requested or detected layout.
+    #[error("a {width}x{height} image cannot be a {layout} map: {reason}")]
+    BadSize {
+        /// Layout name.
+        layout: &'static str,
+        /// Width.
+        width: usize,
+        /// Height.
+        height: usize,
+        /// Why.
+        reason: String,
+    },
+    /// The aspect ratio matches no layout.
+    #[error("cannot tell the layout of a {width}x{height} image from its aspect ratio (2:1 lat-long, 1:1 angular probe, 4:3 or 3:4 cube cross); pass --layout")]
+    Undetectable {
+        /// Width.
+        width: usize,
+        /// Height.
+        height: usize,
+    },
+}
+
+/// An environment map: one image (or six cube faces) and its layout.
+#[derive(Clone, Debug)]
+pub struct EnvMap {
+    layout: Layout,
+    /// One image, or six faces in the order +X, −X, +Y, −Y, +Z, −Z for [`Layout::Faces`].
+    images: Vec<RgbImage>,
+}
+
+/// One texel: its direction (unit, +Z up), its exact solid angle and its radiance.
+#[derive(Clone, Copy, Debug)]
+pub struct Texel {
+    /// Unit direction of the texel centre.
+    pub dir: DVec3,
+    /// Solid angle covered by the texel (steradians).
+    pub solid_angle: f64,
+    /// Linear RGB radiance.
+    pub rgb: [f32; 3],
+}
+
+impl EnvMap {
+    /// Wraps one image in a layout (not [`Layout::Faces`]), checking its size.
+    pub fn new(layout: Layout, image: RgbImage) -> Result<Self, EnvMapError> {
+        layout.check_size(image.width, image.height)?;
+        if layout == Layout::Faces {
+            return Err(EnvMapError::BadSize {
+                layout: layout.name(),
+                width: image.width,
+                height: image.height,
+                reason: "six face images are needed".into(),
+            });
+        }
+        Ok(EnvMap { layout, images: vec![image] })
+    }
+
+    /// Wraps one image, detecting the layout from its aspect ratio.
+    pub fn detect(image: RgbImage) -> Result<Self, EnvMapError> {
+        let layout = Layout::detect(image.width, image.height)?;
+        EnvMap::new(layout, image)
+    }
+
+    /// Six square faces of equal size in the order +X, −X, +Y, −Y, +Z, −Z.
+    pub fn from_faces(faces: Vec<RgbImage>) -> Result<Self, EnvMapError> {
+        let n = faces.first().map(|f| f.width).unwrap_or(0);
+        if faces.len() != 6 || faces.iter().any(|f| f.width != n || f.height != n) || n == 0 {
+            let (w, h) = faces.first().map(|f| (f.width, f.height)).unwrap_or((0, 0));
+            return Err(EnvMapError::BadSize {
+                layout: "cube faces",
+                width: w,
+                height: h,
+                reason: "six square faces of one size are needed".into(),
+            });
+        }
+        Ok(EnvMap { layout: Layout::Faces, images: faces })
+    }
+
+    /// A lat-long map.
+    pub fn latlong(image: RgbImage) -> Result<Self, EnvMapError> {
+        EnvMap::new(Layout::LatLong, image)
+    }
+
+    /// The layout.
+    pub fn layout(&self) -> Layout {
+        self.layout
+    }
+
+    /// The image (the first face for [`Layout::Faces`]).
+    pub fn image(&self) -> &RgbImage {
+        &self.images[0]
+    }
+
+    /// All images (six for faces, one otherwise).
+    pub fn images(&self) -> &[RgbImage] {
+        &self.images
+    }
+
+    /// Mutable access to the pixels (same geometry).
+    pub fn images_mut(&mut self) -> &mut [RgbImage] {
+        &mut self.images
+    }
+
+    /// Number of texels with non-zero solid angle, roughly (all pixels of all images).
+    pub fn texel_count(&self) -> usize {
+        self.images.iter().map(|i| i.width * i.height).sum()
+    }
+
+    /// The highest SH order this map can resolve: √(N/2) for N texels (a lat-long W×H map
+    /// resolves l < H; (F+1)² coefficients need about as many samples, times the 2 of Nyquist).
+    pub fn max_order(&self) -> usize {
+        ((self.texel_count() as f64 / 2.0).sqrt().floor() as usize).max(1)
+    }
+
+    /// Direction and solid angle of pixel (x, y) of image `face` (0 for single-image layouts);
+    /// `None` outside the mapped area (the corners of an angular probe, the empty cells of a
+    /// cross).
+    pub fn texel_geometry(&self, face: usize, x: usize, y: usize) -> Option<(DVec3, f64)> {
+        let img = &self.images[face];
+        let (w, h) = (img.width, img.height);
+        match self.layout {
+            Layout::LatLong => Some(latlong_texel(w, h, x, y)),
+            Layout::Angular => probe::texel(w, x, y),
+            Layout::CrossHorizontal | Layout::CrossVertical => {
+                let n = self.layout.face_size(w, h);
+                let (face, fx, fy) = cube::cross_to_face(self.layout, n, x, y)?;
+                Some(cube::texel(face, n, fx, fy))
+            }
+            Layout::Faces => Some(cube::texel(FACES[face], w, x, y)),
+        }
+    }
+
+    /// Calls `f` for every mapped texel, image by image, row by row.
+    pub fn for_each_texel(&self, mut f: impl FnMut(Texel)) {
+        for (face, img) in self.images.iter().enumerate() {
+            for y in 0..img.height {
+                for x in 0..img.width {
+                    if let Some((dir, solid_angle)) = self.texel_geometry(face, x, y) {
+                        f(Texel { dir, solid_angle, rgb: img.get(x, y) });
+                    }
+                }
+            }
+        }
+    }
+
+    /// Rows of texels as independent units of work: (image index, row).
+    pub fn rows(&self) -> Vec<(usize, usize)> {
+        self.images.iter().enumerate().flat_map(|(f, img)| (0..img.height).map(move |y| (f, y))).collect()
+    }
+
+    /// Bilinearly filtered radiance in direction `dir` (need not be normalized).
+    pub fn lookup(&self, dir: DVec3) -> [f32; 3] {
+        let d = dir.normalize();
+        match self.layout {
+            Layout::LatLong => {
+                let img = &self.images[0];
+                let theta = d.z.clamp(-1.0, 1.0).acos();
+                let mut phi = d.y.atan2(d.x);
+                if phi < 0.0 {
+                    phi += 2.0 * PI;
+                }
+                let fx = phi / (2.0 * PI) * img.width as f64 - 0.5;
+                let fy = theta / PI * img.height as f64 - 0.5;
+                bilinear(img, fx, fy, true)
+            }
+            Layout::Angular => {
+                let img = &self.images[0];
+                let (fx, fy) = probe::pixel_of(img.width, d);
+                bilinear(img, fx, fy, false)
+            }
+            Layout::Faces | Layout::CrossHorizontal | Layout::CrossVertical => {
+                let (face, s, t) = cube::face_coords(d);
+                let n = match self.layout {
+                    Layout::Faces => self.images[0].width,
+                    _ => self.layout.face_size(self.images[0].width, self.images[0].height),
+                };
+                // Texel-centre coordinates within the face, clamped to the face (no seams
+                // filtering across faces; adequate for resampling with supersampling).
+                let fx = ((s + 1.0) * 0.5 * n as f64 - 0.5).clamp(0.0, n as f64 - 1.0);
+                let fy = ((t + 1.0) * 0.5 * n as f64 - 0.5).clamp(0.0, n as f64 - 1.0);
+                match self.layout {
+                    Layout::Faces => bilinear(&self.images[face.index()], fx, fy, false),
+                    _ => {
+                        let sample = |x: usize, y: usize| {
+                            let (cx, cy) = cube::face_to_cross(self.layout, n, face, x, y);
+                            self.images[0].get(cx, cy)
+                        };
+                        bilinear_with(n, n, fx, fy, false, sample)
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Lat-long texel (x, y) of a W×H map: centre direction and exact solid angle
+/// (2π/W)(cos θ_top − cos θ_bottom).
+pub fn latlong_texel(width: usize, height: usize, x: usize, y: usize) -> (DVec3, f64) {
+    let theta = PI * (y as f64 + 0.5) / height as f64;
+    let phi = 2.0 * PI * (x as f64 + 0.5) / width as f64;
+    (crate::sh::basis::direction(theta, phi), latlong_row_solid_angle(width, height, y))
+}
+
+/// Solid angle of one texel in row `y` of a W×H lat-long map.
+pub fn latlong_row_solid_angle(width: usize, height: usize, y: usize) -> f64 {
+    let t0 = PI * y as f64 / height as f64;
+    let t1 = PI * (y + 1) as f64 / height as f64;
+    2.0 * PI / width as f64 * (t0.cos() - t1.cos())
+}
+
+fn bilinear(img: &RgbImage, fx: f64, fy: f64, wrap_x: bool) -> [f32; 3] {
+    bilinear_with(img.width, img.height, fx, fy, wrap_x, |x, y| img.get(x, y))
+}
+
+fn bilinear_with(
+    width: usize,
+    height: usize,
+    fx: f64,
+    fy: f64,
+    wrap_x: bool,
+    sample: impl Fn(usize, usize) -> [f32; 3],
+) -> [f32; 3] {
+    let fy = fy.clamp(0.0, height as f64 - 1.0);
+    let y0 = fy.floor() as usize;
+    let y1 = (y0 + 1).min(height - 1);
+    let ty = (fy - y0 as f64) as f32;
+    let (x0, x1, tx) = if wrap_x {
+        let fl = fx.floor();
+        let tx = (fx - fl) as f32;
+        let x0 = (fl as isize).rem_euclid(width as isize) as usize;
+        (x0, (x0 + 1) % width, tx)
+    } else {
+        let fx = fx.clamp(0.0, width as f64 - 1.0);
+        let x0 = fx.floor() as usize;
+        (x0, (x0 + 1).min(width - 1), (fx - x0 as f64) as f32)
+    };
+    let (a, b, c, d) = (sample(x0, y0), sample(x1, y0), sample(x0, y1), sample(x1, y1));
+    let mut out = [0.0; 3];
+    for k in 0..3 {
+        let top = a[k] + (b[k] - a[k]) * tx;
+        let bottom = c[k] + (d[k] - c[k]) * tx;
+        out[k] = top + (bottom - top) * ty;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn total_solid_angle(map: &EnvMap) -> f64 {
+        let mut s = 0.0;
+        map.for_each_texel(|t| s += t.solid_angle);
+        s
+    }
+
+    #[test]
+    fn solid_angles_sum_to_the_sphere() {
+        let ll = EnvMap::latlong(RgbImage::new(64, 32)).unwrap();
+        assert!((total_solid_angle(&ll) - 4.0 * PI).abs() < 1e-12);
+        let faces = EnvMap::from_faces((0..6).map(|_| RgbImage::new(16, 16)).collect()).unwrap();
+        assert!((total_solid_angle(&faces) - 4.0 * PI).abs() < 1e-12);
+        let cross = EnvMap::new(Layout::CrossHorizontal, RgbImage::new(64, 48)).unwrap();
+        assert!((total_solid_angle(&cross) - 4.0 * PI).abs() < 1e-12);
+        let vcross = EnvMap::new(Layout::CrossVertical, RgbImage::new(48, 64)).unwrap();
+        assert!((total_solid_angle(&vcross) - 4.0 * PI).abs() < 1e-12);
+        let probe = EnvMap::new(Layout::Angular, RgbImage::new(256, 256)).unwrap();
+        assert!((total_solid_angle(&probe) - 4.0 * PI).abs() < 1e-4, "{}", total_solid_angle(&probe));
+    }
+
+    #[test]
+    fn lookup_inverts_texel_directions() {
+        // Each texel's centre direction must look up that texel's own value, in every layout.
+        let layouts = [
+            EnvMap::latlong(RgbImage::from_fn(32, 16, |x, y| [x as f32, y as f32, 0.0])).unwrap(),
+            EnvMap::new(Layout::Angular, RgbImage::from_fn(32, 32, |x, y| [x as f32, y as f32, 0.0])).unwrap(),
+            EnvMap::new(Layout::CrossHorizontal, RgbImage::from_fn(32, 24, |x, y| [x as f32, y as f32, 0.0])).unwrap(),
+            EnvMap::new(Layout::CrossVertical, RgbImage::from_fn(24, 32, |x, y| [x as f32, y as f32, 0.0])).unwrap(),
+            EnvMap::from_faces(
+                (0..6).map(|f| RgbImage::from_fn(8, 8, |x, y| [x as f32, y as f32, f as f32])).collect(),
+            )
+            .unwrap(),
+        ];
+        for map in &layouts {
+            for (face, img) in map.images().iter().enumerate() {
+                for y in 0..img.height {
+                    for x in 0..img.width {
+                        if let Some((dir, _)) = map.texel_geometry(face, x, y) {
+                            let got = map.lookup(dir);
+                            let want = img.get(x, y);
+                            for k in 0..3 {
+                                assert!(
+                                    (got[k] - want[k]).abs() < 1e-3,
+                                    "{:?} ({x},{y}): {got:?} vs {want:?}",
+                                    map.layout()
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

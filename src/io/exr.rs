@@ -1,0 +1,168 @@
+//! OpenEXR reading (half/float/uint, RGB/RGBA/Y, scanline or tiled, any compression — via the
+//! `exr` crate) and float writing with several named RGB layers in one file.
+//!
+//! Layers follow the usual EXR naming: channels `R`, `G`, `B` form the unnamed layer, channels
+//! `name.R`, `name.G`, `name.B` the layer `name`; in multi-part files the part name is a prefix.
+
+use super::{IoError, RgbImage};
+use exr::prelude::{
+    read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, ReadChannels, ReadLayers,
+    WritableImage,
+};
+use std::io::Cursor;
+use std::path::Path;
+
+const FORMAT: &str = "OpenEXR";
+
+/// Decodes the main RGB layer of an EXR file: the unnamed layer if there is one, else the first.
+/// A file with only `Y` (or a single channel) is read as grey.
+pub fn decode(path: &Path, bytes: &[u8]) -> Result<RgbImage, IoError> {
+    let mut layers = decode_layers(path, bytes)?;
+    let index = layers.iter().position(|(name, _)| name.is_empty()).unwrap_or(0);
+    Ok(layers.swap_remove(index).1)
+}
+
+/// Decodes every RGB (or grey) layer in an EXR file as `(name, image)`, in file order.
+pub fn decode_layers(path: &Path, bytes: &[u8]) -> Result<Vec<(String, RgbImage)>, IoError> {
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .non_parallel()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| match e {
+            exr::error::Error::NotSupported(what) => IoError::unsupported(path, FORMAT, what.to_string()),
+            other => IoError::invalid(path, FORMAT, other.to_string()),
+        })?;
+
+    let mut out: Vec<(String, RgbImage)> = Vec::new();
+    for layer in &image.layer_data {
+        let (width, height) = (layer.size.0, layer.size.1);
+        let part = layer.attributes.layer_name.as_ref().map(|t| t.to_string()).unwrap_or_default();
+        // Group this part's channels by prefix (text before the last '.').
+        let mut groups: Vec<(String, [Option<&FlatSamples>; 4])> = Vec::new();
+        for channel in &layer.channel_data.list {
+            let name = channel.name.to_string();
+            let (prefix, base) = match name.rfind('.') {
+                Some(i) => (name[..i].to_string(), name[i + 1..].to_string()),
+                None => (String::new(), name.clone()),
+            };
+            let slot = match base.to_ascii_uppercase().as_str() {
+                "R" => 0,
+                "G" => 1,
+                "B" => 2,
+                "Y" => 3,
+                _ => continue,
+            };
+            let full = match (part.is_empty(), prefix.is_empty()) {
+                (true, _) => prefix,
+                (false, true) => part.clone(),
+                (false, false) => format!("{part}.{prefix}"),
+            };
+            match groups.iter_mut().find(|(n, _)| *n == full) {
+                Some((_, slots)) => slots[slot] = Some(&channel.sample_data),
+                None => {
+                    let mut slots = [None; 4];
+                    slots[slot] = Some(&channel.sample_data);
+                    groups.push((full, slots));
+                }
+            }
+        }
+        if groups.is_empty() && layer.channel_data.list.len() == 1 {
+            groups.push((part.clone(), [None, None, None, Some(&layer.channel_data.list[0].sample_data)]));
+        }
+        for (name, slots) in groups {
+            let to_vec = |s: &FlatSamples| -> Vec<f32> { s.values_as_f32().collect() };
+            let planes: [Vec<f32>; 3] = match slots {
+                [Some(r), Some(g), Some(b), _] => [to_vec(r), to_vec(g), to_vec(b)],
+                [_, _, _, Some(y)] => {
+                    let y = to_vec(y);
+                    [y.clone(), y.clone(), y]
+                }
+                _ => continue, // an incomplete colour layer (e.g. only R): not an RGB image
+            };
+            if planes.iter().any(|p| p.len() != width * height) {
+                return Err(IoError::invalid(path, FORMAT, "channel sizes do not match the data window"));
+            }
+            let pixels = (0..width * height).map(|i| [planes[0][i], planes[1][i], planes[2][i]]).collect();
+            out.push((name, RgbImage { width, height, pixels }));
+        }
+    }
+    if out.is_empty() {
+        return Err(IoError::unsupported(path, FORMAT, "no R,G,B or Y channels found"));
+    }
+    Ok(out)
+}
+
+/// Encodes float RGB layers of equal size into one EXR (ZIP-compressed, single part). The layer
+/// named `""` gets the plain channel names `R`, `G`, `B`.
+pub fn encode_layers(layers: &[(&str, &RgbImage)]) -> Result<Vec<u8>, String> {
+    let first = layers.first().ok_or("no layers to write")?.1;
+    let (width, height) = (first.width, first.height);
+    let mut channels = Vec::with_capacity(layers.len() * 3);
+    for (name, image) in layers {
+        if (image.width, image.height) != (width, height) {
+            return Err(format!("layer {name:?} is {}x{}, expected {width}x{height}", image.width, image.height));
+        }
+        for (c, letter) in ["R", "G", "B"].iter().enumerate() {
+            let samples: Vec<f32> = image.pixels.iter().map(|p| p[c]).collect();
+            let channel_name = if name.is_empty() { letter.to_string() } else { format!("{name}.{letter}") };
+            let text = exr::prelude::Text::new_or_none(&channel_name)
+                .ok_or_else(|| format!("layer name {name:?} cannot be stored in EXR"))?;
+            channels.push(AnyChannel::new(text, FlatSamples::F32(samples)));
+        }
+    }
+    let layer = Layer::new(
+        (width, height),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    let image = Image::from_layer(layer);
+    let mut bytes = Vec::new();
+    image.write().non_parallel().to_buffered(Cursor::new(&mut bytes)).map_err(|e| e.to_string())?;
+    Ok(bytes)
+}
+
+/// Writes one float RGB image as EXR, atomically.
+pub fn write_rgb(path: &Path, image: &RgbImage) -> Result<(), IoError> {
+    write_layers(path, &[("", image)])
+}
+
+/// Writes several named RGB layers as one EXR, atomically.
+pub fn write_layers(path: &Path, layers: &[(&str, &RgbImage)]) -> Result<(), IoError> {
+    let bytes = encode_layers(layers).map_err(|e| IoError::invalid(path, FORMAT, e))?;
+    super::write_atomic(path, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layers_round_trip_bit_exactly() {
+        let a = RgbImage::from_fn(5, 3, |x, y| [x as f32 * 0.25, y as f32, 1e-7]);
+        let b = RgbImage::from_fn(5, 3, |x, y| [-(x as f32), 3.5e4, (x + y) as f32]);
+        let bytes = encode_layers(&[("", &a), ("coef.7", &b)]).unwrap();
+        let layers = decode_layers(Path::new("t.exr"), &bytes).unwrap();
+        assert_eq!(layers.len(), 2);
+        let find = |n: &str| &layers.iter().find(|(name, _)| name == n).unwrap().1;
+        assert_eq!(find(""), &a);
+        assert_eq!(find("coef.7"), &b);
+        assert_eq!(decode(Path::new("t.exr"), &bytes).unwrap(), a);
+    }
+
+    #[test]
+    fn encoding_is_deterministic() {
+        let a = RgbImage::from_fn(64, 64, |x, y| [(x * y) as f32 * 0.1, x as f32, y as f32]);
+        assert_eq!(encode_layers(&[("", &a)]).unwrap(), encode_layers(&[("", &a)]).unwrap());
+    }
+
+    #[test]
+    fn garbage_is_an_error_naming_the_file() {
+        let err = decode(Path::new("bad.exr"), b"not an exr file at all").unwrap_err().to_string();
+        assert!(err.contains("bad.exr"), "{err}");
+    }
+}

@@ -1,0 +1,102 @@
+//! The in-memory HDR image every stage passes around, and reading by file extension.
+
+use super::IoError;
+use std::path::Path;
+
+/// A linear RGB float image, row-major, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// `width * height` pixels, row by row from the top.
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl RgbImage {
+    /// A black image.
+    pub fn new(width: usize, height: usize) -> Self {
+        RgbImage { width, height, pixels: vec![[0.0; 3]; width * height] }
+    }
+
+    /// Builds an image from a per-pixel function of (column, row).
+    pub fn from_fn(width: usize, height: usize, f: impl Fn(usize, usize) -> [f32; 3]) -> Self {
+        let mut pixels = Vec::with_capacity(width * height);
+        for y in 0..height {
+            for x in 0..width {
+                pixels.push(f(x, y));
+            }
+        }
+        RgbImage { width, height, pixels }
+    }
+
+    /// The pixel at column `x`, row `y`.
+    #[inline]
+    pub fn get(&self, x: usize, y: usize) -> [f32; 3] {
+        self.pixels[y * self.width + x]
+    }
+
+    /// Sets the pixel at column `x`, row `y`.
+    #[inline]
+    pub fn set(&mut self, x: usize, y: usize, v: [f32; 3]) {
+        self.pixels[y * self.width + x] = v;
+    }
+
+    /// One row of pixels.
+    pub fn row(&self, y: usize) -> &[[f32; 3]] {
+        &self.pixels[y * self.width..(y + 1) * self.width]
+    }
+}
+
+/// Image file formats prtkit reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// OpenEXR.
+    Exr,
+    /// Radiance RGBE (`.hdr`, `.pic`).
+    Rgbe,
+    /// Portable float map.
+    Pfm,
+}
+
+impl ImageFormat {
+    /// The format named by a file's extension.
+    pub fn from_path(path: &Path) -> Option<ImageFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "exr" => Some(ImageFormat::Exr),
+            "hdr" | "pic" | "rgbe" => Some(ImageFormat::Rgbe),
+            "pfm" => Some(ImageFormat::Pfm),
+            _ => None,
+        }
+    }
+}
+
+/// Reads an HDR image (EXR, Radiance `.hdr`, PFM), chosen by extension.
+pub fn read_image(path: &Path) -> Result<RgbImage, IoError> {
+    let format =
+        ImageFormat::from_path(path).ok_or_else(|| IoError::UnknownFormat { path: path.to_path_buf(), extra: "" })?;
+    let bytes = super::read_bytes(path)?;
+    let image = match format {
+        ImageFormat::Exr => super::exr::decode(path, &bytes)?,
+        ImageFormat::Rgbe => super::rgbe::decode(path, &bytes)?,
+        ImageFormat::Pfm => super::pfm::decode(path, &bytes)?,
+    };
+    if image.width == 0 || image.height == 0 {
+        return Err(IoError::invalid(path, "image", "the image is empty (zero width or height)"));
+    }
+    Ok(image)
+}
+
+/// Writes an image by extension: `.exr` (float), `.pfm`, or `.png` (tone-mapped with `exposure`
+/// stops and the sRGB curve).
+pub fn write_image(path: &Path, image: &RgbImage, exposure: f32) -> Result<(), IoError> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("exr") => super::exr::write_rgb(path, image),
+        Some("pfm") => super::write_atomic(path, &super::pfm::encode(image)),
+        Some("png") => super::png::write_tonemapped(path, image, exposure),
+        _ => Err(IoError::UnknownFormat { path: path.to_path_buf(), extra: ", .png" }),
+    }
+}

@@ -1,0 +1,75 @@
+//! File formats: HDR images (OpenEXR, Radiance `.hdr`, PFM), tone-mapped PNG, JSON documents,
+//! and atomic writes. Everything that touches a file format lives here, once.
+
+pub mod atomic;
+pub mod document;
+pub mod exr;
+pub mod image;
+pub mod pfm;
+pub mod png;
+pub mod rgbe;
+
+pub use self::image::{ImageFormat, RgbImage};
+pub use atomic::{write_atomic, Output};
+pub use document::{Document, Provenance};
+
+use std::path::{Path, PathBuf};
+
+/// Errors from reading or writing files. Each variant is a kind of cause; every one names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
+    /// The operating system refused (missing file, permissions, disk full…).
+    #[error("{path}: {source}")]
+    Os {
+        /// The file involved.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The bytes are not a valid file of the expected format (truncated, garbled).
+    #[error("{path}: invalid {format} file: {reason}")]
+    Invalid {
+        /// The file involved.
+        path: PathBuf,
+        /// Format name, e.g. "OpenEXR".
+        format: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A valid file that uses a feature prtkit does not read.
+    #[error("{path}: unsupported {format} file: {reason}")]
+    Unsupported {
+        /// The file involved.
+        path: PathBuf,
+        /// Format name.
+        format: &'static str,
+        /// What is not supported.
+        reason: String,
+    },
+    /// The file name does not say which format to use.
+    #[error("{path}: unknown image format (expected .exr, .hdr, .pfm{extra})")]
+    UnknownFormat {
+        /// The file involved.
+        path: PathBuf,
+        /// Extra accepted extensions for the message.
+        extra: &'static str,
+    },
+}
+
+impl IoError {
+    pub(crate) fn os(path: &Path, source: std::io::Error) -> Self {
+        IoError::Os { path: path.to_path_buf(), source }
+    }
+    pub(crate) fn invalid(path: &Path, format: &'static str, reason: impl Into<String>) -> Self {
+        IoError::Invalid { path: path.to_path_buf(), format, reason: reason.into() }
+    }
+    pub(crate) fn unsupported(path: &Path, format: &'static str, reason: impl Into<String>) -> Self {
+        IoError::Unsupported { path: path.to_path_buf(), format, reason: reason.into() }
+    }
+}
+
+/// Reads a whole file, naming it in the error.
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, IoError> {
+    std::fs::read(path).map_err(|e| IoError::os(path, e))
+}
