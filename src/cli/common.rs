@@ -98,3 +98,14 @@ pub fn parse_size(s: &str) -> Result<(usize, usize), String> {
     }
     Ok((w, h))
 }
+
+/// Sets the size of rayon's global pool (`--threads`); results never depend on it.
+pub fn init_threads(threads: Option<usize>) -> anyhow::Result<()> {
+    if let Some(n) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+            .map_err(|e| anyhow::anyhow!("cannot start {n} threads: {e}"))?;
+    }
+    Ok(())
+}

@@ -30,7 +30,6 @@ pub fn decode_layers(path: &Path, bytes: &[u8]) -> Result<Vec<(String, RgbImage)
         .all_channels()
         .all_layers()
         .all_attributes()
-        .non_parallel()
         .from_buffered(Cursor::new(bytes))
         .map_err(|e| match e {
             exr::error::Error::NotSupported(what) => IoError::unsupported(path, FORMAT, what.to_string()),

@@ -13,6 +13,7 @@
 pub mod basis;
 pub mod coeffs;
 pub mod convolve;
+pub mod document;
 pub mod legendre;
 pub mod project;
 pub mod rotate;

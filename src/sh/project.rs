@@ -205,3 +205,92 @@ pub fn map_energy(map: &EnvMap) -> f64 {
         .collect();
     blocks.iter().sum()
 }
+
+/// How to choose the order of a projection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum OrderChoice {
+    /// Exactly this order.
+    Order(usize),
+    /// The smallest order capturing 1 − ε of the map's energy (R&H 2002 §5.1), searched up to
+    /// `max_search`.
+    Epsilon {
+        /// Tolerance ε ∈ (0, 1).
+        epsilon: f64,
+        /// Highest order considered.
+        max_search: usize,
+    },
+}
+
+/// A projection and how its order was chosen.
+#[derive(Clone, Debug)]
+pub struct Projection {
+    /// The coefficients (bands 0..=order).
+    pub coeffs: ShCoeffs,
+    /// ∫ |L|² dΩ over RGB.
+    pub total_energy: f64,
+    /// 1 − captured/total.
+    pub epsilon_achieved: f64,
+}
+
+/// Errors of order selection.
+#[derive(Debug, thiserror::Error)]
+pub enum SelectError {
+    /// Projection failed.
+    #[error(transparent)]
+    Project(#[from] ProjectError),
+    /// ε is not in (0, 1).
+    #[error("epsilon must be in (0, 1), got {0}")]
+    BadEpsilon(f64),
+    /// No order up to the limit reaches the tolerance.
+    #[error("no order up to {max} captures 1 - {epsilon} of the energy (order {max} leaves {achieved:.3e}); the map needs more resolution or a larger epsilon")]
+    Unreachable {
+        /// Requested ε.
+        epsilon: f64,
+        /// Highest order tried.
+        max: usize,
+        /// Residual at that order.
+        achieved: f64,
+    },
+}
+
+/// Projects `map`, choosing the order as asked.
+pub fn project_choosing_order(
+    map: &EnvMap,
+    choice: OrderChoice,
+    progress: &dyn Progress,
+) -> Result<Projection, SelectError> {
+    let total_energy = map_energy(map);
+    let residual = |c: &ShCoeffs| {
+        if total_energy > 0.0 {
+            (1.0 - c.band_energy().iter().sum::<f64>() / total_energy).max(0.0)
+        } else {
+            0.0
+        }
+    };
+    match choice {
+        OrderChoice::Order(order) => {
+            let coeffs = project(map, order, progress)?;
+            let epsilon_achieved = residual(&coeffs);
+            Ok(Projection { coeffs, total_energy, epsilon_achieved })
+        }
+        OrderChoice::Epsilon { epsilon, max_search } => {
+            if !(epsilon > 0.0 && epsilon < 1.0) {
+                return Err(SelectError::BadEpsilon(epsilon));
+            }
+            let img = map.image();
+            let mut limit = max_search.min(map.max_order());
+            if map.layout() == Layout::LatLong {
+                limit = limit.min(img.width / 2);
+            }
+            let full = project(map, limit, progress)?;
+            match full.order_for_epsilon(epsilon, total_energy) {
+                Some(order) => {
+                    let coeffs = full.truncated(order);
+                    let epsilon_achieved = residual(&coeffs);
+                    Ok(Projection { coeffs, total_energy, epsilon_achieved })
+                }
+                None => Err(SelectError::Unreachable { epsilon, max: limit, achieved: residual(&full) }),
+            }
+        }
+    }
+}
