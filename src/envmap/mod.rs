@@ -9,6 +9,7 @@ mod resample;
 
 pub use cube::{Face, FACES};
 pub use layout::Layout;
+pub use probe::WORLD_FROM_PROBE;
 pub use resample::resample;
 
 use crate::io::RgbImage;
