@@ -6,5 +6,7 @@
 pub mod cli;
 pub mod envmap;
 pub mod io;
+pub mod prefilter;
 pub mod progress;
+pub mod quadrature;
 pub mod sh;

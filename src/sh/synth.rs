@@ -41,6 +41,54 @@ pub fn eval(coeffs: &ShCoeffs, table: &LegendreTable, dir: DVec3, scratch: &mut 
     out
 }
 
+/// Synthesizes one lat-long row f(φ_x) = a_0 + Σ_{m≥1} a_m cos(mφ_x) + b_m sin(mφ_x) at the
+/// texel centres φ_x = 2π(x+½)/W with one inverse real FFT: the shared last step of every
+/// lat-long synthesis (SH maps here, SHRMs in `prefilter`).
+pub struct RowSynth {
+    width: usize,
+    ifft: std::sync::Arc<dyn realfft::ComplexToReal<f64>>,
+}
+
+impl RowSynth {
+    /// A synthesizer for rows of `width` texels.
+    pub fn new(width: usize) -> Self {
+        RowSynth { width, ifft: RealFftPlanner::<f64>::new().plan_fft_inverse(width) }
+    }
+
+    /// The highest frequency a row can hold (W/2).
+    pub fn max_frequency(&self) -> usize {
+        self.width / 2
+    }
+
+    /// Scratch buffers for [`RowSynth::synth`]: (spectrum, samples, fft scratch).
+    pub fn buffers(&self) -> (Vec<Complex<f64>>, Vec<f64>, Vec<Complex<f64>>) {
+        (self.ifft.make_input_vec(), self.ifft.make_output_vec(), self.ifft.make_scratch_vec())
+    }
+
+    /// Writes f(φ_x) into `samples` (length W) from `a[m]`, `b[m]` for m < a.len() ≤ W/2 + 1
+    /// (`b[0]` is ignored).
+    pub fn synth(&self, a: &[f64], b: &[f64], buffers: &mut (Vec<Complex<f64>>, Vec<f64>, Vec<Complex<f64>>)) {
+        let (spectrum, samples, scratch) = buffers;
+        let w = self.width;
+        spectrum.iter_mut().for_each(|z| *z = Complex::new(0.0, 0.0));
+        for m in 0..a.len().min(w / 2 + 1) {
+            spectrum[m] = if m == 0 {
+                Complex::new(a[0], 0.0)
+            } else if 2 * m == w {
+                // Nyquist: at φ_x = 2π(x+½)/W, cos(mφ_x) = 0 and sin(mφ_x) = (−1)^x.
+                Complex::new(b[m], 0.0)
+            } else {
+                // f = Re Σ_m (a_m − i b_m) e^{imφ}; the inverse FFT sums X_m e^{2πimx/W} over
+                // ±m, i.e. 2 Re(X_m e^{…}), and the half-texel shift is the phase e^{iπm/W}.
+                let (s, c) = (PI * m as f64 / w as f64).sin_cos();
+                Complex::new(a[m], -b[m]) * Complex::new(c, s) * 0.5
+            };
+        }
+        // The DC and Nyquist bins are real by construction, so this cannot fail.
+        let _ = self.ifft.process_with_scratch(spectrum, samples, scratch);
+    }
+}
+
 /// Renders the coefficients into a `width`×`height` lat-long image (texel centres).
 pub fn synthesize_latlong(coeffs: &ShCoeffs, width: usize, height: usize) -> Result<RgbImage, SynthError> {
     let order = coeffs.order;
@@ -48,46 +96,32 @@ pub fn synthesize_latlong(coeffs: &ShCoeffs, width: usize, height: usize) -> Res
         return Err(SynthError::TooNarrow { order, width, need: 2 * order });
     }
     let table = LegendreTable::new(order);
-    let ifft = RealFftPlanner::<f64>::new().plan_fft_inverse(width);
+    let rows = RowSynth::new(width);
     let mut image = RgbImage::new(width, height);
     image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
         let theta = PI * (y as f64 + 0.5) / height as f64;
         let (st, ct) = theta.sin_cos();
         let mut plm = vec![0.0; count(order)];
         table.eval(ct, st, &mut plm);
-        let mut spectrum = ifft.make_input_vec();
-        let mut samples = ifft.make_output_vec();
-        let mut scratch = ifft.make_scratch_vec();
+        let mut buffers = rows.buffers();
+        let (mut a, mut b) = (vec![0.0; order + 1], vec![0.0; order + 1]);
         for c in 0..3 {
-            spectrum.iter_mut().for_each(|z| *z = Complex::new(0.0, 0.0));
             for m in 0..=order {
-                // f(φ) = a_0 + Σ_m a_m cos(mφ) + b_m sin(mφ) = Re Σ_m (a_m − i b_m) e^{imφ}.
-                let (mut a, mut b) = (0.0, 0.0);
+                // a_m(θ) = Σ_l L_lm √2 P̄_l^m(cos θ), b_m likewise with L_l,−m (m = 0: no √2).
+                let (mut am, mut bm) = (0.0, 0.0);
+                let scale = if m == 0 { 1.0 } else { SQRT_2 };
                 for l in m..=order {
-                    let p = plm[index(l, m as isize)];
-                    if m == 0 {
-                        a += coeffs.rgb[index(l, 0)][c] * p;
-                    } else {
-                        a += coeffs.rgb[index(l, m as isize)][c] * p * SQRT_2;
-                        b += coeffs.rgb[index(l, -(m as isize))][c] * p * SQRT_2;
+                    let p = plm[index(l, m as isize)] * scale;
+                    am += coeffs.rgb[index(l, m as isize)][c] * p;
+                    if m > 0 {
+                        bm += coeffs.rgb[index(l, -(m as isize))][c] * p;
                     }
                 }
-                if m == 0 {
-                    spectrum[0] = Complex::new(a, 0.0);
-                } else if 2 * m == width {
-                    // Nyquist: at φ_x = 2π(x+½)/W, cos(mφ_x) = 0 and sin(mφ_x) = (−1)^x.
-                    spectrum[m] = Complex::new(b, 0.0);
-                } else {
-                    // The inverse FFT sums X_m e^{2πimx/W} over ±m, i.e. 2 Re(X_m e^{…}); the
-                    // half-texel shift of the samples is the phase e^{iπm/W}.
-                    let (s, co) = (PI * m as f64 / width as f64).sin_cos();
-                    let z = Complex::new(a, -b) * Complex::new(co, s) * 0.5;
-                    spectrum[m] = z;
-                }
+                a[m] = am;
+                b[m] = bm;
             }
-            // The spectrum's DC and Nyquist bins are real by construction.
-            let _ = ifft.process_with_scratch(&mut spectrum, &mut samples, &mut scratch);
-            for (px, v) in row.iter_mut().zip(&samples) {
+            rows.synth(&a, &b, &mut buffers);
+            for (px, v) in row.iter_mut().zip(&buffers.1) {
                 px[c] = *v as f32;
             }
         }

@@ -1,0 +1,6 @@
+//! Frequency-space prefiltering and spherical harmonic reflection maps (Ramamoorthi & Hanrahan
+//! 2002), with the angular-domain reference. `docs/prefilter.md` has the derivations.
+
+pub mod angular;
+pub mod brdf_sh;
+pub mod shrm;

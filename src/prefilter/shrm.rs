@@ -1,0 +1,295 @@
+//! Spherical harmonic reflection maps (Ramamoorthi & Hanrahan 2002, §4, App. C steps 2–3).
+//!
+//! A local SHRM stores, for each reflection vector R = (α, β), the coefficients B_pq(α, β) of the
+//! outgoing radiance as a function of the local view direction ω_o (eq. 6). The local frame of R
+//! is R_{α,β} = R_z(β)·R_y(α): +Z along R, +X along ∂R/∂α (towards larger θ), +Y along ∂R/∂β.
+//! With the lighting seen from that frame, L∘R_{α,β}, whose coefficients are
+//! M(R_y(−α))·M(R_z(−β))·L, the convolution (eq. 5, App. A) gives
+//!
+//!   B_pq(α, β) = Σ_l ρ̂_{lp|q|} [M(R_{α,β}⁻¹) L]_lq
+//!              = Σ_{m ≥ 0} a_{pq,m}(α) cos(mβ) + b_{pq,m}(α) sin(mβ)           (App. C step 3)
+//!
+//! where R_y preserves the parity of real SH in y, so for q ≥ 0 (d = M^l(R_y(−α)))
+//!   a_{pq,m} = Σ_l ρ̂ d_{q,m} L_{l,m},  b_{pq,m} = Σ_l ρ̂ d_{q,m} L_{l,−m},
+//! and for q < 0
+//!   a_{pq,m} = Σ_l ρ̂ d_{q,−m} L_{l,−m}, b_{pq,m} = −Σ_l ρ̂ d_{q,−m} L_{l,m}.
+//! The first sum costs O(F²P²) per row of α, the β-synthesis one inverse FFT per (p, q, row):
+//! O(F P² S²) in all, as in the paper. The Λ_l of eq. 5 is absorbed by the rotation matrices
+//! (D^l_{m0} = Λ_l Y_lm), exactly as the paper's App. A redefinition B_lmpq = L_lm ρ̂_lpq does.
+
+use super::brdf_sh::BrdfSh;
+use crate::io::RgbImage;
+use crate::progress::Progress;
+use crate::sh::rotate::ShRotation;
+use crate::sh::synth::RowSynth;
+use crate::sh::{count, index, ShCoeffs};
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// An SHRM on a W×H lat-long grid of reflection vectors: (P+1)² RGB layers B_pq, index p(p+1)+q.
+#[derive(Clone, Debug)]
+pub struct Shrm {
+    /// Order F_B of the lighting/BRDF expansion in l.
+    pub f_b: usize,
+    /// Order P_B of the view expansion.
+    pub p_b: usize,
+    /// `true` for a global SHRM (view coefficients in world axes, eq. 7–8).
+    pub global: bool,
+    /// The layers, each a lat-long image indexed by the reflection vector (α = θ, β = φ).
+    pub layers: Vec<RgbImage>,
+}
+
+/// Errors of SHRM synthesis.
+#[derive(Debug, thiserror::Error)]
+pub enum ShrmError {
+    /// The lighting was projected to a lower order than F_B.
+    #[error("the lighting has order {have}, the SHRM needs F_B = {need}")]
+    LightingOrder {
+        /// Order available.
+        have: usize,
+        /// Order needed.
+        need: usize,
+    },
+    /// The output grid cannot hold F_B.
+    #[error("a {width}-texel-wide reflection map cannot hold order F_B = {f_b}: use at least {need} (S_B ≈ 10 F_B is the paper's rule, §5.2)")]
+    TooSmall {
+        /// Requested width.
+        width: usize,
+        /// Order.
+        f_b: usize,
+        /// Minimum width.
+        need: usize,
+    },
+}
+
+impl Shrm {
+    /// Width of the lat-long grid.
+    pub fn width(&self) -> usize {
+        self.layers[0].width
+    }
+    /// Height of the lat-long grid.
+    pub fn height(&self) -> usize {
+        self.layers[0].height
+    }
+    /// Layer (p, q).
+    pub fn layer(&self, p: usize, q: isize) -> &RgbImage {
+        &self.layers[index(p, q)]
+    }
+}
+
+/// The reflection vector and local frame of lat-long texel (x, y): R_{α,β} = R_z(β)·R_y(α).
+pub fn texel_frame(width: usize, height: usize, x: usize, y: usize) -> DMat3 {
+    let alpha = PI * (y as f64 + 0.5) / height as f64;
+    let beta = 2.0 * PI * (x as f64 + 0.5) / width as f64;
+    DMat3::from_rotation_z(beta) * DMat3::from_rotation_y(alpha)
+}
+
+/// Synthesizes the local SHRM B_pq(α, β) on a `width`×`height` lat-long grid.
+pub fn local_shrm(
+    light: &ShCoeffs,
+    brdf: &BrdfSh,
+    width: usize,
+    height: usize,
+    progress: &dyn Progress,
+) -> Result<Shrm, ShrmError> {
+    let (f, p) = (brdf.f, brdf.p);
+    if light.order < f {
+        return Err(ShrmError::LightingOrder { have: light.order, need: f });
+    }
+    if width < 2 * f + 2 {
+        return Err(ShrmError::TooSmall { width, f_b: f, need: 2 * f + 2 });
+    }
+    let rows = RowSynth::new(width);
+    let nlayers = count(p);
+    progress.start("SHRM", height as u64);
+    // Each α row is independent: compute all layers' rows, then scatter.
+    let row_data: Vec<Vec<[f32; 3]>> = (0..height)
+        .into_par_iter()
+        .map(|y| {
+            let alpha = PI * (y as f64 + 0.5) / height as f64;
+            let d = ShRotation::new(DMat3::from_rotation_y(-alpha), f);
+            let mut out = vec![[0.0f32; 3]; nlayers * width];
+            let mut buffers = rows.buffers();
+            let (mut a, mut b) = (vec![0.0; f + 1], vec![0.0; f + 1]);
+            for pp in 0..=p {
+                for q in -(pp as isize)..=(pp as isize) {
+                    for ch in 0..3 {
+                        a.iter_mut().for_each(|v| *v = 0.0);
+                        b.iter_mut().for_each(|v| *v = 0.0);
+                        for l in (q.unsigned_abs())..=f {
+                            let r = brdf.get(l, pp, q)[ch];
+                            if r == 0.0 {
+                                continue;
+                            }
+                            let li = l as isize;
+                            if q >= 0 {
+                                a[0] += r * d.element(l, q, 0) * light.rgb[index(l, 0)][ch];
+                                for m in 1..=li {
+                                    let dq = r * d.element(l, q, m);
+                                    a[m as usize] += dq * light.rgb[index(l, m)][ch];
+                                    b[m as usize] += dq * light.rgb[index(l, -m)][ch];
+                                }
+                            } else {
+                                for m in 1..=li {
+                                    let dq = r * d.element(l, q, -m);
+                                    a[m as usize] += dq * light.rgb[index(l, -m)][ch];
+                                    b[m as usize] -= dq * light.rgb[index(l, m)][ch];
+                                }
+                            }
+                        }
+                        rows.synth(&a, &b, &mut buffers);
+                        let layer = index(pp, q);
+                        for (x, v) in buffers.1.iter().enumerate() {
+                            out[layer * width + x][ch] = *v as f32;
+                        }
+                    }
+                }
+            }
+            progress.advance(1);
+            out
+        })
+        .collect();
+    progress.finish();
+    let mut layers: Vec<RgbImage> = (0..nlayers).map(|_| RgbImage::new(width, height)).collect();
+    for (y, data) in row_data.iter().enumerate() {
+        for (k, layer) in layers.iter_mut().enumerate() {
+            layer.pixels[y * width..(y + 1) * width].copy_from_slice(&data[k * width..(k + 1) * width]);
+        }
+    }
+    Ok(Shrm { f_b: f, p_b: p, global: false, layers })
+}
+
+/// Applies the rotation of texel (x, y)'s frame to the view coefficients of every band:
+/// B̃_p·(α, β) = M^p(R_{α,β}) B_p·(α, β) (eq. 8) when `to_global`, the inverse otherwise.
+fn rotate_views(shrm: &Shrm, to_global: bool) -> Shrm {
+    let (w, h, p) = (shrm.width(), shrm.height(), shrm.p_b);
+    let n = count(p);
+    let mut layers: Vec<RgbImage> = (0..n).map(|_| RgbImage::new(w, h)).collect();
+    let rows: Vec<Vec<[f32; 3]>> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let mut out = vec![[0.0f32; 3]; n * w];
+            let mut coeffs = vec![0.0; n];
+            for x in 0..w {
+                let frame = texel_frame(w, h, x, y);
+                let rot = ShRotation::new(if to_global { frame } else { frame.transpose() }, p);
+                for ch in 0..3 {
+                    for (i, c) in coeffs.iter_mut().enumerate() {
+                        *c = shrm.layers[i].get(x, y)[ch] as f64;
+                    }
+                    let r = rot.apply_scalar(&coeffs);
+                    for i in 0..n {
+                        out[i * w + x][ch] = r[i] as f32;
+                    }
+                }
+            }
+            out
+        })
+        .collect();
+    for (y, data) in rows.iter().enumerate() {
+        for (k, layer) in layers.iter_mut().enumerate() {
+            layer.pixels[y * w..(y + 1) * w].copy_from_slice(&data[k * w..(k + 1) * w]);
+        }
+    }
+    Shrm { f_b: shrm.f_b, p_b: p, global: to_global, layers }
+}
+
+/// The global SHRM B̃_pq(α, β) (eq. 7–8) of a local one.
+pub fn to_global(local: &Shrm) -> Shrm {
+    if local.global {
+        return local.clone();
+    }
+    rotate_views(local, true)
+}
+
+/// The local SHRM of a global one (inverse of [`to_global`]).
+pub fn to_local(global: &Shrm) -> Shrm {
+    if !global.global {
+        return global.clone();
+    }
+    rotate_views(global, false)
+}
+
+/// The reflection map for a distant viewer in direction `view` (unit, towards the viewer):
+/// B̃(α, β) = Σ_pq B̃_pq(α, β) Y_pq(view) (eq. 12) for a global SHRM, or
+/// Σ_pq B_pq(α, β) Y_pq(R_{α,β}⁻¹ view) for a local one.
+pub fn reflection_map(shrm: &Shrm, view: DVec3) -> RgbImage {
+    let (w, h, p) = (shrm.width(), shrm.height(), shrm.p_b);
+    let table = crate::sh::legendre::LegendreTable::new(p);
+    let n = count(p);
+    let mut global_y = vec![0.0; n];
+    crate::sh::basis::eval_basis_dir(&table, view, &mut global_y);
+    let mut image = RgbImage::new(w, h);
+    image.pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let mut ylm = vec![0.0; n];
+        for (x, px) in row.iter_mut().enumerate() {
+            let weights: &[f64] = if shrm.global {
+                &global_y
+            } else {
+                crate::sh::basis::eval_basis_dir(&table, texel_frame(w, h, x, y).transpose() * view, &mut ylm);
+                &ylm
+            };
+            let mut acc = [0.0f64; 3];
+            for (layer, &wt) in shrm.layers.iter().zip(weights) {
+                let v = layer.pixels[y * w + x];
+                for ch in 0..3 {
+                    acc[ch] += wt * v[ch] as f64;
+                }
+            }
+            *px = [acc[0] as f32, acc[1] as f32, acc[2] as f32];
+        }
+    });
+    image
+}
+
+/// The twelve view directions of Cabral et al. 1999: the vertices of an icosahedron.
+pub fn icosahedron_views() -> Vec<DVec3> {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut v = Vec::with_capacity(12);
+    for &(a, b) in &[(1.0, t), (1.0, -t), (-1.0, t), (-1.0, -t)] {
+        v.push(DVec3::new(0.0, a, b).normalize());
+        v.push(DVec3::new(a, b, 0.0).normalize());
+        v.push(DVec3::new(b, 0.0, a).normalize());
+    }
+    v
+}
+
+/// T×T view directions on a lat-long grid of the view sphere (texel centres), for an explicit
+/// 4-D tabulation of reflection maps (App. C, "conversion to explicit forms").
+pub fn view_grid(t: usize) -> Vec<DVec3> {
+    let mut v = Vec::with_capacity(t * t);
+    for j in 0..t {
+        for i in 0..t {
+            let theta = PI * (j as f64 + 0.5) / t as f64;
+            let phi = 2.0 * PI * (i as f64 + 0.5) / t as f64;
+            v.push(crate::sh::basis::direction(theta, phi));
+        }
+    }
+    v
+}
+
+/// Kautz & McCool's 3-D texture B(α, β, θ_o) = Σ_p B_p0(α, β) Y_p0(θ_o) (App. C) at `slices`
+/// values θ_o = π(k+½)/slices, from a local SHRM (only q = 0 terms are used).
+pub fn kautz_mccool(shrm: &Shrm, slices: usize) -> Vec<RgbImage> {
+    let local = to_local(shrm);
+    let table = crate::sh::legendre::LegendreTable::new(local.p_b);
+    let mut plm = vec![0.0; count(local.p_b)];
+    (0..slices)
+        .map(|k| {
+            let theta = PI * (k as f64 + 0.5) / slices as f64;
+            table.eval(theta.cos(), theta.sin(), &mut plm);
+            let mut img = RgbImage::new(local.width(), local.height());
+            for p in 0..=local.p_b {
+                let wt = plm[index(p, 0)] as f32;
+                let layer = local.layer(p, 0);
+                for (dst, src) in img.pixels.iter_mut().zip(&layer.pixels) {
+                    for ch in 0..3 {
+                        dst[ch] += wt * src[ch];
+                    }
+                }
+            }
+            img
+        })
+        .collect()
+}
