@@ -3,6 +3,8 @@
 
 pub mod common;
 pub mod convert;
+pub mod count_terms;
 pub mod envinput;
+pub mod factor_brdf;
 pub mod sh_project;
 pub mod umbrella;

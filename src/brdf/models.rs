@@ -1,0 +1,288 @@
+//! Analytic BRDF models in the local shading frame (+Z is the normal, ω_i points towards the
+//! light, ω_o towards the viewer). Every model is grey (the same value in R, G and B) and is
+//! evaluated as its formula on the whole sphere of directions: restricting to the visible
+//! hemispheres is the caller's choice (`factor --domain hemisphere`), because the paper's
+//! analysis (Mahajan et al. 2008, §3.1–3.2) deliberately extends Phong to the full sphere.
+
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Mirror of ω about the normal +Z: R = (−x, −y, z). With ω = ω_o this is the paper's reflected
+/// view direction R, whose spherical angles are (θ_o, φ_o ± π) (Mahajan et al. 2008, eq. 8).
+#[inline]
+pub fn reflect_about_normal(w: DVec3) -> DVec3 {
+    DVec3::new(-w.x, -w.y, w.z)
+}
+
+/// Lambertian: ρ = albedo / π.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lambert {
+    /// Diffuse albedo in [0, 1].
+    pub albedo: f64,
+}
+
+impl Lambert {
+    /// ρ (constant).
+    pub fn eval(&self) -> f64 {
+        self.albedo / PI
+    }
+}
+
+/// Normalized Phong: ρ = (s+1)/(2π) · max(0, R·ω_i)^s, R the mirror of ω_o (Mahajan et al.
+/// 2008, eq. 5). Radially symmetric about R, so it is a function of cos γ = R·L alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Phong {
+    /// Exponent s > 0.
+    pub exponent: f64,
+}
+
+impl Phong {
+    /// The lobe as a function of cos γ = R·L (eq. 5, clamped at 0).
+    #[inline]
+    pub fn lobe(&self, cos_gamma: f64) -> f64 {
+        if cos_gamma <= 0.0 {
+            0.0
+        } else {
+            (self.exponent + 1.0) / (2.0 * PI) * cos_gamma.min(1.0).powf(self.exponent)
+        }
+    }
+
+    /// ρ(ω_i, ω_o).
+    pub fn eval(&self, wi: DVec3, wo: DVec3) -> f64 {
+        self.lobe(reflect_about_normal(wo).dot(wi))
+    }
+}
+
+/// Blinn-Phong: ρ = (s+2)/(8π) · max(0, N·H)^s with H = normalize(ω_i + ω_o). The factor
+/// (s+2)/(2π) normalizes the distribution cos^s θ_h over the hemisphere of half vectors
+/// (∫ D(h) (n·h) dω_h = 1), and 1/4 is the half-vector Jacobian at normal incidence; Fresnel
+/// and shadowing are omitted, as in the simplified half-angle models of Mahajan et al. §4.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlinnPhong {
+    /// Exponent s > 0.
+    pub exponent: f64,
+}
+
+impl BlinnPhong {
+    /// The half-angle curve as a function of θ_h.
+    pub fn half_angle_curve(&self, theta_h: f64) -> f64 {
+        let c = theta_h.cos();
+        if c <= 0.0 {
+            0.0
+        } else {
+            (self.exponent + 2.0) / (8.0 * PI) * c.powf(self.exponent)
+        }
+    }
+
+    /// ρ(ω_i, ω_o).
+    pub fn eval(&self, wi: DVec3, wo: DVec3) -> f64 {
+        self.half_angle_curve(theta_h(wi, wo))
+    }
+}
+
+/// The simplified Torrance-Sparrow model of Mahajan et al. 2008, eq. 14:
+/// ρ = exp(−(acos(N·H)/σ)²) / (4πσ²).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TorranceSparrow {
+    /// Roughness σ > 0 (radians of θ_h).
+    pub sigma: f64,
+}
+
+impl TorranceSparrow {
+    /// The half-angle curve as a function of θ_h (eq. 14).
+    pub fn half_angle_curve(&self, theta_h: f64) -> f64 {
+        let x = theta_h / self.sigma;
+        (-x * x).exp() / (4.0 * PI * self.sigma * self.sigma)
+    }
+
+    /// ρ(ω_i, ω_o).
+    pub fn eval(&self, wi: DVec3, wo: DVec3) -> f64 {
+        self.half_angle_curve(theta_h(wi, wo))
+    }
+}
+
+/// θ_h = acos(N·H) with H = normalize(ω_i + ω_o) (+Z when the directions are opposite).
+#[inline]
+pub fn theta_h(wi: DVec3, wo: DVec3) -> f64 {
+    let s = wi + wo;
+    let len = s.length();
+    if len > 0.0 {
+        (s.z / len).clamp(-1.0, 1.0).acos()
+    } else {
+        0.0
+    }
+}
+
+/// One generalized cosine lobe of the Lafortune model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LafortuneLobe {
+    /// C_x.
+    pub cx: f64,
+    /// C_y.
+    pub cy: f64,
+    /// C_z.
+    pub cz: f64,
+    /// Exponent n > 0.
+    pub exponent: f64,
+}
+
+/// Multi-lobe Lafortune (Lafortune, Foo, Torrance & Greenberg 1997):
+/// ρ = kd/π + Σ_j max(0, C_x,j ω_i,x ω_o,x + C_y,j ω_i,y ω_o,y + C_z,j ω_i,z ω_o,z)^n_j.
+/// C_x = C_y = −C_z = −c (c > 0) gives (c R·ω_i)^n, a Phong lobe about the mirror direction R.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lafortune {
+    /// Diffuse albedo.
+    pub kd: f64,
+    /// Specular lobes (at least one).
+    pub lobes: Vec<LafortuneLobe>,
+}
+
+impl Lafortune {
+    /// ρ(ω_i, ω_o).
+    pub fn eval(&self, wi: DVec3, wo: DVec3) -> f64 {
+        let mut sum = self.kd / PI;
+        for lobe in &self.lobes {
+            let d = lobe.cx * wi.x * wo.x + lobe.cy * wi.y * wo.y + lobe.cz * wi.z * wo.z;
+            if d > 0.0 {
+                sum += d.powf(lobe.exponent);
+            }
+        }
+        sum
+    }
+
+    /// Isotropic (invariant under rotation about the normal) iff C_x = C_y in every lobe.
+    pub fn is_isotropic(&self) -> bool {
+        self.lobes.iter().all(|l| l.cx == l.cy)
+    }
+
+    /// Radially symmetric about the mirror direction R iff every lobe has C_x = C_y = −C_z < 0:
+    /// then ρ = kd/π + Σ_j max(0, C_z,j R·ω_i)^n_j (the diffuse term is a constant).
+    pub fn is_radially_symmetric(&self) -> bool {
+        self.lobes.iter().all(|l| l.cx == l.cy && l.cx == -l.cz && l.cz > 0.0)
+    }
+
+    /// The lobe as a function of cos γ = R·L when [`Self::is_radially_symmetric`].
+    pub fn lobe(&self, cos_gamma: f64) -> f64 {
+        let mut sum = self.kd / PI;
+        for lobe in &self.lobes {
+            let d = lobe.cz * cos_gamma;
+            if d > 0.0 {
+                sum += d.powf(lobe.exponent);
+            }
+        }
+        sum
+    }
+}
+
+/// Kajiya-Kay hair/fibre specular (Kajiya & Kay 1989) with the fibre tangent T = +X (the model
+/// is anisotropic): light arriving along −ω_i is reflected into the cone of directions that make
+/// the same angle with T, and the lobe is a power of the cosine of the angle between ω_o and the
+/// nearest cone direction:
+/// cos = sin(T,ω_i) sin(T,ω_o) − (T·ω_i)(T·ω_o),  ρ = (s+1)/(2π) · max(0, cos)^s.
+/// The factor (s+1)/(2π) mirrors normalized Phong; it is a scale, not an energy normalization.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KajiyaKay {
+    /// Exponent s > 0.
+    pub exponent: f64,
+}
+
+impl KajiyaKay {
+    /// ρ(ω_i, ω_o).
+    pub fn eval(&self, wi: DVec3, wo: DVec3) -> f64 {
+        let (ti, to) = (wi.x, wo.x);
+        let si = (1.0 - ti * ti).max(0.0).sqrt();
+        let so = (1.0 - to * to).max(0.0).sqrt();
+        let c = si * so - ti * to;
+        if c <= 0.0 {
+            0.0
+        } else {
+            (self.exponent + 1.0) / (2.0 * PI) * c.min(1.0).powf(self.exponent)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sh::basis::direction;
+
+    /// ∫ over the upper hemisphere of f(ω) dω by a midpoint rule in (cos θ, φ).
+    fn hemisphere_integral(f: impl Fn(DVec3) -> f64, n: usize) -> f64 {
+        let mut sum = 0.0;
+        for j in 0..n {
+            let c = (j as f64 + 0.5) / n as f64;
+            let theta = c.acos();
+            for k in 0..2 * n {
+                let phi = (k as f64 + 0.5) * PI / n as f64;
+                sum += f(direction(theta, phi));
+            }
+        }
+        sum * (2.0 * PI) / (2 * n * n) as f64
+    }
+
+    #[test]
+    fn normalized_phong_lobe_integrates_to_one_at_normal_incidence() {
+        // ∫ (s+1)/(2π) (R·L)^s dL over the hemisphere around R = +Z is exactly 1.
+        for s in [1.0, 10.0, 30.0] {
+            let p = Phong { exponent: s };
+            let got = hemisphere_integral(|l| p.eval(l, DVec3::Z), 400);
+            assert!((got - 1.0).abs() < 2e-3, "s={s}: {got}");
+        }
+    }
+
+    #[test]
+    fn phong_is_a_function_of_the_mirror_direction() {
+        let p = Phong { exponent: 7.0 };
+        let wo = direction(0.6, 1.3);
+        let r = direction(0.6, 1.3 + PI);
+        let wi = direction(0.9, 4.0);
+        assert!((p.eval(wi, wo) - 8.0 / (2.0 * PI) * r.dot(wi).powf(7.0)).abs() < 1e-14);
+    }
+
+    #[test]
+    fn blinn_phong_distribution_is_normalized() {
+        // (s+2)/(2π) ∫ cos^s θ_h cos θ_h dω_h = 1: the 4·ρ curve times cos θ_h integrates to 1.
+        let b = BlinnPhong { exponent: 20.0 };
+        let got = hemisphere_integral(|h| 4.0 * b.half_angle_curve(h.z.acos()) * h.z, 400);
+        assert!((got - 1.0).abs() < 2e-3, "{got}");
+    }
+
+    #[test]
+    fn torrance_sparrow_matches_eq_14() {
+        let t = TorranceSparrow { sigma: 0.2 };
+        let wi = direction(0.7, 0.0);
+        let wo = direction(0.6, 2.5);
+        let th = (wi + wo).normalize().z.acos();
+        let want = (-(th / 0.2f64).powi(2)).exp() / (4.0 * PI * 0.04);
+        assert!((t.eval(wi, wo) - want).abs() < 1e-14);
+    }
+
+    const R_DOT_L: f64 = 0.8;
+
+    #[test]
+    fn lafortune_with_mirror_lobe_is_phong() {
+        // C = diag(1, 1, −1) is the anti-mirror: (C ω_o)·ω_i = −R·ω_i, zero on the specular peak.
+        let l = Lafortune { kd: 0.0, lobes: vec![LafortuneLobe { cx: 1.0, cy: 1.0, cz: -1.0, exponent: 12.0 }] };
+        // C = diag(−1, −1, 1) is the classic mirror lobe: (C ω_o)·ω_i = R·ω_i.
+        let l2 = Lafortune { kd: 0.0, lobes: vec![LafortuneLobe { cx: -1.0, cy: -1.0, cz: 1.0, exponent: 12.0 }] };
+        let p = Phong { exponent: 12.0 };
+        let (wi, wo) = (direction(0.4, 0.3), direction(0.5, 3.3));
+        let phong_unnormalized = p.eval(wi, wo) * 2.0 * PI / 13.0;
+        assert!((l2.eval(wi, wo) - phong_unnormalized).abs() < 1e-14);
+        assert_eq!(l.eval(wi, wo), 0.0);
+        assert!(l2.is_isotropic() && l2.is_radially_symmetric() && !l.is_radially_symmetric());
+        assert!((l2.lobe(R_DOT_L) - R_DOT_L.powf(12.0)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn kajiya_kay_peaks_on_the_reflection_cone() {
+        let k = KajiyaKay { exponent: 32.0 };
+        // ω_i at 40° from T = +X; the cone contains ω_o with T·ω_o = −T·ω_i.
+        let a = 40f64.to_radians();
+        let wi = DVec3::new(a.cos(), a.sin(), 0.0);
+        let on_cone = DVec3::new(-a.cos(), 0.0, a.sin());
+        let off_cone = DVec3::new(a.cos(), 0.0, a.sin());
+        assert!((k.eval(wi, on_cone) - 33.0 / (2.0 * PI)).abs() < 1e-12);
+        assert!(k.eval(wi, off_cone) < 1e-6);
+    }
+}

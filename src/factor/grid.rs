@@ -1,0 +1,107 @@
+//! The direction grid of the BRDF matrix: n × n cells uniform in cos θ and φ, so every cell has
+//! the same solid angle (Mahajan et al. 2008, §3.2: "to preserve correct sampling on the
+//! sphere, we uniformly sampled along cos θ and φ"). Samples sit at the cell midpoints in
+//! cos θ and φ. Sampling uniformly in θ instead, without solid-angle weights, over-weights the
+//! poles and silently lowers K.
+
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Which directions the BRDF matrix covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Domain {
+    /// The full sphere for both ω_i and ω_o (the paper's analytic setting, §3.1–3.3).
+    Sphere,
+    /// The visible hemispheres, z > 0 for both (physical BRDFs, §3.4).
+    Hemisphere,
+}
+
+impl std::fmt::Display for Domain {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Domain::Sphere => "sphere",
+            Domain::Hemisphere => "hemisphere",
+        })
+    }
+}
+
+/// An n × n grid in (cos θ, φ) over a [`Domain`]. Direction index = j·n + k with j the cos θ
+/// bin (from the pole, cos θ decreasing) and k the φ bin.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Grid {
+    /// Bins along cos θ and along φ.
+    pub n: usize,
+    /// Sphere or hemisphere.
+    pub domain: Domain,
+}
+
+impl Grid {
+    /// Number of directions, n².
+    pub fn len(&self) -> usize {
+        self.n * self.n
+    }
+
+    /// Always false for a valid grid (n ≥ 1).
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// cos θ at the midpoint of bin j, decreasing from the pole: 1 − (j+½)·h with h = 2/n on the
+    /// sphere and 1/n on the hemisphere.
+    pub fn cos_theta(&self, j: usize) -> f64 {
+        let span = match self.domain {
+            Domain::Sphere => 2.0,
+            Domain::Hemisphere => 1.0,
+        };
+        1.0 - (j as f64 + 0.5) * span / self.n as f64
+    }
+
+    /// φ at the midpoint of bin k: (k+½)·2π/n.
+    pub fn phi(&self, k: usize) -> f64 {
+        (k as f64 + 0.5) * 2.0 * PI / self.n as f64
+    }
+
+    /// The direction of bin (j, k).
+    pub fn direction_jk(&self, j: usize, k: usize) -> DVec3 {
+        let c = self.cos_theta(j);
+        let s = (1.0 - c * c).max(0.0).sqrt();
+        let (sp, cp) = self.phi(k).sin_cos();
+        DVec3::new(s * cp, s * sp, c)
+    }
+
+    /// The direction of flat index j·n + k.
+    pub fn direction(&self, index: usize) -> DVec3 {
+        self.direction_jk(index / self.n, index % self.n)
+    }
+
+    /// Solid angle of one cell: 4π/n² (sphere) or 2π/n² (hemisphere).
+    pub fn cell_solid_angle(&self) -> f64 {
+        let area = match self.domain {
+            Domain::Sphere => 4.0 * PI,
+            Domain::Hemisphere => 2.0 * PI,
+        };
+        area / self.len() as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_tile_the_domain_with_equal_solid_angle() {
+        for domain in [Domain::Sphere, Domain::Hemisphere] {
+            let g = Grid { n: 8, domain };
+            let total = g.cell_solid_angle() * g.len() as f64;
+            let want = if domain == Domain::Sphere { 4.0 * PI } else { 2.0 * PI };
+            assert!((total - want).abs() < 1e-12);
+            // Midpoint rule in cos θ integrates z² exactly up to the O(h²) midpoint error:
+            // ∫ z² dω = 4π/3 (sphere), 2π/3 (hemisphere).
+            let g = Grid { n: 200, domain };
+            let z2: f64 = (0..g.len()).map(|i| g.direction(i).z.powi(2)).sum::<f64>() * g.cell_solid_angle();
+            assert!((z2 - want / 3.0).abs() < 1e-4, "{z2}");
+            assert!((0..g.len()).all(|i| domain == Domain::Sphere || g.direction(i).z > 0.0));
+        }
+    }
+}

@@ -1,0 +1,393 @@
+//! The in-out factorization ρ(ω_i, ω_o) = Σ_k σ_k h_k(ω_o) g_k(ω_i) (Mahajan et al. 2008, eq. 2)
+//! as the SVD of the sampled BRDF matrix.
+//!
+//! The matrix is M[o, i] = ρ(ω_i, ω_o) [· cos θ_i] · ΔΩ with ΔΩ the (equal) cell solid angle, so
+//! its singular values approximate those of the integral operator (∫ ρ(ω_i, ω_o) g(ω_i) dω_i) and
+//! can be compared with the paper's F_l directly; the unit singular vectors divided by √ΔΩ are
+//! the L²-orthonormal factor functions g_k, h_k.
+//!
+//! Two methods give the same singular values:
+//! - **dense**: the full n²×n² matrix and faer's SVD (any BRDF, O(n⁶) time, O(n⁴) memory);
+//! - **fft**: for an isotropic BRDF, ρ depends on φ_o − φ_i only, so with the φ grid uniform
+//!   the matrix is block-circulant, M[(j_o,k_o),(j_i,k_i)] = B_{(k_o−k_i) mod n}[j_o, j_i]. A DFT
+//!   over φ block-diagonalizes it: for the azimuthal frequency m, with
+//!   C_m = Σ_d B_d cos(2πmd/n) and S_m = Σ_d B_d sin(2πmd/n), M maps
+//!   a cos(mφ) + b sin(mφ) (profiles a, b over θ) to (C a − S b) cos(mφ) + (S a + C b) sin(mφ).
+//!   So the singular values of M are those of C_0, C_{n/2} (n even) and the real 2n×2n
+//!   matrices T_m = [[C_m, −S_m], [S_m, C_m]] for 0 < m < n/2 (which carry frequencies m and
+//!   n−m together). Cost O(n³ log n) to sample + n/2 SVDs of 2n×2n: the way to high resolution.
+
+use super::channel::Channel;
+use super::grid::{Domain, Grid};
+use crate::brdf::Brdf;
+use crate::progress::Progress;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::svd::{self, ComputeSvdVectors};
+use faer::diag::Diag;
+use faer::{Mat, MatRef, Par};
+use rayon::prelude::*;
+
+/// How the BRDF matrix is sampled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sampling {
+    /// Grid bins along cos θ and φ (n² directions per side).
+    pub resolution: usize,
+    /// Sphere or visible hemispheres.
+    pub domain: Domain,
+    /// Fold max(cos θ_i, 0) into the matrix.
+    pub cosine: bool,
+    /// Scalar of RGB data.
+    pub channel: Channel,
+}
+
+impl Sampling {
+    /// The direction grid.
+    pub fn grid(&self) -> Grid {
+        Grid { n: self.resolution, domain: self.domain }
+    }
+
+    /// The matrix entry for ω_i, ω_o, without the cell weight.
+    #[inline]
+    fn entry(&self, brdf: &Brdf, wi: glam::DVec3, wo: glam::DVec3) -> f64 {
+        let v = self.channel.apply(brdf.eval(wi, wo));
+        if self.cosine {
+            v * wi.z.max(0.0)
+        } else {
+            v
+        }
+    }
+}
+
+/// Which SVD to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// FFT over φ for isotropic BRDFs, dense otherwise.
+    Auto,
+    /// The full n²×n² matrix.
+    Dense,
+    /// Block-circulant FFT over φ (isotropic BRDFs only).
+    Fft,
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Method::Auto => "auto",
+            Method::Dense => "dense",
+            Method::Fft => "fft",
+        })
+    }
+}
+
+/// Errors of the factorization.
+#[derive(Debug, thiserror::Error)]
+pub enum FactorError {
+    /// The requested problem would not fit the memory budget.
+    #[error(
+        "resolution {n} on the {domain} ({dirs} directions per side) with the {method} method needs about {need} \
+         of memory (limit {limit}); lower --resolution{hint} or raise --max-memory"
+    )]
+    TooLarge {
+        /// Resolution.
+        n: usize,
+        /// Domain.
+        domain: Domain,
+        /// Directions per side.
+        dirs: usize,
+        /// Method that would run.
+        method: Method,
+        /// Human-readable need.
+        need: String,
+        /// Human-readable limit.
+        limit: String,
+        /// Extra advice.
+        hint: &'static str,
+    },
+    /// A bad parameter.
+    #[error("{0}")]
+    Invalid(String),
+    /// The SVD did not converge.
+    #[error("the SVD did not converge ({0})")]
+    NoConvergence(String),
+}
+
+/// The result: singular values (descending) and optionally the leading factor functions.
+#[derive(Clone, Debug)]
+pub struct Factorization {
+    /// Singular values σ_k of the weighted matrix, descending.
+    pub singular_values: Vec<f64>,
+    /// The method that ran (`Dense` or `Fft`).
+    pub method: Method,
+    /// The grid the factors are sampled on.
+    pub grid: Grid,
+    /// g_k(ω_i) on the grid (L²-orthonormal: Σ g² ΔΩ = 1), leading terms first.
+    pub g: Vec<Vec<f64>>,
+    /// h_k(ω_o) on the grid, same normalization.
+    pub h: Vec<Vec<f64>>,
+    /// For the FFT method, the azimuthal frequency m of each singular value (pairs m, n−m are
+    /// reported as m); empty for the dense method.
+    pub azimuthal_frequency: Vec<usize>,
+}
+
+/// Bytes needed by `method` for `terms` singular vectors.
+pub fn memory_estimate(sampling: &Sampling, method: Method, terms: usize) -> u128 {
+    let n = sampling.resolution as u128;
+    let dirs = n * n;
+    let vectors = 2 * dirs * terms as u128 * 8;
+    match method {
+        // Matrix + faer's workspace (about one more copy, bidiagonal reduction) + U, V if wanted.
+        Method::Dense | Method::Auto => {
+            let uv = if terms > 0 { 2 * dirs * dirs * 8 } else { 0 };
+            2 * dirs * dirs * 8 + uv + vectors
+        }
+        // B_d (n³) + C_m, S_m (2 n³ / 2) + per-thread 2n×2n SVDs with vectors.
+        Method::Fft => 2 * n * n * n * 8 + rayon::current_num_threads() as u128 * 6 * (2 * n) * (2 * n) * 8 + vectors,
+    }
+}
+
+/// Formats a byte count as KiB/MiB/GiB/TiB.
+pub fn human_bytes(b: u128) -> String {
+    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < units.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{b} bytes")
+    } else {
+        format!("{v:.1} {}", units[u])
+    }
+}
+
+/// Chooses the method for `brdf`: `Auto` → FFT when isotropic, else dense.
+pub fn resolve_method(brdf: &Brdf, method: Method) -> Result<Method, FactorError> {
+    match method {
+        Method::Auto if brdf.is_isotropic() => Ok(Method::Fft),
+        Method::Auto => Ok(Method::Dense),
+        Method::Fft if !brdf.is_isotropic() => Err(FactorError::Invalid(format!(
+            "--method fft needs an isotropic BRDF; {} is anisotropic (use --method dense)",
+            brdf.spec()
+        ))),
+        m => Ok(m),
+    }
+}
+
+/// Checks the resolution and the memory budget before any work.
+pub fn check_budget(sampling: &Sampling, method: Method, terms: usize, max_memory: u128) -> Result<(), FactorError> {
+    if sampling.resolution < 2 {
+        return Err(FactorError::Invalid(format!("resolution must be at least 2, got {}", sampling.resolution)));
+    }
+    let need = memory_estimate(sampling, method, terms);
+    if need > max_memory {
+        let dirs = sampling.resolution * sampling.resolution;
+        return Err(FactorError::TooLarge {
+            n: sampling.resolution,
+            domain: sampling.domain,
+            dirs,
+            method,
+            need: human_bytes(need),
+            limit: human_bytes(max_memory),
+            hint: if method == Method::Dense { ", use an isotropic BRDF with --method fft" } else { "" },
+        });
+    }
+    Ok(())
+}
+
+/// Factors `brdf` sampled by `sampling`, keeping the leading `terms` factor functions.
+/// `method` must be resolved (`Dense` or `Fft`; `Auto` resolves here).
+pub fn factor(
+    brdf: &Brdf,
+    sampling: &Sampling,
+    method: Method,
+    terms: usize,
+    progress: &dyn Progress,
+) -> Result<Factorization, FactorError> {
+    let method = resolve_method(brdf, method)?;
+    if sampling.resolution < 2 {
+        return Err(FactorError::Invalid(format!("resolution must be at least 2, got {}", sampling.resolution)));
+    }
+    let terms = terms.min(sampling.grid().len());
+    match method {
+        Method::Fft => factor_fft(brdf, sampling, terms, progress),
+        _ => factor_dense(brdf, sampling, terms, progress),
+    }
+}
+
+/// The weighted dense matrix M[o, i] = ρ(ω_i, ω_o)[cos θ_i] ΔΩ, column-major (column = ω_i).
+pub fn dense_matrix(brdf: &Brdf, sampling: &Sampling, progress: &dyn Progress) -> Vec<f64> {
+    let grid = sampling.grid();
+    let dirs = grid.len();
+    let weight = grid.cell_solid_angle();
+    progress.start("sampling", dirs as u64);
+    let mut data = vec![0.0; dirs * dirs];
+    data.par_chunks_mut(dirs).enumerate().for_each(|(i, col)| {
+        let wi = grid.direction(i);
+        for (o, x) in col.iter_mut().enumerate() {
+            *x = sampling.entry(brdf, wi, grid.direction(o)) * weight;
+        }
+        progress.advance(1);
+    });
+    progress.finish();
+    data
+}
+
+fn factor_dense(
+    brdf: &Brdf,
+    sampling: &Sampling,
+    terms: usize,
+    progress: &dyn Progress,
+) -> Result<Factorization, FactorError> {
+    let grid = sampling.grid();
+    let dirs = grid.len();
+    let data = dense_matrix(brdf, sampling, progress);
+    let m = MatRef::from_column_major_slice(&data, dirs, dirs);
+    progress.start("SVD", 1);
+    let (s, u, v) = run_svd(m, terms > 0)?;
+    progress.finish();
+    let scale = 1.0 / grid.cell_solid_angle().sqrt();
+    let (mut g, mut h) = (Vec::new(), Vec::new());
+    if let (Some(u), Some(v)) = (u, v) {
+        for k in 0..terms {
+            h.push((0..dirs).map(|r| u[(r, k)] * scale).collect());
+            g.push((0..dirs).map(|r| v[(r, k)] * scale).collect());
+        }
+    }
+    Ok(Factorization { singular_values: s, method: Method::Dense, grid, g, h, azimuthal_frequency: vec![] })
+}
+
+type Svd = (Vec<f64>, Option<Mat<f64>>, Option<Mat<f64>>);
+
+/// faer's SVD, sequential so that results are bit-identical for any thread count.
+fn run_svd(a: MatRef<'_, f64>, vectors: bool) -> Result<Svd, FactorError> {
+    let (rows, cols) = a.shape();
+    let size = rows.min(cols);
+    let mut s = Diag::<f64>::zeros(size);
+    let want = if vectors { ComputeSvdVectors::Thin } else { ComputeSvdVectors::No };
+    let mut u = vectors.then(|| Mat::<f64>::zeros(rows, size));
+    let mut v = vectors.then(|| Mat::<f64>::zeros(cols, size));
+    let par = Par::Seq;
+    let mut mem = MemBuffer::new(svd::svd_scratch::<f64>(rows, cols, want, want, par, Default::default()));
+    svd::svd(
+        a,
+        s.as_mut(),
+        u.as_mut().map(|m| m.as_mut()),
+        v.as_mut().map(|m| m.as_mut()),
+        par,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )
+    .map_err(|e| FactorError::NoConvergence(format!("{e:?}")))?;
+    let values = s.column_vector().iter().map(|x| x.max(0.0)).collect();
+    Ok((values, u, v))
+}
+
+/// One block's singular triplets, before the global sort.
+struct BlockSvd {
+    m: usize,
+    values: Vec<f64>,
+    u: Option<Mat<f64>>,
+    v: Option<Mat<f64>>,
+}
+
+fn factor_fft(
+    brdf: &Brdf,
+    sampling: &Sampling,
+    terms: usize,
+    progress: &dyn Progress,
+) -> Result<Factorization, FactorError> {
+    let grid = sampling.grid();
+    let n = grid.n;
+    let weight = grid.cell_solid_angle();
+    // b[(jo·n + ji)·n + d] = ρ(ω_i = (ji, k=0), ω_o = (jo, k=d)) ΔΩ: one φ_o − φ_i = d·2π/n row
+    // per (j_o, j_i) pair, transformed in place by a real FFT over d.
+    progress.start("sampling", (n * n) as u64);
+    let half = n / 2 + 1;
+    let mut spectra = vec![[0.0f64; 2]; n * n * half];
+    let fft = realfft::RealFftPlanner::<f64>::new().plan_fft_forward(n);
+    spectra.par_chunks_mut(half).enumerate().for_each_init(
+        || (fft.make_input_vec(), fft.make_output_vec(), fft.make_scratch_vec()),
+        |(input, output, scratch), (pair, out)| {
+            let (jo, ji) = (pair / n, pair % n);
+            let wi = grid.direction_jk(ji, 0);
+            for (d, x) in input.iter_mut().enumerate() {
+                *x = sampling.entry(brdf, wi, grid.direction_jk(jo, d)) * weight;
+            }
+            // Lengths match by construction, so the FFT cannot fail.
+            if fft.process_with_scratch(input, output, scratch).is_ok() {
+                for (o, c) in out.iter_mut().zip(output.iter()) {
+                    // X_m = Σ_d x_d e^{−2πimd/n} = C − iS.
+                    *o = [c.re, -c.im];
+                }
+            }
+            progress.advance(1);
+        },
+    );
+    progress.finish();
+    let spec = |m: usize, jo: usize, ji: usize| spectra[(jo * n + ji) * half + m];
+    // Frequencies 0 ..= n/2; m = 0 and m = n/2 (n even) are real n×n blocks.
+    let last = n / 2;
+    progress.start("SVD", (last + 1) as u64);
+    let blocks: Vec<Result<BlockSvd, FactorError>> = (0..=last)
+        .into_par_iter()
+        .map(|m| {
+            let real_block = m == 0 || (n % 2 == 0 && m == last);
+            let a = if real_block {
+                Mat::from_fn(n, n, |r, c| spec(m, r, c)[0])
+            } else {
+                Mat::from_fn(2 * n, 2 * n, |r, c| {
+                    let [cm, sm] = spec(m, r % n, c % n);
+                    match (r < n, c < n) {
+                        (true, true) | (false, false) => cm,
+                        (true, false) => -sm,
+                        (false, true) => sm,
+                    }
+                })
+            };
+            let (values, u, v) = run_svd(a.as_ref(), terms > 0)?;
+            progress.advance(1);
+            Ok(BlockSvd { m, values, u, v })
+        })
+        .collect();
+    progress.finish();
+    let blocks = blocks.into_iter().collect::<Result<Vec<_>, _>>()?;
+    // Global order: value descending, ties by (m, index) so the order is deterministic.
+    let mut all: Vec<(f64, usize, usize)> =
+        blocks.iter().enumerate().flat_map(|(b, blk)| blk.values.iter().enumerate().map(move |(i, &s)| (s, b, i))).collect();
+    all.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let singular_values = all.iter().map(|t| t.0).collect();
+    let azimuthal_frequency = all.iter().map(|t| blocks[t.1].m).collect();
+    let (mut g, mut h) = (Vec::new(), Vec::new());
+    for &(_, b, i) in all.iter().take(terms) {
+        let blk = &blocks[b];
+        if let (Some(u), Some(v)) = (&blk.u, &blk.v) {
+            h.push(expand_vector(u.as_ref(), i, blk.m, n, weight));
+            g.push(expand_vector(v.as_ref(), i, blk.m, n, weight));
+        }
+    }
+    Ok(Factorization { singular_values, method: Method::Fft, grid, g, h, azimuthal_frequency })
+}
+
+/// A block singular vector (column `col`) as a function on the grid: for 0 < m < n/2 the
+/// coefficients (a; b) become √(2/n)(a_j cos(mk·2π/n) + b_j sin(mk·2π/n)); for m = 0, a_j/√n;
+/// for m = n/2, a_j (−1)^k/√n. Divided by √ΔΩ for L²-orthonormal functions.
+fn expand_vector(mat: MatRef<'_, f64>, col: usize, m: usize, n: usize, weight: f64) -> Vec<f64> {
+    let scale = 1.0 / weight.sqrt();
+    let alpha = 2.0 * std::f64::consts::PI * m as f64 / n as f64;
+    let real_block = mat.nrows() == n;
+    let mut out = vec![0.0; n * n];
+    for j in 0..n {
+        for k in 0..n {
+            let (s, c) = (alpha * k as f64).sin_cos();
+            out[j * n + k] = scale
+                * if real_block {
+                    mat[(j, col)] * c / (n as f64).sqrt()
+                } else {
+                    (2.0 / n as f64).sqrt() * (mat[(j, col)] * c + mat[(n + j, col)] * s)
+                };
+        }
+    }
+    out
+}
