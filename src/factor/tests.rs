@@ -23,8 +23,9 @@ fn phong_sphere_singular_values_are_f_l_with_multiplicity_2l_plus_1() {
     // Mahajan et al. 2008, eq. 9: on the full sphere σ = F_l = f_l √(4π/(2l+1)), 2l+1 times.
     let s = 4.0;
     let f = phong_f(s, 12);
-    let fact = factor(&Brdf::parse("phong:s=4").unwrap(), &sampling(32, Domain::Sphere, false), Method::Fft, 0, &NoProgress)
-        .unwrap();
+    let fact =
+        factor(&Brdf::parse("phong:s=4").unwrap(), &sampling(32, Domain::Sphere, false), Method::Fft, 0, &NoProgress)
+            .unwrap();
     let sv = &fact.singular_values;
     let mut k = 0;
     for (l, fl) in f.iter().enumerate().take(6) {

@@ -201,16 +201,22 @@ pub fn from_isotropic(
     out
 }
 
-/// ρ̂_l00 of a radially symmetric ρ̂ = u(R·ω_i) (independent of ω_o), up to order F, by
-/// Gauss–Legendre quadrature in x = R·ω_i on [−1, 1] with `nodes` nodes (exact when u is a
-/// polynomial of degree < 2·nodes − F, e.g. Phong with s + F < 2·nodes):
+/// ρ̂_l00 of a radially symmetric ρ̂ = u(R·ω_i) (independent of ω_o), up to order F:
 /// ρ̂_l00 = √(4π) · 2π ∫ u(x) P̄_l^0(x) dx, and the energy ∫∫ ρ̂² = 4π · 2π ∫ u² dx.
+/// Gauss–Legendre with `nodes` nodes on each of [−1, 0] and [0, 1]: lobes such as Phong's and the
+/// clamped cosine are polynomials on each half with a kink at 0, so the rule is exact for them
+/// whenever the degree (s + F) is below 2·nodes.
 pub fn from_radial(u: impl Fn(f64) -> [f64; 3], f: usize, nodes: usize) -> BrdfSh {
     let table = LegendreTable::new(f);
     let mut plm = vec![0.0; count(f)];
     let mut out = BrdfSh { f, p: 0, coeffs: vec![[0.0; 3]; f + 1], total_energy: 0.0 };
     let scale = (4.0 * PI).sqrt() * 2.0 * PI;
-    for (x, w) in gauss_legendre(nodes) {
+    let half = gauss_legendre(nodes);
+    let halves = half
+        .iter()
+        .map(|&(t, w)| (0.5 * (t - 1.0), 0.5 * w))
+        .chain(half.iter().map(|&(t, w)| (0.5 * (t + 1.0), 0.5 * w)));
+    for (x, w) in halves {
         let v = u(x);
         table.eval(x, (1.0 - x * x).max(0.0).sqrt(), &mut plm);
         out.total_energy += 4.0 * PI * 2.0 * PI * w * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);

@@ -3,4 +3,5 @@
 
 pub mod angular;
 pub mod brdf_sh;
+pub mod model;
 pub mod shrm;

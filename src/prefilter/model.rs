@@ -1,0 +1,193 @@
+//! A BRDF as the prefilter sees it: reparameterized by its central direction (R&H 2002 §3.1).
+//!
+//! - Radially symmetric lobes take the 1-D path: Phong is ρ̂ = (s+1)/2π (R·L)^s about the
+//!   reflection vector, used as the paper does (§6.3, without an extra N·L); Lambert is
+//!   ρ̂ = (albedo/π) max(N·L, 0) about the normal, so its "reflection map" is indexed by N.
+//! - Every other isotropic BRDF takes the general path, in the frame whose +Z is the reflection
+//!   vector R: with N = normalize(R + ω_o), ρ̂(ω_i, ω_o) = ρ(ω_i, ω_o)·max(N·ω_i, 0) in N's
+//!   frame (eq. 1–2, ρ̂ = ρ cos θ_i). `cosine: false` drops the max(N·ω_i, 0), for models the
+//!   paper defines directly as ρ̂ (its microfacet eq. 11).
+
+use super::brdf_sh::{self, BrdfGrid, BrdfSh};
+use crate::brdf::Brdf;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Errors of building a prefilter model.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    /// Anisotropic BRDFs other than the tangent-reparameterized Kajiya–Kay are out of scope.
+    #[error("{0} is anisotropic: the prefilter handles isotropic BRDFs (R&H 2002 §3)")]
+    Anisotropic(String),
+    /// No order up to the search limit reaches the tolerance.
+    #[error("no orders up to F = {f}, P = {p} keep 1 - {epsilon} of the energy of {brdf} (they leave {achieved:.3e}); use a larger --epsilon")]
+    Unreachable {
+        /// The BRDF spec.
+        brdf: String,
+        /// Requested ε.
+        epsilon: f64,
+        /// Largest F tried.
+        f: usize,
+        /// Largest P tried.
+        p: usize,
+        /// Residual at those orders.
+        achieved: f64,
+    },
+}
+
+/// Which direction a radially symmetric lobe is centred on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Centre {
+    /// The reflection vector (Phong).
+    Reflection,
+    /// The surface normal (Lambert).
+    Normal,
+}
+
+/// A BRDF prepared for prefiltering.
+#[derive(Clone, Debug)]
+pub struct Model {
+    brdf: Brdf,
+    cosine: bool,
+}
+
+impl Model {
+    /// Wraps a BRDF. `cosine` folds max(N·ω_i, 0) into ρ̂ for general BRDFs.
+    pub fn new(brdf: Brdf, cosine: bool) -> Result<Self, ModelError> {
+        if !brdf.is_isotropic() {
+            return Err(ModelError::Anisotropic(brdf.spec()));
+        }
+        Ok(Model { brdf, cosine })
+    }
+
+    /// The BRDF.
+    pub fn brdf(&self) -> &Brdf {
+        &self.brdf
+    }
+
+    /// Whether N·ω_i is folded into ρ̂ on the general path.
+    pub fn cosine(&self) -> bool {
+        self.cosine
+    }
+
+    /// For radially symmetric BRDFs, the centre of the lobe.
+    pub fn centre(&self) -> Option<Centre> {
+        match &self.brdf {
+            Brdf::Lambert(_) => Some(Centre::Normal),
+            b if b.is_radially_symmetric() => Some(Centre::Reflection),
+            _ => None,
+        }
+    }
+
+    /// The 1-D lobe u(cos γ) of a radially symmetric BRDF (γ from its centre).
+    pub fn lobe(&self, cos_gamma: f64) -> [f64; 3] {
+        let v = match &self.brdf {
+            Brdf::Lambert(_) => self.brdf.reflection_lobe(cos_gamma).unwrap_or(0.0) * cos_gamma.max(0.0),
+            b => b.reflection_lobe(cos_gamma).unwrap_or(0.0),
+        };
+        [v; 3]
+    }
+
+    /// ρ̂(ω_i, ω_o) in the reflection frame (+Z = R), for the general path.
+    pub fn rho_hat(&self, wi: DVec3, wo: DVec3) -> [f64; 3] {
+        let n = DVec3::Z + wo;
+        let len = n.length();
+        if len < 1e-9 {
+            return [0.0; 3];
+        }
+        let n = n / len;
+        let cos_i = n.dot(wi);
+        if cos_i <= 0.0 {
+            return [0.0; 3];
+        }
+        let (t, b) = n.any_orthonormal_pair();
+        let wi_n = DVec3::new(wi.dot(t), wi.dot(b), cos_i);
+        let wo_n = DVec3::new(wo.dot(t), wo.dot(b), wo.dot(n));
+        let v = self.brdf.eval(wi_n, wo_n);
+        let k = if self.cosine { cos_i } else { 1.0 };
+        [v[0] * k, v[1] * k, v[2] * k]
+    }
+
+    /// Luminance-like grey value of ρ̂ (mean of RGB), for cut-offs.
+    pub fn rho_hat_grey(&self, wi: DVec3, wo: DVec3) -> f64 {
+        let v = self.rho_hat(wi, wo);
+        (v[0] + v[1] + v[2]) / 3.0
+    }
+
+    /// ρ̂_lpq up to (F, P) (p = 0 only for radially symmetric BRDFs).
+    pub fn coefficients(&self, f: usize, p: usize) -> BrdfSh {
+        if self.centre().is_some() {
+            // Gauss–Legendre is exact for polynomial lobes of degree < 2n − F; 1024 nodes cover
+            // Phong exponents into the thousands.
+            return brdf_sh::from_radial(|x| self.lobe(x), f, 1024);
+        }
+        let grid = BrdfGrid { theta_i: (4 * f).max(96), theta_o: (4 * p + 16).max(32), phi: (4 * p + 16).max(32) };
+        brdf_sh::from_isotropic(
+            |ci, co, phi| {
+                let si = (1.0 - ci * ci).max(0.0).sqrt();
+                let so = (1.0 - co * co).max(0.0).sqrt();
+                self.rho_hat(DVec3::new(si, 0.0, ci), DVec3::new(so * phi.cos(), so * phi.sin(), co))
+            },
+            f,
+            p,
+            grid,
+        )
+    }
+
+    /// Coefficients truncated to the smallest (F_B, P_B) keeping 1 − ε of the BRDF energy
+    /// (§5.1, App. C: start at F = 16, P = 6 and double F until the tolerance is met, up to 128).
+    pub fn coefficients_for_epsilon(&self, epsilon: f64, max_p: usize) -> Result<BrdfSh, ModelError> {
+        let p = if self.centre().is_some() { 0 } else { max_p };
+        let mut f = 16;
+        loop {
+            let full = self.coefficients(f, p);
+            if let Some((fb, pb)) = full.select_orders(epsilon) {
+                if fb < f || f >= 128 {
+                    return Ok(full.truncated(fb, pb));
+                }
+            }
+            if f >= 128 {
+                return Err(ModelError::Unreachable {
+                    brdf: self.brdf.spec(),
+                    epsilon,
+                    f,
+                    p,
+                    achieved: full.residual(f, p),
+                });
+            }
+            f *= 2;
+        }
+    }
+}
+
+/// Conservative residual-energy bound of App. B: with lighting and BRDF residuals ε_L, ε_ρ of
+/// totals L_tot, ρ_tot at order F, B_res = Λ_{F+1} (ε_L L_tot)(ε_ρ ρ_tot) and
+/// ε_B ≤ B_res / (Σ|B|² + B_res).
+pub fn residual_bound(
+    f: usize,
+    light_residual_energy: f64,
+    brdf_residual_energy: f64,
+    captured_light_field_energy: f64,
+) -> f64 {
+    let b_res = crate::sh::convolve::lambda(f + 1) * light_residual_energy * brdf_residual_energy;
+    if b_res <= 0.0 {
+        0.0
+    } else {
+        b_res / (captured_light_field_energy + b_res)
+    }
+}
+
+/// Unit normalization check used by tests: ∫ ρ̂ dω_i for a view (should be ≤ 1 for an
+/// energy-conserving BRDF with the cosine folded in).
+pub fn albedo(model: &Model, wo: DVec3, n: usize) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..n {
+        let theta = PI * (i as f64 + 0.5) / n as f64;
+        for k in 0..2 * n {
+            let phi = PI * (k as f64 + 0.5) / n as f64;
+            let wi = crate::sh::basis::direction(theta, phi);
+            sum += model.rho_hat_grey(wi, wo) * theta.sin();
+        }
+    }
+    sum * (PI / n as f64) * (PI / n as f64)
+}
