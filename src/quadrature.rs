@@ -1,7 +1,26 @@
 //! Gauss–Legendre quadrature on [−1, 1]: exact for polynomials of degree < 2n, the natural rule
 //! for integrals over cos θ.
 
+use std::collections::HashMap;
 use std::f64::consts::PI;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// A quadrature rule: (node, weight) pairs.
+pub type Rule = Arc<Vec<(f64, f64)>>;
+
+/// [`gauss_legendre`], computed once per n and shared (rules are pure functions of n).
+pub fn gauss_legendre_cached(n: usize) -> Rule {
+    static CACHE: OnceLock<Mutex<HashMap<usize, Rule>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(rule) = cache.lock().ok().and_then(|c| c.get(&n).cloned()) {
+        return rule;
+    }
+    let rule = Arc::new(gauss_legendre(n));
+    if let Ok(mut c) = cache.lock() {
+        c.insert(n, rule.clone());
+    }
+    rule
+}
 
 /// n Gauss–Legendre nodes and weights on [−1, 1], ascending, by Newton's method on P_n from the
 /// Tricomi initial guesses. Accurate to ~1e-15 for n up to several thousand.

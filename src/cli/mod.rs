@@ -6,5 +6,6 @@ pub mod convert;
 pub mod count_terms;
 pub mod envinput;
 pub mod factor_brdf;
+pub mod prefilter;
 pub mod sh_project;
 pub mod umbrella;

@@ -18,6 +18,8 @@ enum Stage {
     Convert(super::convert::Args),
     /// Project an environment map onto spherical harmonics.
     ShProject(super::sh_project::Args),
+    /// Prefilter an environment map with a BRDF: SHRMs and reflection maps.
+    Prefilter(super::prefilter::Args),
     /// Factor a BRDF into in-out terms by SVD.
     FactorBrdf(super::factor_brdf::Args),
     /// Predict and measure how many BRDF terms materials need (CI check).
@@ -29,6 +31,7 @@ pub fn main() -> ExitCode {
     match Cli::parse().stage {
         Stage::Convert(args) => run_stage("convert", || super::convert::run(args)),
         Stage::ShProject(args) => run_stage("sh-project", || super::sh_project::run(args)),
+        Stage::Prefilter(args) => run_stage("prefilter", || super::prefilter::run(args)),
         Stage::FactorBrdf(args) => run_stage("factor-brdf", || super::factor_brdf::run(args)),
         Stage::CountTerms(args) => run_stage("count-terms", || super::count_terms::run(args)),
     }

@@ -10,7 +10,7 @@
 use crate::envmap::{latlong_row_solid_angle, latlong_texel, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::Progress;
-use crate::quadrature::gauss_legendre;
+use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;

@@ -16,7 +16,7 @@
 //! (θ_i, p, q), a θ_i-sum per (l, p, q). Gauss–Legendre in θ (nodes uniform in angle resolve
 //! lobes near θ = 0) and the trapezoid rule in φ (exact for the trigonometric polynomials).
 
-use crate::quadrature::gauss_legendre;
+use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use crate::sh::legendre::LegendreTable;
 use crate::sh::{count, index};
 use rayon::prelude::*;
@@ -233,8 +233,8 @@ pub fn from_radial(u: impl Fn(f64) -> [f64; 3], f: usize, nodes: usize) -> BrdfS
 /// Gauss–Legendre nodes in θ ∈ [0, π] with weights that include sin θ.
 fn angle_nodes(n: usize) -> Vec<(f64, f64)> {
     gauss_legendre(n.max(1))
-        .into_iter()
-        .map(|(x, w)| {
+        .iter()
+        .map(|&(x, w)| {
             let theta = 0.5 * PI * (x + 1.0);
             (theta, 0.5 * PI * w * theta.sin())
         })

@@ -3,5 +3,7 @@
 
 pub mod angular;
 pub mod brdf_sh;
+pub mod document;
 pub mod model;
+pub mod pipeline;
 pub mod shrm;

@@ -160,16 +160,18 @@ impl Model {
     }
 }
 
-/// Conservative residual-energy bound of App. B: with lighting and BRDF residuals ε_L, ε_ρ of
-/// totals L_tot, ρ_tot at order F, B_res = Λ_{F+1} (ε_L L_tot)(ε_ρ ρ_tot) and
-/// ε_B ≤ B_res / (Σ|B|² + B_res).
+/// Conservative residual-energy bound of App. B: with lighting and BRDF residual energies
+/// ε_L L_tot and ε_ρ ρ_tot at order F, the worst case puts both in band F+1, where the light
+/// field's energy is at most B_res = Λ²_{F+1} (ε_L L_tot)(ε_ρ ρ_tot) (B_lmpq = Λ_l L_lm ρ̂_lpq,
+/// eq. 5; the paper writes Λ for the factor of the coefficients, whose energy takes its
+/// square), so ε_B ≤ B_res / (Σ|B_lmpq|² + B_res).
 pub fn residual_bound(
     f: usize,
     light_residual_energy: f64,
     brdf_residual_energy: f64,
     captured_light_field_energy: f64,
 ) -> f64 {
-    let b_res = crate::sh::convolve::lambda(f + 1) * light_residual_energy * brdf_residual_energy;
+    let b_res = crate::sh::convolve::lambda(f + 1).powi(2) * light_residual_energy * brdf_residual_energy;
     if b_res <= 0.0 {
         0.0
     } else {

@@ -1,0 +1,190 @@
+//! The whole prefilter, both ways: frequency space (App. C steps 1–3) and the angular reference.
+
+use super::angular::{self, ConeIntegrator, CutoffTable};
+use super::brdf_sh::BrdfSh;
+use super::model::{Model, ModelError};
+use super::shrm::{self, Shrm, ShrmError};
+use crate::envmap::EnvMap;
+use crate::io::RgbImage;
+use crate::progress::Progress;
+use crate::sh::project::{project, ProjectError};
+use crate::sh::ShCoeffs;
+use glam::DVec3;
+use std::time::Instant;
+
+/// How F_B and P_B are chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Orders {
+    /// The smallest orders keeping 1 − ε of the BRDF energy (§5.1), P searched up to `max_p`.
+    Epsilon {
+        /// ε.
+        epsilon: f64,
+        /// Largest P considered.
+        max_p: usize,
+    },
+    /// Given orders.
+    Fixed {
+        /// F_B.
+        f: usize,
+        /// P_B (0 for radially symmetric BRDFs).
+        p: usize,
+    },
+}
+
+/// The lighting: an environment map (projected to F_B as needed) or given coefficients.
+pub enum Lighting<'a> {
+    /// An environment map.
+    Map(&'a EnvMap),
+    /// SH coefficients (from a `prtkit.sh` document).
+    Coefficients(&'a ShCoeffs),
+}
+
+/// Errors of the prefilter.
+#[derive(Debug, thiserror::Error)]
+pub enum PrefilterError {
+    /// BRDF problems.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// Projection problems (order beyond the map's resolution).
+    #[error(transparent)]
+    Project(#[from] ProjectError),
+    /// SHRM problems.
+    #[error(transparent)]
+    Shrm(#[from] ShrmError),
+    /// Angular reference problems.
+    #[error(transparent)]
+    Angular(#[from] angular::AngularError),
+    /// Given coefficients are of too low an order.
+    #[error("the SH coefficients have order {have}, but F_B = {need} is needed: re-run sh-project with --order {need} (or give the environment map)")]
+    LightingOrder {
+        /// Order given.
+        have: usize,
+        /// Order needed.
+        need: usize,
+    },
+}
+
+/// Seconds spent in each step of the frequency-space prefilter.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Timings {
+    /// Step 1: BRDF coefficients (with the order search).
+    pub brdf_seconds: f64,
+    /// Step 1: lighting coefficients to F_B.
+    pub lighting_seconds: f64,
+    /// Steps 2–3: the SHRM.
+    pub shrm_seconds: f64,
+}
+
+/// The frequency-space result.
+pub struct Frequency {
+    /// ρ̂_lpq, truncated to (F_B, P_B).
+    pub brdf: BrdfSh,
+    /// L_lm up to F_B.
+    pub lighting: ShCoeffs,
+    /// The local SHRM.
+    pub shrm: Shrm,
+    /// BRDF energy missed by (F_B, P_B).
+    pub epsilon_achieved: f64,
+    /// Per-step times.
+    pub timings: Timings,
+}
+
+/// BRDF coefficients for the requested orders.
+pub fn brdf_coefficients(model: &Model, orders: Orders) -> Result<BrdfSh, PrefilterError> {
+    Ok(match orders {
+        Orders::Epsilon { epsilon, max_p } => model.coefficients_for_epsilon(epsilon, max_p)?,
+        Orders::Fixed { f, p } => {
+            let p = if model.centre().is_some() { 0 } else { p };
+            model.coefficients(f, p)
+        }
+    })
+}
+
+/// Frequency-space prefiltering into a local SHRM on a `width`×`height` lat-long grid.
+pub fn frequency(
+    model: &Model,
+    lighting: Lighting<'_>,
+    orders: Orders,
+    width: usize,
+    height: usize,
+    progress: &dyn Progress,
+) -> Result<Frequency, PrefilterError> {
+    let t = Instant::now();
+    let brdf = brdf_coefficients(model, orders)?;
+    let brdf_seconds = t.elapsed().as_secs_f64();
+    let f_b = brdf.f;
+
+    let t = Instant::now();
+    let light = match lighting {
+        Lighting::Map(map) => project(map, f_b, progress)?,
+        Lighting::Coefficients(c) => {
+            if c.order < f_b {
+                return Err(PrefilterError::LightingOrder { have: c.order, need: f_b });
+            }
+            c.truncated(f_b)
+        }
+    };
+    let lighting_seconds = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let shrm =
+        if model.centre().is_some() {
+            // 1-D path: B(R) = Σ Λ_l ρ̂_l L_lm Y_lm(R); the SHRM's single layer is B_00 = √(4π) B.
+            let kernel = |l: usize| brdf.radial_kernel(l);
+            let mut conv = light.clone();
+            for (i, c) in conv.rgb.iter_mut().enumerate() {
+                let (l, _) = crate::sh::lm(i);
+                let k = kernel(l);
+                for ch in 0..3 {
+                    c[ch] *= k[ch] * (4.0 * std::f64::consts::PI).sqrt();
+                }
+            }
+            if width < 2 * f_b + 2 {
+                return Err(ShrmError::TooSmall { width, f_b, need: 2 * f_b + 2 }.into());
+            }
+            let layer = crate::sh::synth::synthesize_latlong(&conv, width, height)
+                .map_err(|_| ShrmError::TooSmall { width, f_b, need: 2 * f_b + 2 })?;
+            Shrm { f_b, p_b: 0, global: false, layers: vec![layer] }
+        } else {
+            shrm::local_shrm(&light, &brdf, width, height, progress)?
+        };
+    let shrm_seconds = t.elapsed().as_secs_f64();
+    let epsilon_achieved = brdf.residual(brdf.f, brdf.p);
+    Ok(Frequency {
+        brdf,
+        lighting: light,
+        shrm,
+        epsilon_achieved,
+        timings: Timings { brdf_seconds, lighting_seconds, shrm_seconds },
+    })
+}
+
+/// The angular reference: for radially symmetric BRDFs one map (views ignored), otherwise one
+/// reflection map per view. The BRDF is truncated at ε (App. D).
+pub fn angular_maps(
+    model: &Model,
+    env: &EnvMap,
+    views: &[DVec3],
+    epsilon: f64,
+    width: usize,
+    height: usize,
+    progress: &dyn Progress,
+) -> Result<Vec<RgbImage>, PrefilterError> {
+    let cone = ConeIntegrator::new(env)?;
+    if model.centre().is_some() {
+        let grey = |x: f64| {
+            let v = model.lobe(x);
+            (v[0] + v[1] + v[2]) / 3.0
+        };
+        let theta_star = angular::radial_cutoff(grey, epsilon);
+        return Ok(vec![angular::radial_map(&cone, |x| model.lobe(x), theta_star, width, height, progress)]);
+    }
+    let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), epsilon, 65);
+    progress.start("angular", (views.len() * height) as u64);
+    let maps = views
+        .iter()
+        .map(|&v| angular::view_map(&cone, |wi, wo| model.rho_hat(wi, wo), &cutoff, v, width, height, progress))
+        .collect();
+    progress.finish();
+    Ok(maps)
+}
