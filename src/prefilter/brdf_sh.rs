@@ -208,7 +208,7 @@ pub fn from_isotropic(
 /// whenever the degree (s + F) is below 2·nodes.
 pub fn from_radial(u: impl Fn(f64) -> [f64; 3], f: usize, nodes: usize) -> BrdfSh {
     let table = LegendreTable::new(f);
-    let mut plm = vec![0.0; count(f)];
+    let mut pl = vec![0.0; f + 1];
     let mut out = BrdfSh { f, p: 0, coeffs: vec![[0.0; 3]; f + 1], total_energy: 0.0 };
     let scale = (4.0 * PI).sqrt() * 2.0 * PI;
     let half = gauss_legendre(nodes);
@@ -218,10 +218,10 @@ pub fn from_radial(u: impl Fn(f64) -> [f64; 3], f: usize, nodes: usize) -> BrdfS
         .chain(half.iter().map(|&(t, w)| (0.5 * (t + 1.0), 0.5 * w)));
     for (x, w) in halves {
         let v = u(x);
-        table.eval(x, (1.0 - x * x).max(0.0).sqrt(), &mut plm);
+        table.eval_zonal(x, &mut pl);
         out.total_energy += 4.0 * PI * 2.0 * PI * w * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         for l in 0..=f {
-            let k = scale * w * plm[index(l, 0)];
+            let k = scale * w * pl[l];
             for ch in 0..3 {
                 out.coeffs[l][ch] += k * v[ch];
             }

@@ -72,6 +72,20 @@ impl LegendreTable {
         }
     }
 
+    /// The zonal functions only: `out[l]` = P̄_l^0(x) for l ≤ order, in O(order).
+    pub fn eval_zonal(&self, x: f64, out: &mut [f64]) {
+        let order = self.order;
+        out[0] = 0.5 / PI.sqrt();
+        if order == 0 {
+            return;
+        }
+        out[1] = 3f64.sqrt() * x * out[0];
+        for l in 2..=order {
+            let i = super::index(l, 0);
+            out[l] = self.a[i] * (x * out[l - 1] - self.b[i] * out[l - 2]);
+        }
+    }
+
     /// P̄_l^m(cos θ) for m ≥ 0 laid out per m: `out[m][l - m]`, convenient for per-m sums.
     pub fn eval_by_m(&self, cos_theta: f64, sin_theta: f64, out: &mut [Vec<f64>]) {
         let order = self.order;
@@ -118,5 +132,18 @@ mod tests {
         // P_3^2 = 15 c s², N_3^2 = k(3)·√(1/120).
         let n32 = k(3.0) * (1.0f64 / 120.0).sqrt();
         assert!((out[super::super::index(3, 2)] - n32 * 15.0 * c * s * s).abs() < 1e-13);
+    }
+
+    #[test]
+    fn zonal_evaluation_equals_the_full_table() {
+        let t = LegendreTable::new(40);
+        let (mut full, mut zonal) = (vec![0.0; crate::sh::count(40)], vec![0.0; 41]);
+        for x in [-0.9, -0.2, 0.0, 0.45, 0.999] {
+            t.eval(x, (1.0f64 - x * x).sqrt(), &mut full);
+            t.eval_zonal(x, &mut zonal);
+            for l in 0..=40 {
+                assert_eq!(zonal[l], full[crate::sh::index(l, 0)]);
+            }
+        }
     }
 }

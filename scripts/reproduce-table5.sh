@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# R&H 2002 Table 5 (microfacet SHRMs and 100 reflection maps), measured in one run. Prints one
+# JSON line per roughness on stdout and writes docs/results/prefilter-table5.md.
+# ANGULAR_VIEWS=K times K of the 100 angular reflection maps and scales (default 100: all).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo bench --quiet --bench prefilter_tables -- --table 5 --angular-views "${ANGULAR_VIEWS:-100}" --out docs/results/prefilter-table5.md
