@@ -3,8 +3,10 @@
 //! Each module is one domain concept; binaries in `src/bin` are thin wrappers over `cli`.
 #![forbid(unsafe_code)]
 
+pub mod affine;
 pub mod cli;
 pub mod envmap;
 pub mod io;
 pub mod progress;
 pub mod sh;
+pub mod shader;
