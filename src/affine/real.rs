@@ -28,13 +28,15 @@ pub const MAX_INTEGER_POWER: f64 = 64.0;
 
 /// A number type of the shading language: `f64` (point sampling), [`Interval`] or [`Affine`]
 /// (area sampling with guaranteed bounds).
-pub trait Real: Clone + std::fmt::Debug + Send + Sync + 'static {
+pub trait Real: Clone + PartialEq + std::fmt::Debug + Send + Sync + 'static {
     /// Name for reports: `point`, `interval`, `affine`.
     const NAME: &'static str;
     /// An exact constant.
     fn constant(x: f64) -> Self;
     /// A value known to lie in `iv` (for f64, the midpoint: only called on ranges).
     fn from_interval(iv: Interval) -> Self;
+    /// An input that ranges over [lo, hi] (u, v of an area sample); for `f64` the midpoint.
+    fn input(lo: f64, hi: f64) -> Self;
     /// Guaranteed bounds of the value.
     fn bounds(&self) -> Interval;
     /// The value if it is one exactly known number.
@@ -104,6 +106,9 @@ impl Real for f64 {
     }
     fn from_interval(iv: Interval) -> Self {
         iv.mid()
+    }
+    fn input(lo: f64, hi: f64) -> Self {
+        0.5 * (lo + hi)
     }
     fn bounds(&self) -> Interval {
         Interval::point(*self)
@@ -244,6 +249,9 @@ impl Real for Interval {
     fn from_interval(iv: Interval) -> Self {
         iv
     }
+    fn input(lo: f64, hi: f64) -> Self {
+        Interval::new(lo, hi)
+    }
     fn bounds(&self) -> Interval {
         *self
     }
@@ -278,19 +286,34 @@ impl Real for Interval {
         Interval::neg(*self)
     }
     fn sqrt(&self) -> Self {
-        Interval::sqrt(*self)
+        match self.as_constant() {
+            Some(c) => Interval::point(Real::sqrt(&c)),
+            None => Interval::sqrt(*self),
+        }
     }
     fn exp(&self) -> Self {
-        Interval::exp(*self)
+        match self.as_constant() {
+            Some(c) => Interval::point(Real::exp(&c)),
+            None => Interval::exp(*self),
+        }
     }
     fn ln(&self) -> Self {
-        Interval::ln(*self)
+        match self.as_constant() {
+            Some(c) => Interval::point(Real::ln(&c)),
+            None => Interval::ln(*self),
+        }
     }
     fn sin(&self) -> Self {
-        Interval::sin(*self)
+        match self.as_constant() {
+            Some(c) => Interval::point(Real::sin(&c)),
+            None => Interval::sin(*self),
+        }
     }
     fn cos(&self) -> Self {
-        Interval::cos(*self)
+        match self.as_constant() {
+            Some(c) => Interval::point(Real::cos(&c)),
+            None => Interval::cos(*self),
+        }
     }
     fn abs(&self) -> Self {
         Interval::abs(*self)
@@ -314,7 +337,10 @@ impl Real for Interval {
         step0_interval(*self)
     }
     fn smooth01(&self) -> Self {
-        smooth01_interval(*self)
+        match self.as_constant() {
+            Some(c) => Interval::point(smooth01_point(c)),
+            None => smooth01_interval(*self),
+        }
     }
     fn join(&self, o: &Self) -> Self {
         self.hull(*o)
@@ -344,6 +370,10 @@ impl Real for Affine {
     }
     fn from_interval(iv: Interval) -> Self {
         Affine::from_interval(iv)
+    }
+    fn input(lo: f64, hi: f64) -> Self {
+        // Node corners are dyadic, so centre and radius are exact: û = u₀ + (Δu/2)·ε (§3.1).
+        Affine::symbol(0.5 * (lo + hi), 0.5 * (hi - lo))
     }
     fn bounds(&self) -> Interval {
         self.range()
