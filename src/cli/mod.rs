@@ -4,5 +4,6 @@
 pub mod common;
 pub mod convert;
 pub mod envinput;
+pub mod sample_shader;
 pub mod sh_project;
 pub mod umbrella;

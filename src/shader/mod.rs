@@ -7,6 +7,7 @@ pub mod interp;
 pub mod lexer;
 pub mod noise;
 pub mod parser;
+pub mod report;
 pub mod rng;
 pub mod sampler;
 
