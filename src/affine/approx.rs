@@ -369,3 +369,35 @@ pub fn smooth01(a: f64, b: f64) -> Option<Approx> {
     }
     critical(a, b, alpha, smooth01_point, &crits, 6.0)
 }
+
+/// The quintic fade of Perlin noise, 6t⁵ − 15t⁴ + 10t³, evaluated as t³·(t·(6t − 15) + 10)
+/// (the operation order the point evaluation uses).
+pub fn fade_point(t: f64) -> f64 {
+    let t3 = t * t * t;
+    t3 * (t * (t * 6.0 - 15.0) + 10.0)
+}
+
+/// Rounding allowance of [`fade_point`] on |t| ≤ m: a few ulps of the largest partial term.
+pub fn fade_slack(m: f64) -> f64 {
+    64.0 * UNIT_ROUNDOFF * (1.0 + 31.0 * m.powi(5))
+}
+
+/// fade on [a, b]: monotone (f' = 30t²(t − 1)² ≥ 0) with an inflection at ½; secant slope and
+/// the critical points 30t²(t − 1)² = α, i.e. t(1 − t) = ±√(α/30):
+/// t = (1 ± √(1 − 4s))/2 and t = (1 ± √(1 + 4s))/2 with s = √(α/30);
+/// |f''| = 60|t(t − 1)(2t − 1)| ≤ 60·M(M + 1)(2M + 1), M = max |t|.
+pub fn fade(a: f64, b: f64) -> Option<Approx> {
+    let alpha = if a == b { 0.0 } else { ((fade_point(b) - fade_point(a)) / (b - a)).max(0.0) };
+    let s = (alpha / 30.0).sqrt();
+    let mut crits = Vec::with_capacity(4);
+    for disc in [1.0 - 4.0 * s, 1.0 + 4.0 * s] {
+        if disc >= 0.0 {
+            let r = disc.sqrt();
+            crits.push(0.5 * (1.0 - r));
+            crits.push(0.5 * (1.0 + r));
+        }
+    }
+    let m = a.abs().max(b.abs());
+    let ap = critical(a, b, alpha, fade_point, &crits, 60.0 * m * (m + 1.0) * (2.0 * m + 1.0))?;
+    Some(Approx { delta: up(ap.delta + fade_slack(m)), ..ap })
+}

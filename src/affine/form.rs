@@ -277,7 +277,7 @@ impl Affine {
     /// A product of a form with itself is a square: the quadratic part Σxᵢεᵢ·Σxᵢεᵢ ∈ [0, A²]
     /// gives centre A²/2 and a half as large new term.
     pub fn mul(&self, o: &Affine) -> Affine {
-        let iv = if self == o && self.err == 0.0 { self.iv.sqr() } else { self.iv.mul(o.iv) };
+        let iv = if self == o && self.err == 0.0 { self.range().sqr() } else { self.range().mul(o.range()) };
         if self.is_unbounded() || o.is_unbounded() {
             return Affine::from_interval(iv);
         }
@@ -316,10 +316,16 @@ impl Affine {
         z.finish()
     }
 
+    /// A value times itself: the product form with the non-negative interval of the square.
+    pub fn sqr(&self) -> Affine {
+        let iv = self.range().sqr();
+        self.mul(self).with_interval(iv)
+    }
+
     /// Quotient with the language's rule x/0 = 0: a divisor whose range contains 0 gives an
     /// unbounded form (interval [`Interval::ENTIRE`]) unless the divisor or dividend is exactly 0.
     pub fn div(&self, o: &Affine) -> Affine {
-        let iv = self.iv.div(o.iv);
+        let iv = self.range().div(o.range());
         if o.as_constant() == Some(0.0) || self.as_constant() == Some(0.0) {
             return Affine::constant(0.0);
         }

@@ -121,7 +121,7 @@ mod tests {
         check("add", 1, (-8, 4), (0.0, 0.0), |x, y| x + y, |x, y| x.add(y), |x, y| x.add(y));
         check("sub", 2, (-8, 4), (0.0, 0.0), |x, y| x - y, |x, y| x.sub(y), |x, y| x.sub(y));
         check("mul", 3, (-8, 4), (0.0, 0.0), |x, y| x * y, |x, y| x.mul(y), |x, y| x.mul(y));
-        check("sqr", 4, (-8, 4), (0.0, 0.0), |x, _| x * x, |x, _| x.mul(x), |x, _| Real::mul(&x, &x));
+        check("sqr", 4, (-8, 4), (0.0, 0.0), |x, _| x * x, |x, _| Real::sqr(x), |x, _| Real::sqr(&x));
     }
 
     #[test]
@@ -152,6 +152,8 @@ mod tests {
         unary("abs", 15, (-8, 4), 0.0, |x| Real::abs(&x), |x| Real::abs(x), |x| Real::abs(&x));
         unary("floor", 16, (-8, 2), 0.0, |x| Real::floor(&x), |x| Real::floor(x), |x| Real::floor(&x));
         unary("step", 17, (-8, 2), 0.0, |x| Real::step0(&x), |x| Real::step0(x), |x| Real::step0(&x));
+        unary("fade", 22, (-12, -8), 0.5, |x| Real::fade(&x), |x| Real::fade(x), |x| Real::fade(&x));
+        unary("fade-wide", 23, (-9, -7), 0.5, |x| Real::fade(&x), |x| Real::fade(x), |x| Real::fade(&x));
         unary("smooth", 18, (-12, -8), 0.4, |x| Real::smooth01(&x), |x| Real::smooth01(x), |x| Real::smooth01(&x));
         check("min", 19, (-8, 4), (0.0, 0.0), |x, y| x.min(y), |x, y| Real::min(x, y), |x, y| Real::min(&x, &y));
         check("max", 20, (-8, 4), (0.0, 0.0), |x, y| x.max(y), |x, y| Real::max(x, y), |x, y| Real::max(&x, &y));

@@ -8,7 +8,7 @@
 //! - `pow(x, n)` for an integer constant |n| ≤ 64 is sign(x)ⁿ·|x|ⁿ; any other exponent uses
 //!   `max(x, 0)` as the base (`pow(0, y < 0) = +∞`).
 
-use super::approx::{self, powi_point, smooth01_point};
+use super::approx::{self, fade_point, fade_slack, powi_point, smooth01_point};
 use super::form::Affine;
 use super::interval::{down_by, up_by, Interval, LIBM_ULPS};
 
@@ -47,6 +47,9 @@ pub trait Real: Clone + PartialEq + std::fmt::Debug + Send + Sync + 'static {
     fn sub(&self, o: &Self) -> Self;
     /// `self · o`.
     fn mul(&self, o: &Self) -> Self;
+    /// `self · self` (a value times itself: non-negative, tighter than a product of two
+    /// independent values with the same range).
+    fn sqr(&self) -> Self;
     /// `self / o` with `x / 0 = 0`.
     fn div(&self, o: &Self) -> Self;
     /// `−self`.
@@ -75,6 +78,9 @@ pub trait Real: Clone + PartialEq + std::fmt::Debug + Send + Sync + 'static {
     fn step0(&self) -> Self;
     /// Hermite smoothstep of clamp(x, 0, 1).
     fn smooth01(&self) -> Self;
+    /// Perlin's quintic fade 6t⁵ − 15t⁴ + 10t³ (a univariate primitive so that area
+    /// arithmetics approximate it as a whole, not as a chain of products).
+    fn fade(&self) -> Self;
     /// A value that may be `self` or `o` (both branches of a condition over a range).
     fn join(&self, o: &Self) -> Self;
     /// The sign over the whole range.
@@ -125,6 +131,9 @@ impl Real for f64 {
     fn mul(&self, o: &Self) -> Self {
         self * o
     }
+    fn sqr(&self) -> Self {
+        self * self
+    }
     fn div(&self, o: &Self) -> Self {
         if *o == 0.0 {
             0.0
@@ -174,6 +183,9 @@ impl Real for f64 {
     }
     fn smooth01(&self) -> Self {
         smooth01_point(*self)
+    }
+    fn fade(&self) -> Self {
+        fade_point(*self)
     }
     fn join(&self, _o: &Self) -> Self {
         // A point condition is never ambiguous, so the interpreter never joins points.
@@ -237,6 +249,12 @@ fn smooth01_interval(x: Interval) -> Interval {
     Interval::new(down_by(smooth01_point(x.lo), 4), up_by(smooth01_point(x.hi), 4))
 }
 
+/// fade is monotone increasing (f' = 30t²(t − 1)² ≥ 0).
+fn fade_interval(x: Interval) -> Interval {
+    let s = fade_slack(x.lo.abs().max(x.hi.abs()));
+    Interval::new(down_by(fade_point(x.lo) - s, 1), up_by(fade_point(x.hi) + s, 1))
+}
+
 fn step0_interval(x: Interval) -> Interval {
     Interval::new(x.lo.step0(), x.hi.step0())
 }
@@ -274,6 +292,12 @@ impl Real for Interval {
         match (self.as_constant(), o.as_constant()) {
             (Some(a), Some(b)) => Interval::point(a * b),
             _ => Interval::mul(*self, *o),
+        }
+    }
+    fn sqr(&self) -> Self {
+        match self.as_constant() {
+            Some(a) => Interval::point(a * a),
+            None => Interval::sqr(*self),
         }
     }
     fn div(&self, o: &Self) -> Self {
@@ -342,6 +366,12 @@ impl Real for Interval {
             None => smooth01_interval(*self),
         }
     }
+    fn fade(&self) -> Self {
+        match self.as_constant() {
+            Some(c) => Interval::point(fade_point(c)),
+            None => fade_interval(*self),
+        }
+    }
     fn join(&self, o: &Self) -> Self {
         self.hull(*o)
     }
@@ -372,8 +402,14 @@ impl Real for Affine {
         Affine::from_interval(iv)
     }
     fn input(lo: f64, hi: f64) -> Self {
-        // Node corners are dyadic, so centre and radius are exact: û = u₀ + (Δu/2)·ε (§3.1).
-        Affine::symbol(0.5 * (lo + hi), 0.5 * (hi - lo))
+        // û = u₀ + (Δu/2)·ε (§3.1); node corners are dyadic, so centre and radius are exact
+        // (otherwise the interval is enclosed with outward rounding).
+        let (c, r) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+        if c - r == lo && c + r == hi {
+            Affine::symbol(c, r)
+        } else {
+            Affine::from_interval(Interval::new(lo, hi))
+        }
     }
     fn bounds(&self) -> Interval {
         self.range()
@@ -389,6 +425,9 @@ impl Real for Affine {
     }
     fn mul(&self, o: &Self) -> Self {
         Affine::mul(self, o)
+    }
+    fn sqr(&self) -> Self {
+        Affine::sqr(self)
     }
     fn div(&self, o: &Self) -> Self {
         Affine::div(self, o)
@@ -464,6 +503,9 @@ impl Real for Affine {
     }
     fn smooth01(&self) -> Self {
         self.unary(smooth01_point, smooth01_interval, approx::smooth01)
+    }
+    fn fade(&self) -> Self {
+        self.unary(fade_point, fade_interval, approx::fade)
     }
     fn join(&self, o: &Self) -> Self {
         Affine::join(self, o)

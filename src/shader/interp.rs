@@ -142,6 +142,11 @@ fn dot<N: Real>(a: &[N; 3], b: &[N; 3]) -> N {
     a[0].mul(&b[0]).add(&a[1].mul(&b[1])).add(&a[2].mul(&b[2]))
 }
 
+/// a·a: each component squared (a value times itself is non-negative in every arithmetic).
+fn norm2<N: Real>(a: &[N; 3]) -> N {
+    a[0].sqr().add(&a[1].sqr()).add(&a[2].sqr())
+}
+
 /// `a − b·floor(a/b)` (RenderMan's mod: the result has the sign of b).
 pub fn modulo<N: Real>(a: &N, b: &N) -> N {
     a.sub(&b.mul(&a.div(b).floor()))
@@ -310,6 +315,10 @@ impl<N: Real> Ctx<'_, N> {
                 Global::Ci => Value::T(self.ci.clone()),
             },
             IExpr::Neg(a) => map1(self.expr(a, frame)?, |x| x.neg()),
+            IExpr::Arith(ArOp::Mul, a, b) if a == b && matches!(**a, IExpr::Local(_) | IExpr::Global(_)) => {
+                // The same variable twice: a square, not a product of independent values.
+                map1(self.expr(a, frame)?, |x| x.sqr())
+            }
             IExpr::Arith(op, a, b) => {
                 let (a, b) = (self.expr(a, frame)?, self.expr(b, frame)?);
                 match op {
@@ -431,17 +440,17 @@ impl<N: Real> Ctx<'_, N> {
             }
             Length => {
                 let a = next().triple();
-                Value::F(dot(&a, &a).sqrt())
+                Value::F(norm2(&a).sqrt())
             }
             Dot => Value::F(dot(&next().triple(), &next().triple())),
             Distance => {
                 let (a, b) = (next().triple(), next().triple());
                 let d: [N; 3] = std::array::from_fn(|k| a[k].sub(&b[k]));
-                Value::F(dot(&d, &d).sqrt())
+                Value::F(norm2(&d).sqrt())
             }
             Normalize => {
                 let a = next().triple();
-                let len = dot(&a, &a).sqrt();
+                let len = norm2(&a).sqrt();
                 Value::T(std::array::from_fn(|k| a[k].div(&len)))
             }
             Cross => {

@@ -47,11 +47,9 @@ fn hash(cell: [i64; 3]) -> u8 {
     p[(p[(p[w(cell[0])] as usize + w(cell[1])) & 255] as usize + w(cell[2])) & 255]
 }
 
-/// Quintic fade 6t⁵ − 15t⁴ + 10t³ in Horner form t³(t(6t − 15) + 10).
+/// Quintic fade 6t⁵ − 15t⁴ + 10t³, one primitive of the arithmetic ([`Real::fade`]).
 fn fade<N: Real>(t: &N) -> N {
-    let t3 = t.mul(t).mul(t);
-    let inner = t.mul(&t.mul(&N::constant(6.0)).sub(&N::constant(15.0))).add(&N::constant(10.0));
-    t3.mul(&inner)
+    t.fade()
 }
 
 fn lerp<N: Real>(w: &N, a: &N, b: &N) -> N {
@@ -169,21 +167,24 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
     if counts.iter().product::<i64>() > MAX_CELLS {
         return global();
     }
+    // Each touched cell on its part of the box, in the caller's arithmetic with fresh inputs
+    // (affine stays tighter than interval inside a cell); the hull of the cells' bounds.
     let mut hull: Option<Interval> = None;
     for cx in lo[0]..=hi[0] {
         for cy in lo[1]..=hi[1] {
             for cz in lo[2]..=hi[2] {
                 let cell = [cx, cy, cz];
-                let t: [Interval; 3] = std::array::from_fn(|k| {
+                let t: [N; 3] = std::array::from_fn(|k| {
                     let c = cell[k] as f64;
-                    let part = Interval::new(b[k].lo.max(c), b[k].hi.min(c + 1.0));
                     if k < dim {
-                        Interval::sub(part, Interval::point(c))
+                        let part = Interval::new(b[k].lo.max(c), b[k].hi.min(c + 1.0));
+                        let local = Interval::sub(part, Interval::point(c));
+                        N::input(local.lo, local.hi)
                     } else {
-                        Interval::point(0.0)
+                        N::constant(0.0)
                     }
                 });
-                let v = cell_eval::<Interval>(dim, cell, &t);
+                let v = cell_eval::<N>(dim, cell, &t).bounds();
                 hull = Some(hull.map_or(v, |h| h.hull(v)));
             }
         }

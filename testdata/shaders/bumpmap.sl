@@ -6,7 +6,7 @@ float height(float x, float y) {
 }
 
 shader bumpmap(float depth = 0.6,
-               float eps = 0.002,
+               float eps = 0.01,
                color base = color(0.75, 0.72, 0.68)) {
     float h = height(u, v);
     float hx = (height(u + eps, v) - h) / eps;

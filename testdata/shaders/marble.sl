@@ -1,8 +1,8 @@
 // marble: blue marble. Turbulence displaces a sine-wave stratification; a colour spline maps
 // the result to white stone with blue veins. After the RenderMan Companion's blue marble
 // shader (ch. 16), re-expressed.
-shader marble(float scale = 3,
-              float veining = 5,
+shader marble(float scale = 2,
+              float veining = 3,
               float distortion = 0.7,
               float octaves = 5) {
     float t = turbulence(P * scale, octaves, 2, 0.5);

@@ -3,7 +3,7 @@
 // RenderMan Companion's screen shader, ch. 16, which makes the gaps transparent; here the
 // opacity is baked as colour). The wires get a soft cylindrical highlight across their width.
 shader screen(float density = 0.25,
-              float frequency = 20,
+              float frequency = 8,
               color metal = color(0.85, 0.82, 0.75),
               color gap = color(0.04, 0.04, 0.05)) {
     float su = mod(u * frequency, 1);
