@@ -232,3 +232,37 @@ mod tests {
         assert!(ci[0].range().lo >= 0.0 && ci[0].range().hi <= 1.0 + 1e-12);
     }
 }
+
+#[cfg(test)]
+mod conservativeness {
+    //! Every shader in testdata/shaders: sample a quadtree in affine and in interval arithmetic and
+    //! check 10⁵ random point evaluations (spread over every leaf, plus each leaf's corners)
+    //! against the leaves' bounds: zero violations.
+    use super::report::verify;
+    use super::sampler::{sample, Arith, Domain, SampleConfig};
+    use super::Shader;
+    use crate::progress::NoProgress;
+
+    #[test]
+    fn every_leaf_of_every_shader_bounds_its_point_values() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/shaders");
+        let mut names: Vec<_> = std::fs::read_dir(&dir)
+            .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.extension().is_some_and(|x| x == "sl")).collect())
+            .unwrap_or_default();
+        names.sort();
+        assert!(names.len() >= 6, "expected the six shaders in {}", dir.display());
+        for path in names {
+            let src = std::fs::read_to_string(&path).unwrap_or_default();
+            let shader = Shader::compile(&src, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"));
+            let domain = if shader.uses_direction() { Domain::LatLong } else { Domain::Texture };
+            for arith in [Arith::Affine, Arith::Interval] {
+                let cfg = SampleConfig { tolerance: 0.1, max_depth: 4, arith, domain, points_per_node: 1, seed: 9 };
+                let sampled = sample(&shader, &cfg, &NoProgress).unwrap_or_else(|e| panic!("{e}"));
+                let per_leaf = 100_000usize.div_ceil(sampled.leaves.len());
+                let v = verify(&shader, &sampled, domain, per_leaf, 11).unwrap_or_else(|e| panic!("{e}"));
+                assert!(v.points >= 100_000);
+                assert_eq!(v.violations, 0, "{} ({arith:?}): {v:?}", path.display());
+            }
+        }
+    }
+}
