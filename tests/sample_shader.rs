@@ -48,7 +48,8 @@ fn texture_exr_has_width_and_depth_layers_matching_the_stats() {
         assert!(w <= 0.05 + 1e-6 || d[0] == 6.0, "a leaf above tolerance before max depth: {w} at depth {}", d[0]);
     }
     // Histogram counts every pixel once.
-    let counts: u64 = doc["error_histogram"]["counts"].as_array().map(|a| a.iter().filter_map(|c| c.as_u64()).sum()).unwrap_or(0);
+    let counts: u64 =
+        doc["error_histogram"]["counts"].as_array().map(|a| a.iter().filter_map(|c| c.as_u64()).sum()).unwrap_or(0);
     let overflow = doc["error_histogram"]["overflow"].as_u64().unwrap_or(0);
     assert_eq!(counts + overflow, 64 * 64);
 }
@@ -81,7 +82,8 @@ fn compare_json_rows_show_affine_tighter_than_interval() {
 fn syntax_and_type_errors_name_file_line_and_column() {
     let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
     let bad = dir.path().join("bad.sl");
-    std::fs::write(&bad, "shader s(float k = 1) {\n    color c = P;\n    Ci = c;\n}\n").unwrap_or_else(|e| panic!("{e}"));
+    std::fs::write(&bad, "shader s(float k = 1) {\n    color c = P;\n    Ci = c;\n}\n")
+        .unwrap_or_else(|e| panic!("{e}"));
     let out = dir.path().join("never.exr");
     bin()
         .arg(&bad)
@@ -115,7 +117,12 @@ fn unknown_parameter_is_an_error_and_overrides_change_the_result() {
 fn latlong_sky_feeds_sh_project() {
     let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
     let sky = dir.path().join("sky.exr");
-    bin().arg(shader("sky")).args(["--latlong", "64x32", "--tolerance", "0.5", "-q", "-o"]).arg(&sky).assert().success();
+    bin()
+        .arg(shader("sky"))
+        .args(["--latlong", "64x32", "--tolerance", "0.5", "-q", "-o"])
+        .arg(&sky)
+        .assert()
+        .success();
     let img = prtkit::io::image::read_image(&sky).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!((img.width, img.height), (64, 32));
     assert!(img.pixels.iter().all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));

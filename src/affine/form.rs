@@ -65,6 +65,7 @@ fn rounding(mags: f64, n: usize) -> f64 {
     up(mags * ROUND) + n as f64 * 5e-324
 }
 
+#[allow(clippy::should_implement_trait)]
 impl Affine {
     /// The exact constant `x`.
     pub fn constant(x: f64) -> Affine {

@@ -20,6 +20,7 @@ mod tests {
     //! range and (c) the interval result. Inputs are dyadic rationals with few bits, so the
     //! input values are exact and any violation is the operation's fault. The check itself is
     //! done in outward-rounded interval arithmetic, so it cannot raise false alarms.
+    #![allow(clippy::redundant_closure)]
     use super::*;
     use crate::shader::rng::SplitMix64;
 
@@ -112,7 +113,15 @@ mod tests {
         assert_eq!(violations, 0, "{name}: {violations} violations in {trials} trials; first {first:?}");
     }
 
-    fn unary(name: &str, seed: u64, scale: (i32, i32), bias: f64, point: fn(f64) -> f64, a: fn(&Affine) -> Affine, i: fn(Interval) -> Interval) {
+    fn unary(
+        name: &str,
+        seed: u64,
+        scale: (i32, i32),
+        bias: f64,
+        point: fn(f64) -> f64,
+        a: fn(&Affine) -> Affine,
+        i: fn(Interval) -> Interval,
+    ) {
         check(name, seed, scale, (bias, 0.0), |x, _| point(x), |x, _| a(x), |x, _| i(x));
     }
 
@@ -127,8 +136,24 @@ mod tests {
     #[test]
     fn div_never_violates() {
         // Divisors centred away from 0 (bias) and across 0 (unbounded results).
-        check("div", 5, (-8, 4), (0.0, 1.5), |x, y| Real::div(&x, &y), |x, y| Real::div(x, y), |x, y| Real::div(&x, &y));
-        check("div0", 6, (-8, 4), (0.0, 0.0), |x, y| Real::div(&x, &y), |x, y| Real::div(x, y), |x, y| Real::div(&x, &y));
+        check(
+            "div",
+            5,
+            (-8, 4),
+            (0.0, 1.5),
+            |x, y| Real::div(&x, &y),
+            |x, y| Real::div(x, y),
+            |x, y| Real::div(&x, &y),
+        );
+        check(
+            "div0",
+            6,
+            (-8, 4),
+            (0.0, 0.0),
+            |x, y| Real::div(&x, &y),
+            |x, y| Real::div(x, y),
+            |x, y| Real::div(&x, &y),
+        );
     }
 
     #[test]

@@ -384,7 +384,12 @@ impl Affine {
         self.apply(approx::max0(r.lo, r.hi), r.max(Interval::point(0.0)))
     }
 
-    fn unary(&self, point: fn(f64) -> f64, iv: fn(Interval) -> Interval, ap: fn(f64, f64) -> Option<approx::Approx>) -> Affine {
+    fn unary(
+        &self,
+        point: fn(f64) -> f64,
+        iv: fn(Interval) -> Interval,
+        ap: fn(f64, f64) -> Option<approx::Approx>,
+    ) -> Affine {
         if let Some(c) = self.as_constant() {
             return Affine::constant(point(c));
         }

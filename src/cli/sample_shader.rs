@@ -317,7 +317,8 @@ pub fn run(args: Args) -> Result<Outcome> {
         }
     }
     if args.compare {
-        let point_cost = runs.iter().find(|r| r.stats.arith == "point").map(|r| r.stats.seconds / r.stats.evaluations as f64);
+        let point_cost =
+            runs.iter().find(|r| r.stats.arith == "point").map(|r| r.stats.seconds / r.stats.evaluations as f64);
         let rows: Vec<CompareRow> = runs
             .iter()
             .map(|r| CompareRow {
@@ -337,13 +338,22 @@ pub fn run(args: Args) -> Result<Outcome> {
             Output::Stdout.write(io::document::to_json_pretty(&rows).as_bytes())?;
         } else {
             let mut t = String::from(
-                "| arith | nodes | leaves | evaluations | median width | p95 width | max width | seconds | cost per evaluation (point = 1) | guaranteed |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
+                "| shader | arith | nodes | leaves | evaluations | median width | p95 width | max width | seconds | cost per evaluation (point = 1) | guaranteed |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
             );
             for r in &rows {
                 let cost = point_cost.map(|p| format!("{:.2}", r.seconds_per_evaluation / p)).unwrap_or_default();
                 t += &format!(
-                    "| {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.3} | {} | {} |\n",
-                    r.arith, r.nodes, r.leaves, r.evaluations, r.median_width, r.p95_width, r.max_width, r.seconds, cost,
+                    "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.3} | {} | {} |\n",
+                    shader.name(),
+                    r.arith,
+                    r.nodes,
+                    r.leaves,
+                    r.evaluations,
+                    r.median_width,
+                    r.p95_width,
+                    r.max_width,
+                    r.seconds,
+                    cost,
                     if r.guaranteed { "yes" } else { "no (estimate)" }
                 );
             }

@@ -321,9 +321,37 @@ fn builtin_of(name: &str) -> Option<Builtin> {
 
 /// Names of all builtins (for docs and messages).
 pub const BUILTINS: &[&str] = &[
-    "sin", "cos", "sqrt", "exp", "log", "abs", "floor", "ceil", "fract", "pow", "min", "max", "mod", "step", "clamp",
-    "mix", "smoothstep", "noise", "snoise", "fbm", "turbulence", "spline", "length", "dot", "distance", "normalize",
-    "cross", "xcomp", "ycomp", "zcomp", "luminance",
+    "sin",
+    "cos",
+    "sqrt",
+    "exp",
+    "log",
+    "abs",
+    "floor",
+    "ceil",
+    "fract",
+    "pow",
+    "min",
+    "max",
+    "mod",
+    "step",
+    "clamp",
+    "mix",
+    "smoothstep",
+    "noise",
+    "snoise",
+    "fbm",
+    "turbulence",
+    "spline",
+    "length",
+    "dot",
+    "distance",
+    "normalize",
+    "cross",
+    "xcomp",
+    "ycomp",
+    "zcomp",
+    "luminance",
 ];
 
 struct Checker<'a> {
@@ -339,14 +367,12 @@ fn unify(a: VTy, b: VTy, pos: Pos, what: &str) -> Result<VTy, ShaderError> {
         }
         (VTy::Float, t) | (t, VTy::Float) => Ok(t),
         (VTy::Triple(Type::Color), VTy::Triple(Type::Color)) => Ok(a),
-        (VTy::Triple(Type::Color), VTy::Triple(t)) | (VTy::Triple(t), VTy::Triple(Type::Color)) => Err(
-            ShaderError::at(pos, format!("{what}: cannot combine color and {} (convert explicitly)", t.name())),
-        ),
-        (VTy::Triple(x), VTy::Triple(y)) => Ok(VTy::Triple(if x == Type::Point || y == Type::Point {
-            Type::Point
-        } else {
-            Type::Vector
-        })),
+        (VTy::Triple(Type::Color), VTy::Triple(t)) | (VTy::Triple(t), VTy::Triple(Type::Color)) => {
+            Err(ShaderError::at(pos, format!("{what}: cannot combine color and {} (convert explicitly)", t.name())))
+        }
+        (VTy::Triple(x), VTy::Triple(y)) => {
+            Ok(VTy::Triple(if x == Type::Point || y == Type::Point { Type::Point } else { Type::Vector }))
+        }
     }
 }
 
@@ -408,7 +434,10 @@ impl Checker<'_> {
             ExprKind::Member(a, m) => {
                 let (a, t) = self.expr(a, sc)?;
                 let VTy::Triple(tt) = t else {
-                    return Err(ShaderError::at(pos, format!("'.{m}' needs a color, point or vector, found {}", t.name())));
+                    return Err(ShaderError::at(
+                        pos,
+                        format!("'.{m}' needs a color, point or vector, found {}", t.name()),
+                    ));
                 };
                 let idx = match (tt, m.as_str()) {
                     (Type::Color, "r") | (Type::Point | Type::Vector, "x") => 0,
@@ -433,7 +462,11 @@ impl Checker<'_> {
                         if ta != VTy::Float || tb != VTy::Float {
                             return Err(ShaderError::at(
                                 pos,
-                                format!("comparisons need floats, found {} and {} (compare components)", ta.name(), tb.name()),
+                                format!(
+                                    "comparisons need floats, found {} and {} (compare components)",
+                                    ta.name(),
+                                    tb.name()
+                                ),
                             ));
                         }
                         let c = match op {
@@ -527,7 +560,10 @@ impl Checker<'_> {
             }
             for (i, (_, ty)) in checked.iter().enumerate() {
                 if *ty != VTy::Float {
-                    return Err(ShaderError::at(pos, format!("{name}(…): argument {} must be float, found {}", i + 1, ty.name())));
+                    return Err(ShaderError::at(
+                        pos,
+                        format!("{name}(…): argument {} must be float, found {}", i + 1, ty.name()),
+                    ));
                 }
             }
             return Ok((IExpr::Construct(checked.into_iter().map(|c| c.0).collect()), VTy::Triple(t)));
@@ -540,10 +576,7 @@ impl Checker<'_> {
         };
         let f = &self.prog.functions[fi];
         if f.params.len() != n {
-            return Err(ShaderError::at(
-                pos,
-                format!("'{name}' takes {} arguments, found {n}", f.params.len()),
-            ));
+            return Err(ShaderError::at(pos, format!("'{name}' takes {} arguments, found {n}", f.params.len())));
         }
         let mut out = Vec::with_capacity(n);
         for (i, ((e, ty), (pty, pname, _))) in checked.into_iter().zip(&f.params).enumerate() {
@@ -575,14 +608,20 @@ impl Checker<'_> {
         let need_triple = |i: usize| -> Result<(), ShaderError> {
             match types[i] {
                 VTy::Triple(_) => Ok(()),
-                t => Err(ShaderError::at(pos, format!("'{name}': argument {} must be a color, point or vector, found {}", i + 1, t.name()))),
+                t => Err(ShaderError::at(
+                    pos,
+                    format!("'{name}': argument {} must be a color, point or vector, found {}", i + 1, t.name()),
+                )),
             }
         };
         let need_float = |i: usize| -> Result<(), ShaderError> {
             if types[i] == VTy::Float {
                 Ok(())
             } else {
-                Err(ShaderError::at(pos, format!("'{name}': argument {} must be float, found {}", i + 1, types[i].name())))
+                Err(ShaderError::at(
+                    pos,
+                    format!("'{name}': argument {} must be float, found {}", i + 1, types[i].name()),
+                ))
             }
         };
         let ty = match b {
@@ -699,7 +738,10 @@ impl Checker<'_> {
                 let (mut ie, mut t) = self.expr(e, sc)?;
                 let (target, tty) = if let Some(v) = sc.lookup(name) {
                     if v.konst {
-                        return Err(ShaderError::at(pos, format!("'{name}' is a parameter or loop variable and cannot be assigned")));
+                        return Err(ShaderError::at(
+                            pos,
+                            format!("'{name}' is a parameter or loop variable and cannot be assigned"),
+                        ));
                     }
                     (Some(v.slot), v.ty)
                 } else if name == "Ci" {
@@ -735,7 +777,10 @@ impl Checker<'_> {
             StmtKind::If(c, a, b) => {
                 let (ic, tc) = self.expr(c, sc)?;
                 if tc != VTy::Bool {
-                    return Err(ShaderError::at(c.pos, format!("'if' needs a condition (a comparison), found {}", tc.name())));
+                    return Err(ShaderError::at(
+                        c.pos,
+                        format!("'if' needs a condition (a comparison), found {}", tc.name()),
+                    ));
                 }
                 sc.push();
                 let ia = self.stmt_block(a, sc, in_function)?;
@@ -753,7 +798,9 @@ impl Checker<'_> {
                     if !self.is_const(e, sc) {
                         return Err(ShaderError::at(
                             e.pos,
-                            format!("the loop {what} must be constant (literals, parameters, enclosing loop variables)"),
+                            format!(
+                                "the loop {what} must be constant (literals, parameters, enclosing loop variables)"
+                            ),
                         ));
                     }
                 }
@@ -767,7 +814,10 @@ impl Checker<'_> {
                 let slot = if *declared {
                     sc.declare(var, VTy::Float, true, pos)?
                 } else {
-                    return Err(ShaderError::at(pos, format!("declare the loop variable in the loop: 'for (float {var} = …'")));
+                    return Err(ShaderError::at(
+                        pos,
+                        format!("declare the loop variable in the loop: 'for (float {var} = …'"),
+                    ));
                 };
                 let ibody = self.stmt_block(body, sc, in_function)?;
                 sc.pop();
@@ -849,12 +899,5 @@ pub fn check(prog: &Program) -> Result<Checked, ShaderError> {
     }
     sc.push();
     let body = ck.stmts(&prog.body, &mut sc, false)?;
-    Ok(Checked {
-        name: prog.name.clone(),
-        params,
-        slots: sc.slots,
-        body,
-        functions,
-        uses_direction: ck.uses_direction,
-    })
+    Ok(Checked { name: prog.name.clone(), params, slots: sc.slots, body, functions, uses_direction: ck.uses_direction })
 }

@@ -171,7 +171,8 @@ pub fn spline<N: Real>(t: &N, knots: &[N]) -> N {
         let sf = s as f64;
         let lo = b.lo.max(sf);
         let hi = if s == nseg - 1 { b.hi } else { b.hi.min(sf + 1.0) };
-        let local = crate::affine::Interval::sub(crate::affine::Interval::new(lo, hi), crate::affine::Interval::point(sf));
+        let local =
+            crate::affine::Interval::sub(crate::affine::Interval::new(lo, hi), crate::affine::Interval::point(sf));
         let v = catmull_rom(s, &local, &kb);
         hull = Some(hull.map_or(v, |h| h.hull(v)));
     }
@@ -295,10 +296,7 @@ impl<N: Real> Ctx<'_, N> {
 
     /// A loop bound: constant by the checker's rule, so exactly known in every arithmetic.
     fn constant(&mut self, e: &IExpr, frame: &[Value<N>], pos: Pos) -> Result<f64, ShaderError> {
-        self.expr(e, frame)?
-            .float()
-            .as_constant()
-            .ok_or_else(|| ShaderError::at(pos, "loop bounds must be constant"))
+        self.expr(e, frame)?.float().as_constant().ok_or_else(|| ShaderError::at(pos, "loop bounds must be constant"))
     }
 
     fn expr(&mut self, e: &IExpr, frame: &[Value<N>]) -> Result<Value<N>, ShaderError> {

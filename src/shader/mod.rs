@@ -86,8 +86,9 @@ impl Shader {
         let mut frame: Vec<Value<f64>> = Vec::new();
         for p in &self.program.params {
             let value = match overrides.iter().rev().find(|(n, _)| n == &p.name) {
-                Some((_, text)) => parse_value(text, p.ty)
-                    .map_err(|m| ShaderError::at(Pos::default(), format!("parameter '{}': {m}", p.name)).in_file(&self.file))?,
+                Some((_, text)) => parse_value(text, p.ty).map_err(|m| {
+                    ShaderError::at(Pos::default(), format!("parameter '{}': {m}", p.name)).in_file(&self.file)
+                })?,
                 None => interp::eval_const(&self.program, &p.default, &frame).map_err(|e| e.in_file(&self.file))?,
             };
             frame.push(value);
@@ -170,9 +171,14 @@ mod tests {
             "t.sl:2:8: operator '+': cannot combine color and point (convert explicitly)"
         );
         assert_eq!(err("shader s() {\n  Ci = 1; @\n}"), "t.sl:2:11: unexpected character '@'");
-        assert!(err("shader s(float k = 2) {\n  for (float i = 0; i < u; i += 1) { Ci = 1; }\n}").starts_with("t.sl:2:25: the loop bound must be constant"));
-        assert!(err("float f(float x) { if (x < 0) { return 1; } return 2; }\nshader s() { Ci = f(u); }").starts_with("t.sl:1:33: 'return' must be the last"));
-        assert_eq!(err("shader s(float k = 1) {\n  k = 2;\n}"), "t.sl:2:3: 'k' is a parameter or loop variable and cannot be assigned");
+        assert!(err("shader s(float k = 2) {\n  for (float i = 0; i < u; i += 1) { Ci = 1; }\n}")
+            .starts_with("t.sl:2:25: the loop bound must be constant"));
+        assert!(err("float f(float x) { if (x < 0) { return 1; } return 2; }\nshader s() { Ci = f(u); }")
+            .starts_with("t.sl:1:33: 'return' must be the last"));
+        assert_eq!(
+            err("shader s(float k = 1) {\n  k = 2;\n}"),
+            "t.sl:2:3: 'k' is a parameter or loop variable and cannot be assigned"
+        );
     }
 
     #[test]
@@ -227,7 +233,8 @@ mod tests {
         // At exactly u = 0.5 the point value is 0 (x/0 = 0), inside the bound.
         assert_eq!(point_value(&s, Domain::Texture, 0.5, 0.5, 0.0, 0.0).unwrap_or([1.0; 3])[0], 0.0);
         // Clamping afterwards gives finite bounds again.
-        let s = Shader::compile("shader s() { Ci = clamp(1 / (u - 0.5), 0, 1); }", "t.sl").unwrap_or_else(|e| panic!("{e}"));
+        let s = Shader::compile("shader s() { Ci = clamp(1 / (u - 0.5), 0, 1); }", "t.sl")
+            .unwrap_or_else(|e| panic!("{e}"));
         let ci = s.eval(&g).unwrap_or_else(|e| panic!("{e}"));
         assert!(ci[0].range().lo >= 0.0 && ci[0].range().hi <= 1.0 + 1e-12);
     }
@@ -247,7 +254,12 @@ mod conservativeness {
     fn every_leaf_of_every_shader_bounds_its_point_values() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/shaders");
         let mut names: Vec<_> = std::fs::read_dir(&dir)
-            .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.extension().is_some_and(|x| x == "sl")).collect())
+            .map(|d| {
+                d.filter_map(|e| e.ok())
+                    .map(|e| e.path())
+                    .filter(|p| p.extension().is_some_and(|x| x == "sl"))
+                    .collect()
+            })
             .unwrap_or_default();
         names.sort();
         assert!(names.len() >= 6, "expected the six shaders in {}", dir.display());

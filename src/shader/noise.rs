@@ -32,7 +32,7 @@ fn perm() -> &'static [u8; 512] {
     PERM.get_or_init(|| {
         // A fixed pseudo-random permutation (Fisher–Yates with a fixed seed).
         let mut p: [u8; 256] = std::array::from_fn(|i| i as u8);
-        let mut rng = SplitMix64::new(0x5eed_0f_9e41);
+        let mut rng = SplitMix64::new(0x5EED_F00D);
         for i in (1..256).rev() {
             let j = (rng.next_u64() % (i as u64 + 1)) as usize;
             p.swap(i, j);
@@ -155,13 +155,8 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
     if counts.iter().all(|&c| c == 1) {
         // One cell (always the case for points): the polynomial in the caller's arithmetic.
         let cell = [lo[0], lo[1], lo[2]];
-        let t: [N; 3] = std::array::from_fn(|k| {
-            if k < dim {
-                p[k].sub(&N::constant(cell[k] as f64))
-            } else {
-                N::constant(0.0)
-            }
-        });
+        let t: [N; 3] =
+            std::array::from_fn(|k| if k < dim { p[k].sub(&N::constant(cell[k] as f64)) } else { N::constant(0.0) });
         return cell_eval(dim, cell, &t);
     }
     if counts.iter().product::<i64>() > MAX_CELLS {

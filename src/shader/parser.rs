@@ -417,7 +417,12 @@ impl Parser {
             Tok::Sym("<=") => BinOp::Le,
             Tok::Sym(">") => BinOp::Gt,
             Tok::Sym(">=") => BinOp::Ge,
-            t => return Err(ShaderError::at(p2, format!("expected <, <=, > or >= in the loop condition, found {}", describe(&t)))),
+            t => {
+                return Err(ShaderError::at(
+                    p2,
+                    format!("expected <, <=, > or >= in the loop condition, found {}", describe(&t)),
+                ))
+            }
         };
         let bound = self.expr()?;
         self.expect(";")?;
@@ -428,7 +433,9 @@ impl Parser {
         let step_sign = match self.bump().tok {
             Tok::Sym("+=") => 1.0,
             Tok::Sym("-=") => -1.0,
-            t => return Err(ShaderError::at(p3, format!("expected += or -= in the loop step, found {}", describe(&t)))),
+            t => {
+                return Err(ShaderError::at(p3, format!("expected += or -= in the loop step, found {}", describe(&t))))
+            }
         };
         let step = self.expr()?;
         self.expect(")")?;

@@ -105,7 +105,9 @@ pub fn globals<N: Real>(domain: Domain, u: [f64; 2], v: [f64; 2]) -> Globals<N> 
     let c = |x: f64| N::constant(x);
     let (du, dv) = (c(u[1] - u[0]), c(v[1] - v[0]));
     match domain {
-        Domain::Texture => Globals { p: [un.clone(), vn.clone(), c(0.0)], d: [c(0.0), c(0.0), c(1.0)], u: un, v: vn, du, dv },
+        Domain::Texture => {
+            Globals { p: [un.clone(), vn.clone(), c(0.0)], d: [c(0.0), c(0.0), c(1.0)], u: un, v: vn, du, dv }
+        }
         Domain::LatLong => {
             let theta = vn.mul(&c(PI));
             let phi = un.mul(&c(2.0 * PI));
@@ -134,7 +136,8 @@ pub fn evaluate_node(shader: &Shader, cfg: &SampleConfig, depth: u32, ix: u32, i
             for _ in 0..cfg.points_per_node.max(1) {
                 let pu = u[0] + (u[1] - u[0]) * rng.next_f64();
                 let pv = v[0] + (v[1] - v[0]) * rng.next_f64();
-                let ci = shader.eval(&globals::<f64>(cfg.domain, [pu, pu], [pv, pv]).with_sizes(u[1] - u[0], v[1] - v[0]))?;
+                let ci = shader
+                    .eval(&globals::<f64>(cfg.domain, [pu, pu], [pv, pv]).with_sizes(u[1] - u[0], v[1] - v[0]))?;
                 for k in 0..3 {
                     lo[k] = lo[k].min(ci[k]);
                     hi[k] = hi[k].max(ci[k]);
