@@ -3,6 +3,7 @@
 //! Each module is one domain concept; binaries in `src/bin` are thin wrappers over `cli`.
 #![forbid(unsafe_code)]
 
+pub mod affine;
 pub mod brdf;
 pub mod cli;
 pub mod envmap;
@@ -12,3 +13,4 @@ pub mod prefilter;
 pub mod progress;
 pub mod quadrature;
 pub mod sh;
+pub mod shader;

@@ -7,5 +7,6 @@ pub mod count_terms;
 pub mod envinput;
 pub mod factor_brdf;
 pub mod prefilter;
+pub mod sample_shader;
 pub mod sh_project;
 pub mod umbrella;

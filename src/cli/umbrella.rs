@@ -24,6 +24,8 @@ enum Stage {
     FactorBrdf(super::factor_brdf::Args),
     /// Predict and measure how many BRDF terms materials need (CI check).
     CountTerms(super::count_terms::Args),
+    /// Bake a procedural shader with guaranteed error bounds (adaptive area sampling).
+    SampleShader(super::sample_shader::Args),
 }
 
 /// Parses `prtkit <stage> …` and runs the stage.
@@ -34,5 +36,6 @@ pub fn main() -> ExitCode {
         Stage::Prefilter(args) => run_stage("prefilter", || super::prefilter::run(args)),
         Stage::FactorBrdf(args) => run_stage("factor-brdf", || super::factor_brdf::run(args)),
         Stage::CountTerms(args) => run_stage("count-terms", || super::count_terms::run(args)),
+        Stage::SampleShader(args) => run_stage("sample-shader", || super::sample_shader::run(args)),
     }
 }
