@@ -84,6 +84,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
         .map_err(|e| IoError::os(path, e))?;
     tmp.write_all(bytes).map_err(|e| IoError::os(path, e))?;
     tmp.as_file().sync_data().map_err(|e| IoError::os(path, e))?;
+    // Temporary files are created 0600; an output keeps the mode of the file it replaces, or gets
+    // the usual 0644, so other users and tools can read it.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(path).map(|m| m.permissions().mode() & 0o7777).unwrap_or(0o644);
+        tmp.as_file().set_permissions(std::fs::Permissions::from_mode(mode)).map_err(|e| IoError::os(path, e))?;
+    }
     tmp.persist(path).map_err(|e| IoError::os(path, e.error))?;
     Ok(())
 }
@@ -100,6 +108,12 @@ mod tests {
         assert_eq!(std::fs::read(&path).unwrap(), b"hello");
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(names.len(), 1);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, 0o644, "outputs must be readable by others");
+        }
     }
 
     #[test]

@@ -133,10 +133,14 @@ pub fn from_isotropic(
 ) -> BrdfSh {
     let nodes_i = angle_nodes(grid.theta_i);
     let nodes_o = angle_nodes(grid.theta_o);
-    let nphi = grid.phi.max(2 * p + 2);
+    // ρ̂ is even in φ (reciprocity and isotropy), so the trapezoid rule over the full circle
+    // with an even number of samples equals samples k = 0..=n/2 with weights 1, 2, …, 2, 1.
+    let nphi = (grid.phi.max(2 * p + 2) + 1) & !1;
     let dphi = 2.0 * PI / nphi as f64;
+    let half = nphi / 2;
+    let phi_weight: Vec<f64> = (0..=half).map(|k| if k == 0 || k == half { 1.0 } else { 2.0 }).collect();
     let cos_q: Vec<Vec<f64>> =
-        (0..=p).map(|q| (0..nphi).map(|k| (q as f64 * k as f64 * dphi).cos()).collect()).collect();
+        (0..=p).map(|q| (0..=half).map(|k| phi_weight[k] * (q as f64 * k as f64 * dphi).cos()).collect()).collect();
     let table_o = LegendreTable::new(p);
     let table_i = LegendreTable::new(f);
 
@@ -149,12 +153,12 @@ pub fn from_isotropic(
             let mut rho_pq = vec![[0.0; 3]; (p + 1) * (p + 1)]; // [p][q]
             let mut energy = 0.0;
             let mut plm = vec![0.0; count(p)];
-            let mut samples = vec![[0.0; 3]; nphi];
-            for &(theta_o, w_o) in &nodes_o {
+            let mut samples = vec![[0.0; 3]; half + 1];
+            for &(theta_o, w_o) in nodes_o.iter() {
                 let cos_o = theta_o.cos();
                 for (k, s) in samples.iter_mut().enumerate() {
                     *s = rho_hat(cos_i, cos_o, k as f64 * dphi);
-                    energy += w_o * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+                    energy += phi_weight[k] * w_o * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
                 }
                 table_o.eval(cos_o, theta_o.sin(), &mut plm);
                 for q in 0..=p {

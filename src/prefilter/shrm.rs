@@ -162,6 +162,8 @@ pub fn local_shrm(
 
 /// Applies the rotation of texel (x, y)'s frame to the view coefficients of every band:
 /// B̃_p·(α, β) = M^p(R_{α,β}) B_p·(α, β) (eq. 8) when `to_global`, the inverse otherwise.
+/// M(R_z(β) R_y(α)) = M(R_z(β)) M(R_y(α)): one R_y matrix per row, then per texel the z-rotation,
+/// which only mixes the (q, −q) pairs by cos qβ, sin qβ.
 fn rotate_views(shrm: &Shrm, to_global: bool) -> Shrm {
     let (w, h, p) = (shrm.width(), shrm.height(), shrm.p_b);
     let n = count(p);
@@ -169,16 +171,23 @@ fn rotate_views(shrm: &Shrm, to_global: bool) -> Shrm {
     let rows: Vec<Vec<[f32; 3]>> = (0..h)
         .into_par_iter()
         .map(|y| {
+            let alpha = PI * (y as f64 + 0.5) / h as f64;
+            let sign = if to_global { 1.0 } else { -1.0 };
+            let ry = ShRotation::new(DMat3::from_rotation_y(sign * alpha), p);
             let mut out = vec![[0.0f32; 3]; n * w];
             let mut coeffs = vec![0.0; n];
             for x in 0..w {
-                let frame = texel_frame(w, h, x, y);
-                let rot = ShRotation::new(if to_global { frame } else { frame.transpose() }, p);
+                let beta = sign * 2.0 * PI * (x as f64 + 0.5) / w as f64;
                 for ch in 0..3 {
                     for (i, c) in coeffs.iter_mut().enumerate() {
                         *c = shrm.layers[i].get(x, y)[ch] as f64;
                     }
-                    let r = rot.apply_scalar(&coeffs);
+                    // Global: R_y(α) first, then R_z(β). Local: R_z(−β) first, then R_y(−α).
+                    let r = if to_global {
+                        rotate_z(&ry.apply_scalar(&coeffs), p, beta)
+                    } else {
+                        ry.apply_scalar(&rotate_z(&coeffs, p, beta))
+                    };
                     for i in 0..n {
                         out[i * w + x][ch] = r[i] as f32;
                     }
@@ -193,6 +202,21 @@ fn rotate_views(shrm: &Shrm, to_global: bool) -> Shrm {
         }
     }
     Shrm { f_b: shrm.f_b, p_b: p, global: to_global, layers }
+}
+
+/// Coefficients of f∘R_z(−γ) (f rotated by γ about +Z): c'_q = c_q cos qγ − c_−q sin qγ and
+/// c'_−q = c_−q cos qγ + c_q sin qγ for q > 0.
+fn rotate_z(c: &[f64], order: usize, gamma: f64) -> Vec<f64> {
+    let mut out = c.to_vec();
+    for q in 1..=order as isize {
+        let (s, co) = (q as f64 * gamma).sin_cos();
+        for p in (q as usize)..=order {
+            let (i, j) = (index(p, q), index(p, -q));
+            out[i] = c[i] * co - c[j] * s;
+            out[j] = c[j] * co + c[i] * s;
+        }
+    }
+    out
 }
 
 /// The global SHRM B̃_pq(α, β) (eq. 7–8) of a local one.

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# The demo pipeline, end to end, on data prtkit makes itself:
+#   1. sample-shader bakes a procedural HDR sky (testdata/shaders/sky.sl) into a lat-long EXR,
+#      with guaranteed per-texel error bounds;
+#   2. sh-project projects it onto spherical harmonics (order chosen for ε = 1 %) and writes the
+#      reconstruction and the irradiance map;
+#   3. prefilter makes a glossy Phong reflection map and a microfacet SHRM from it;
+#   4. count-terms says how many in-out BRDF terms those materials need.
+# Outputs go to out/demo/ (EXR for data, PNG previews for people). Usage: scripts/demo.sh [OUTDIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-out/demo}
+mkdir -p "$out"
+cargo build --release --quiet
+bin=target/release
+say() { printf '\n== %s\n' "$*" >&2; }
+
+say "1. sample-shader: a procedural sky as a 512x256 lat-long environment"
+"$bin/sample-shader" testdata/shaders/sky.sl --latlong 512x256 --tolerance 0.05 \
+    -o "$out/sky.exr" --stats "$out/sky.stats.json" -q
+"$bin/prtkit" convert "$out/sky.exr" --to latlong -o "$out/sky.png" --exposure -2
+
+say "2. sh-project: SH coefficients for ε = 1 %, reconstruction and irradiance"
+"$bin/sh-project" "$out/sky.exr" --epsilon 0.01 -o "$out/sky.sh.json" \
+    --reconstruct "$out/sky-recon.exr" --reconstruct "$out/sky-recon.png" \
+    --irradiance "$out/sky-irradiance.exr" --irradiance "$out/sky-irradiance.png" --exposure -4 --json -q \
+    > "$out/sh-project.summary.json"
+
+say "3. prefilter: Phong s=32 reflection map; microfacet (σ = 0.2) SHRM and two views"
+"$bin/prefilter" "$out/sky.exr" --brdf phong:s=32 --reflection-map "$out/phong32.exr" \
+    --reflection-map "$out/phong32.png" --exposure -2 -o "$out/phong32.shrm.json" -q
+"$bin/prefilter" "$out/sky.exr" --brdf torrance-sparrow:sigma=0.2 --no-cosine --epsilon 0.03 \
+    --shrm "$out/microfacet.shrm.exr" --view 0,0,1 --reflection-map "$out/microfacet-top.png" \
+    --view 1,0,0.2 --reflection-map "$out/microfacet-side.png" --exposure -2 -o "$out/microfacet.shrm.json" -q
+
+say "4. count-terms: in-out BRDF terms for the demo materials (measured by SVD)"
+"$bin/count-terms" --brdf phong:s=32 --brdf torrance-sparrow:sigma=0.2 --resolution 24 \
+    --json > "$out/terms.json"
+"$bin/count-terms" --brdf phong:s=32 --brdf torrance-sparrow:sigma=0.2 --resolution 24 >&2
+
+say "done: $(ls "$out" | wc -l) files in $out"
+ls "$out" >&2
