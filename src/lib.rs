@@ -6,5 +6,6 @@
 pub mod cli;
 pub mod envmap;
 pub mod io;
+pub mod normals;
 pub mod progress;
 pub mod sh;

@@ -3,6 +3,7 @@
 
 pub mod common;
 pub mod convert;
+pub mod encode_normals;
 pub mod envinput;
 pub mod sh_project;
 pub mod umbrella;

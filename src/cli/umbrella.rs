@@ -18,6 +18,8 @@ enum Stage {
     Convert(super::convert::Args),
     /// Project an environment map onto spherical harmonics.
     ShProject(super::sh_project::Args),
+    /// Encode normal vectors at a bit budget and measure the exact angular error.
+    EncodeNormals(super::encode_normals::Args),
 }
 
 /// Parses `prtkit <stage> …` and runs the stage.
@@ -25,5 +27,6 @@ pub fn main() -> ExitCode {
     match Cli::parse().stage {
         Stage::Convert(args) => run_stage("convert", || super::convert::run(args)),
         Stage::ShProject(args) => run_stage("sh-project", || super::sh_project::run(args)),
+        Stage::EncodeNormals(args) => run_stage("encode-normals", || super::encode_normals::run(args)),
     }
 }

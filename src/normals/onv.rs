@@ -1,0 +1,172 @@
+//! Octahedron normal vectors (Meyer et al. 2010, §5): project onto the octahedron `|x|+|y|+|z| = 1`
+//! with the 1-norm, unfold the lower half onto the corners of the square `[-1,1]^2` (Fig. 2), and
+//! store `[u, v]` as two SNORM fields.
+//!
+//! Two ways to pick the stored lattice point:
+//! - **domain** rounding: round `u` and `v` independently (error bound eq. 10, `≈ 3ε/√2`);
+//! - **range** rounding: of the four corners of the parameter cell holding `[u, v]`, keep the one
+//!   whose decoded normal is closest to the input on the sphere (bound eq. 11, `≈ √2·ε`). The
+//!   comparison uses squared chord lengths in f64, never the largest f32 dot product: at 24 bits
+//!   and above the four candidates' cosines are equal in f32 and the choice becomes arbitrary.
+//!
+//! Fold: for `z < 0` we unfold with `x = σ(u)(1-|v|)`, `y = σ(v)(1-|u|)` (Engelhardt &
+//! Dachsbacher 2008; Cigolle et al. 2014), which is continuous across the fold `|u|+|v| = 1`
+//! and across the square's border. Eq. 9 as printed in our copy of the paper swaps the signs
+//! (`[σ(v)-v, σ(u)-u]`), which agrees in the first quadrant only and would tear the other three
+//! fold edges apart; both unfold the same octahedron, ours keeps rounding across the fold local.
+
+use super::fixed::{field, from_field, snorm_floor, snorm_round, snorm_value, to_field};
+use super::vec::{distance_squared, normalize, sign_not_zero, Dir};
+
+/// Field widths of an ONV code: `u` in the low `u_bits`, `v` in the next `v_bits`
+/// (`u_bits = ⌈b/2⌉`, `v_bits = ⌊b/2⌋`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OnvLayout {
+    /// Width of the `u` field (low bits).
+    pub u_bits: u32,
+    /// Width of the `v` field (above `u`).
+    pub v_bits: u32,
+}
+
+impl OnvLayout {
+    /// The split of a `bits`-bit budget.
+    pub fn new(bits: u32) -> Self {
+        OnvLayout { u_bits: bits.div_ceil(2), v_bits: bits / 2 }
+    }
+}
+
+/// The point `[u, v]` of the unfolded octahedron for a nonzero direction (need not be unit).
+#[inline]
+pub fn oct_from_dir(n: Dir) -> [f64; 2] {
+    let inv_l1 = 1.0 / (n[0].abs() + n[1].abs() + n[2].abs());
+    let (u, v) = (n[0] * inv_l1, n[1] * inv_l1);
+    if n[2] < 0.0 {
+        [(1.0 - v.abs()) * sign_not_zero(u), (1.0 - u.abs()) * sign_not_zero(v)]
+    } else {
+        [u, v]
+    }
+}
+
+/// The point on the octahedron for `[u, v]` in `[-1,1]^2` (eq. 9 with the continuous fold).
+#[inline]
+pub fn octahedron_from_oct(p: [f64; 2]) -> Dir {
+    let (u, v) = (p[0], p[1]);
+    let z = 1.0 - u.abs() - v.abs();
+    if z < 0.0 {
+        [(1.0 - v.abs()) * sign_not_zero(u), (1.0 - u.abs()) * sign_not_zero(v), z]
+    } else {
+        [u, v, z]
+    }
+}
+
+/// The unit normal for `[u, v]` (eq. 9, then 2-norm normalization).
+#[inline]
+pub fn dir_from_oct(p: [f64; 2]) -> Dir {
+    normalize(octahedron_from_oct(p))
+}
+
+#[inline]
+fn pack(su: i64, sv: i64, layout: OnvLayout) -> u64 {
+    to_field(su, layout.u_bits) | (to_field(sv, layout.v_bits) << layout.u_bits)
+}
+
+/// The lattice integers `(s_u, s_v)` stored in a code.
+#[inline]
+pub fn unpack(code: u64, layout: OnvLayout) -> (i64, i64) {
+    (
+        from_field(field(code, 0, layout.u_bits), layout.u_bits),
+        from_field(field(code, layout.u_bits, layout.v_bits), layout.v_bits),
+    )
+}
+
+/// ONV_domain: rounds `u` and `v` to the nearest lattice values.
+#[inline]
+pub fn encode_domain(n: Dir, layout: OnvLayout) -> u64 {
+    let p = oct_from_dir(n);
+    pack(snorm_round(p[0], layout.u_bits), snorm_round(p[1], layout.v_bits), layout)
+}
+
+/// ONV_range (§5): of the four corners of the parameter cell holding the input, the one whose
+/// decoded unit normal is nearest on the sphere. `n` must be unit length (the distance compares
+/// unit vectors).
+#[inline]
+pub fn encode_range(n: Dir, layout: OnvLayout) -> u64 {
+    let p = oct_from_dir(n);
+    let u0 = snorm_floor(p[0], layout.u_bits);
+    let v0 = snorm_floor(p[1], layout.v_bits);
+    let mut best = (f64::INFINITY, u0, v0);
+    for (su, sv) in [(u0, v0), (u0 + 1, v0), (u0, v0 + 1), (u0 + 1, v0 + 1)] {
+        let q = dir_from_oct([snorm_value(su, layout.u_bits), snorm_value(sv, layout.v_bits)]);
+        let d = distance_squared(n, q);
+        if d < best.0 {
+            best = (d, su, sv);
+        }
+    }
+    pack(best.1, best.2, layout)
+}
+
+/// Decodes any code to a unit normal.
+#[inline]
+pub fn decode(code: u64, layout: OnvLayout) -> Dir {
+    let (su, sv) = unpack(code, layout);
+    dir_from_oct([snorm_value(su, layout.u_bits), snorm_value(sv, layout.v_bits)])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::normals::fixed::snorm_max;
+
+    #[test]
+    fn fold_is_continuous() {
+        // On the fold |u|+|v| = 1 both branches of eq. 9 give the same point (z = 0).
+        for i in 0..=64 {
+            let u = -1.0 + i as f64 / 32.0;
+            for sv in [-1.0, 1.0] {
+                let v = sv * (1.0 - u.abs());
+                let upper = [u, v, 0.0];
+                let lower = [(1.0 - v.abs()) * sign_not_zero(u), (1.0 - u.abs()) * sign_not_zero(v), 0.0];
+                assert_eq!(upper, lower, "u {u} v {v}");
+            }
+        }
+        // The square's border is identified with its mirror image: (1, v) ~ (1, -v).
+        for i in 0..=16 {
+            let v = i as f64 / 16.0;
+            assert_eq!(octahedron_from_oct([1.0, v]), octahedron_from_oct([1.0, -v]));
+            assert_eq!(octahedron_from_oct([v, -1.0]), octahedron_from_oct([-v, -1.0]));
+        }
+    }
+
+    #[test]
+    fn inverse_on_the_octahedron() {
+        let mut state = 7u64;
+        for _ in 0..10_000 {
+            let n = crate::normals::rng::uniform_direction(&mut state);
+            let p = oct_from_dir(n);
+            let m = dir_from_oct(p);
+            assert!(distance_squared(n, m) < 1e-28, "{n:?}");
+        }
+    }
+
+    #[test]
+    fn lattice_corners_and_axes_are_exact() {
+        for bits in [8, 16, 17, 32, 48, 64] {
+            let layout = OnvLayout::new(bits);
+            for axis in 0..3 {
+                for sign in [1.0, -1.0] {
+                    let mut n = [0.0; 3];
+                    n[axis] = sign;
+                    assert_eq!(decode(encode_domain(n, layout), layout), n, "bits {bits} axis {n:?}");
+                    assert_eq!(decode(encode_range(n, layout), layout), n, "bits {bits} axis {n:?}");
+                }
+            }
+            let q = snorm_max(layout.u_bits);
+            // All four corners of the square are -Z.
+            for (a, b) in [(q, q), (-q, q), (q, -q), (-q, -q)] {
+                let c = to_field(a, layout.u_bits)
+                    | (to_field(b * snorm_max(layout.v_bits) / q, layout.v_bits) << layout.u_bits);
+                assert_eq!(decode(c, layout), [0.0, 0.0, -1.0]);
+            }
+        }
+    }
+}
