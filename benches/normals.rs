@@ -32,7 +32,11 @@ fn max_error_f32(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, f64) {
 fn main() {
     let n: usize = std::env::var("NORMALS_BENCH_COUNT").ok().and_then(|s| s.parse().ok()).unwrap_or(10_000_000);
     let threads = rayon::current_num_threads();
-    println!("normals bench: {n} random unit normals, {threads} threads, best of 5");
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!(
+        "normals bench: {n} random unit normals, {threads} threads, best of 5; load average at start: {}",
+        load.trim()
+    );
     let normals: Vec<[f32; 3]> = (0..n.div_ceil(1 << 16))
         .into_par_iter()
         .flat_map_iter(|c| {

@@ -228,7 +228,9 @@ fn run_encode(args: &Args, codec: &Codec, input: &Path) -> Result<Outcome> {
             .with_context(|| format!("writing {}", out.display()))?;
     }
     if let Some(path) = &args.decoded {
-        let f32s: Vec<[f32; 3]> = decoded.iter().map(|d| d.map(|c| c as f32)).collect();
+        // The same f32 decoder as --decode, so both give identical files.
+        let mut f32s = vec![[0f32; 3]; codes.len()];
+        codec.decode_all_f32(&codes, &mut f32s);
         let bytes = source.write_back(path, &f32s)?;
         crate::io::write_atomic(path, &bytes)?;
     }

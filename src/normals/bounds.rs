@@ -89,19 +89,53 @@ pub fn fpnv_equivalent_bits(mantissa_bits: u32) -> u32 {
     (18f64.log2() + 2.0 * mantissa_bits as f64).ceil() as u32
 }
 
-/// The closed-form bound of `scheme` at `bits`.
+/// The closed-form bound of `scheme` at `bits`, generalized to the unequal per-axis steps of
+/// odd splits (each reduces to the printed equation when the steps are equal):
+/// - ONV_domain (eq. 10): the face centre offset by half a step `(a, b)` in `(u, v)`:
+///   `atan(√3·sqrt(a² + b² + (a+b)²))`;
+/// - ONV_range (eq. 11): near the face centre a step `(du, dv)` subtends `√3·|(du, dv, -du-dv)|`,
+///   so the cell's corners form triangles with sides `ℓu = √6·εu`, `ℓv = √6·εv` at 60°; the
+///   nearest-of-four-corners error peaks at their circumradius `ℓ3/√3`,
+///   `ℓ3² = ℓu² + ℓv² - ℓu·ℓv` (or at half the longer side if the triangle is obtuse):
+///   `√2·ε` for equal steps;
+/// - PP (eq. 6): the half-cell diagonal `sqrt(εx² + εy²)/2` taken radially at the unit circle;
+/// - SPP (eq. 7): at the effective spacing `sqrt(2/3)·sqrt(a² + b² + (a+b)²)` (half steps `a`,
+///   `b`), which gives the same leading term as the unequal-step derivation;
+/// - CM (eq. 8): the face centre offset by half a step: `atan(sqrt(a² + b²))`;
+/// - SC (eq. 5): see [`sc`].
 pub fn bound(scheme: Scheme, bits: u32) -> f64 {
-    let eps = spacing(scheme, bits);
     match scheme {
-        Scheme::OnvRange => onv_range(eps),
-        Scheme::OnvDomain => onv_domain(eps),
+        Scheme::OnvRange | Scheme::OnvDomain => {
+            let l = OnvLayout::new(bits);
+            let (eu, ev) = (snorm_spacing(l.u_bits), snorm_spacing(l.v_bits));
+            if scheme == Scheme::OnvDomain {
+                let (a, b) = (0.5 * eu, 0.5 * ev);
+                (3f64.sqrt() * (a * a + b * b + (a + b) * (a + b)).sqrt()).atan()
+            } else {
+                let circum = SQRT_2 * (eu * eu + ev * ev - eu * ev).sqrt();
+                let half_long = 0.5 * 6f64.sqrt() * eu.max(ev);
+                circum.max(half_long)
+            }
+        }
         Scheme::Sc => {
             let l = ScLayout::new(bits);
             sc(l.theta_step(), l.phi_step())
         }
-        Scheme::Pp => pp(eps),
-        Scheme::Spp => spp(eps),
-        Scheme::Cm => cm(eps),
+        Scheme::Pp => {
+            let l = PpLayout::new(bits);
+            let (ex, ey) = (snorm_spacing(l.x_bits), snorm_spacing(l.y_bits));
+            acos_one_minus(0.5 * (ex * ex + ey * ey).sqrt())
+        }
+        Scheme::Spp => {
+            let l = FaceLayout::new(bits);
+            let (a, b) = (0.5 * FRAC_1_SQRT_2 * snorm_spacing(l.a_bits), 0.5 * FRAC_1_SQRT_2 * snorm_spacing(l.b_bits));
+            spp((2.0 / 3.0 * (a * a + b * b + (a + b) * (a + b))).sqrt())
+        }
+        Scheme::Cm => {
+            let l = FaceLayout::new(bits);
+            let (a, b) = (0.5 * snorm_spacing(l.a_bits), 0.5 * snorm_spacing(l.b_bits));
+            (a * a + b * b).sqrt().atan()
+        }
     }
 }
 
@@ -120,7 +154,7 @@ mod tests {
 
     #[test]
     fn stable_forms_match_the_printed_arccos_forms_where_those_are_accurate() {
-        for eps in [1e-1, 3e-2, 1e-2, 1e-3] {
+        for eps in [1e-1f64, 3e-2, 1e-2, 1e-3] {
             let printed_domain = (2.0 / (2.0 + 9.0 * eps * eps)).sqrt().acos();
             assert!(rel(onv_domain(eps), printed_domain) < 1e-9);
             let printed_cm = (2.0 / (2.0 * eps * eps + 4.0).sqrt()).acos();
@@ -165,6 +199,31 @@ mod tests {
         }
         // SC: 3.74e-7 corresponds to angular steps of π·2^-22.5 (the paper's split is not given).
         assert!(rel(sc(PI * (-22.5f64).exp2(), PI * (-22.5f64).exp2()), 3.74e-7) < 5e-3);
+    }
+
+    #[test]
+    fn generalized_bounds_reduce_to_the_printed_ones_for_equal_steps() {
+        // ONV at even budgets has equal steps: bound() must equal eqs. 10 and 11 exactly.
+        for bits in [16, 32, 48] {
+            let eps = spacing(Scheme::OnvDomain, bits);
+            assert!(rel(bound(Scheme::OnvDomain, bits), onv_domain(eps)) < 1e-12);
+            assert!(rel(bound(Scheme::OnvRange, bits), onv_range(eps)) < 1e-12);
+        }
+        // Unequal steps never give more than the coarse step used on both axes.
+        for bits in 8..=64 {
+            for scheme in Scheme::ALL {
+                let eps = spacing(scheme, bits);
+                let coarse = match scheme {
+                    Scheme::OnvRange => onv_range(eps),
+                    Scheme::OnvDomain => onv_domain(eps),
+                    Scheme::Pp => pp(eps),
+                    Scheme::Spp => spp(eps),
+                    Scheme::Cm => cm(eps),
+                    Scheme::Sc => bound(scheme, bits),
+                };
+                assert!(bound(scheme, bits) <= coarse * (1.0 + 1e-12), "{scheme} {bits}");
+            }
+        }
     }
 
     #[test]

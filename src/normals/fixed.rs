@@ -24,7 +24,24 @@ pub fn snorm_spacing(bits: u32) -> f64 {
 #[inline]
 pub fn snorm_round(t: f64, bits: u32) -> i64 {
     let q = snorm_max(bits);
-    ((t * q as f64).round() as i64).clamp(-q, q)
+    round_half_away(t * q as f64).clamp(-q, q)
+}
+
+/// `x.round() as i64` without the libm call that baseline x86-64 (no SSE4.1 `roundsd`) makes
+/// for `f64::round`: truncate with a native conversion, then correct by the exact remainder
+/// (`x - trunc(x)` is exact for `|x| < 2^52`). NaN gives 0.
+#[inline]
+pub fn round_half_away(x: f64) -> i64 {
+    let i = x as i64;
+    let f = x - i as f64;
+    i + i64::from(f >= 0.5) - i64::from(f <= -0.5)
+}
+
+/// `x.floor() as i64` without a libm call (see [`round_half_away`]).
+#[inline]
+pub fn floor_i64(x: f64) -> i64 {
+    let i = x as i64;
+    i - i64::from((i as f64) > x)
 }
 
 /// The lower lattice index of the SNORM cell holding `t`: `s` with `s <= t*q < s + 1`, clamped so
@@ -32,7 +49,7 @@ pub fn snorm_round(t: f64, bits: u32) -> i64 {
 #[inline]
 pub fn snorm_floor(t: f64, bits: u32) -> i64 {
     let q = snorm_max(bits);
-    ((t * q as f64).floor() as i64).clamp(-q, q - 1)
+    floor_i64(t * q as f64).clamp(-q, q - 1)
 }
 
 /// The value of SNORM integer `s`: `max(s/q, -1)`. Division (not a reciprocal multiply) keeps
@@ -93,6 +110,16 @@ mod tests {
         // 8-bit SNORM as the GPU reads it: 127 -> 1, -127 and -128 -> -1.
         assert_eq!(snorm_value(from_field(0x80, 8), 8), -1.0);
         assert_eq!(snorm_value(from_field(0x7f, 8), 8), 1.0);
+    }
+
+    #[test]
+    fn integer_rounding_matches_std() {
+        let mut s = 5u64;
+        let specials = [0.5, -0.5, 1.5, -1.5, 2.5, 0.49999999999999994, -0.49999999999999994, 0.0, -0.0, 1e15 + 0.5];
+        for x in specials.into_iter().chain((0..100_000).map(|_| (crate::normals::rng::next_f64(&mut s) - 0.5) * 1e6)) {
+            assert_eq!(round_half_away(x), x.round() as i64, "{x}");
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
+        }
     }
 
     #[test]

@@ -125,10 +125,10 @@ mod tests {
         let mean = e.iter().sum::<f64>() / e.len() as f64;
         let rms = (e.iter().map(|x| x * x).sum::<f64>() / e.len() as f64).sqrt();
         assert!((s.mean() - mean).abs() < 1e-15 && (s.rms() - rms).abs() < 1e-15);
-        assert_eq!(s.max, 999e-6);
-        assert_eq!(e[s.max_index as usize], 999e-6);
-        let h = histogram(&e, 1e-3, 10);
-        assert_eq!(h.counts.iter().sum::<u64>(), e.len() as u64);
-        assert_eq!(h.counts[0], 10_000);
+        assert_eq!(s.max, 999.0 * 1e-6);
+        assert_eq!(e[s.max_index as usize], s.max);
+        assert_eq!(s.max_index, e.iter().position(|&x| x == s.max).unwrap() as u64);
+        let h = histogram(&[0.05, 0.15, 0.15, 0.95, 2.0], 1.0, 10);
+        assert_eq!(h.counts, vec![1, 2, 0, 0, 0, 0, 0, 0, 0, 2]);
     }
 }

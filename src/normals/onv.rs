@@ -6,8 +6,11 @@
 //! - **domain** rounding: round `u` and `v` independently (error bound eq. 10, `≈ 3ε/√2`);
 //! - **range** rounding: of the four corners of the parameter cell holding `[u, v]`, keep the one
 //!   whose decoded normal is closest to the input on the sphere (bound eq. 11, `≈ √2·ε`). The
-//!   comparison uses squared chord lengths in f64, never the largest f32 dot product: at 24 bits
-//!   and above the four candidates' cosines are equal in f32 and the choice becomes arbitrary.
+//!   comparison never uses the largest dot product: at 24 bits and above the four candidates'
+//!   cosines are equal in f32 (and at 64 bits even in f64), so the choice becomes arbitrary. It
+//!   compares `sin²` of the angles, `|n×p|²/|p|²`, in f64 and cross-multiplied (no division, no
+//!   normalization of the candidates): the cross product of two nearly parallel vectors keeps
+//!   its relative accuracy where `1 - cos` cancels.
 //!
 //! Fold: for `z < 0` we unfold with `x = σ(u)(1-|v|)`, `y = σ(v)(1-|u|)` (Engelhardt &
 //! Dachsbacher 2008; Cigolle et al. 2014), which is continuous across the fold `|u|+|v| = 1`
@@ -15,8 +18,8 @@
 //! (`[σ(v)-v, σ(u)-u]`), which agrees in the first quadrant only and would tear the other three
 //! fold edges apart; both unfold the same octahedron, ours keeps rounding across the fold local.
 
-use super::fixed::{field, from_field, snorm_floor, snorm_round, snorm_value, to_field};
-use super::vec::{distance_squared, normalize, sign_not_zero, Dir};
+use super::fixed::{field, from_field, snorm_floor, snorm_max, snorm_round, snorm_value, to_field};
+use super::vec::{cross, dot, normalize, sign_not_zero, Dir};
 
 /// Field widths of an ONV code: `u` in the low `u_bits`, `v` in the next `v_bits`
 /// (`u_bits = ⌈b/2⌉`, `v_bits = ⌊b/2⌋`).
@@ -40,11 +43,11 @@ impl OnvLayout {
 pub fn oct_from_dir(n: Dir) -> [f64; 2] {
     let inv_l1 = 1.0 / (n[0].abs() + n[1].abs() + n[2].abs());
     let (u, v) = (n[0] * inv_l1, n[1] * inv_l1);
-    if n[2] < 0.0 {
-        [(1.0 - v.abs()) * sign_not_zero(u), (1.0 - u.abs()) * sign_not_zero(v)]
-    } else {
-        [u, v]
-    }
+    // Both branches are computed and one selected: the hemisphere of random normals is a coin
+    // flip, which a branch would mispredict half the time.
+    let (fu, fv) = ((1.0 - v.abs()) * sign_not_zero(u), (1.0 - u.abs()) * sign_not_zero(v));
+    let lower = n[2] < 0.0;
+    [if lower { fu } else { u }, if lower { fv } else { v }]
 }
 
 /// The point on the octahedron for `[u, v]` in `[-1,1]^2` (eq. 9 with the continuous fold).
@@ -94,15 +97,44 @@ pub fn encode_range(n: Dir, layout: OnvLayout) -> u64 {
     let p = oct_from_dir(n);
     let u0 = snorm_floor(p[0], layout.u_bits);
     let v0 = snorm_floor(p[1], layout.v_bits);
-    let mut best = (f64::INFINITY, u0, v0);
-    for (su, sv) in [(u0, v0), (u0 + 1, v0), (u0, v0 + 1), (u0 + 1, v0 + 1)] {
-        let q = dir_from_oct([snorm_value(su, layout.u_bits), snorm_value(sv, layout.v_bits)]);
-        let d = distance_squared(n, q);
-        if d < best.0 {
-            best = (d, su, sv);
+    // best = (sin² numerator |n×p|², denominator |p|², su, sv); 0/1 < anything else is false,
+    // so start with +inf/1.
+    let mut best = (f64::INFINITY, 1.0, u0, v0);
+    // Candidate coordinates by a reciprocal multiply (the decoder divides; the two differ by at
+    // most an ulp, which can only matter between exactly tied candidates).
+    let (ru, rv) = (1.0 / snorm_max(layout.u_bits) as f64, 1.0 / snorm_max(layout.v_bits) as f64);
+    let (ua, ub) = (u0 as f64 * ru, (u0 + 1) as f64 * ru);
+    let (va, vb) = (v0 as f64 * rv, (v0 + 1) as f64 * rv);
+    for (su, sv, u, v) in [(u0, v0, ua, va), (u0 + 1, v0, ub, va), (u0, v0 + 1, ua, vb), (u0 + 1, v0 + 1, ub, vb)] {
+        let p = octahedron_from_oct([u, v]);
+        let c = cross(n, p);
+        let (s2, p2) = (dot(c, c), dot(p, p));
+        // sin²(n, p) < sin²(best) without dividing: s2/p2 < best.0/best.1.
+        if s2 * best.1 < best.0 * p2 {
+            best = (s2, p2, su, sv);
         }
     }
-    pack(best.1, best.2, layout)
+    pack(best.2, best.3, layout)
+}
+
+/// The f32 decoder of the batch path for codes of at most 32 bits (fields of at most 16 bits,
+/// exact in f32), written branch-free like the shader decoders: `x = u - σ(u)·max(-z, 0)` is
+/// eq. 9's fold `σ(u)(1-|v|)` rewritten. It differs from [`decode`] rounded to f32 by a few
+/// f32 ulps (< 3e-7 rad, tested), far below the 32-bit code's own error (≥ 4e-5 rad).
+#[inline]
+pub fn decode_f32(code: u64, layout: OnvLayout) -> [f32; 3] {
+    let (ku, kv) = (layout.u_bits, layout.v_bits);
+    let c = code as u32;
+    let su = ((c << (32 - ku)) as i32) >> (32 - ku);
+    let sv = (((c >> ku) << (32 - kv)) as i32) >> (32 - kv);
+    let u = (su as f32 / ((1u32 << (ku - 1)) - 1) as f32).max(-1.0);
+    let v = (sv as f32 / ((1u32 << (kv - 1)) - 1) as f32).max(-1.0);
+    let z = 1.0 - u.abs() - v.abs();
+    let t = (-z).max(0.0);
+    let x = u - if u >= 0.0 { t } else { -t };
+    let y = v - if v >= 0.0 { t } else { -t };
+    let inv = 1.0 / (x * x + y * y + z * z).sqrt();
+    [x * inv, y * inv, z * inv]
 }
 
 /// Decodes any code to a unit normal.
@@ -115,7 +147,6 @@ pub fn decode(code: u64, layout: OnvLayout) -> Dir {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::normals::fixed::snorm_max;
 
     #[test]
     fn fold_is_continuous() {
@@ -144,7 +175,44 @@ mod tests {
             let n = crate::normals::rng::uniform_direction(&mut state);
             let p = oct_from_dir(n);
             let m = dir_from_oct(p);
-            assert!(distance_squared(n, m) < 1e-28, "{n:?}");
+            assert!(crate::normals::vec::distance_squared(n, m) < 1e-28, "{n:?}");
+        }
+    }
+
+    #[test]
+    fn f32_batch_decoder_matches_the_f64_decoder() {
+        let mut state = 3u64;
+        for bits in 8..=32 {
+            let layout = OnvLayout::new(bits);
+            for _ in 0..20_000 {
+                let code = crate::normals::rng::next_u64(&mut state) & crate::normals::fixed::mask(bits);
+                let a = decode(code, layout);
+                let b = decode_f32(code, layout).map(f64::from);
+                assert!(crate::normals::vec::angle_between(a, b) < 3e-7, "{bits} {code:#x}");
+            }
+        }
+    }
+
+    #[test]
+    fn range_choice_by_sine_matches_choice_by_chord() {
+        // Reference: the slow, obviously right rule (normalize, compare squared chords).
+        let mut state = 13u64;
+        for bits in [8, 16, 24, 32, 48, 64] {
+            let layout = OnvLayout::new(bits);
+            for _ in 0..20_000 {
+                let n = crate::normals::rng::uniform_direction(&mut state);
+                let p = oct_from_dir(n);
+                let (u0, v0) = (snorm_floor(p[0], layout.u_bits), snorm_floor(p[1], layout.v_bits));
+                let best = [(u0, v0), (u0 + 1, v0), (u0, v0 + 1), (u0 + 1, v0 + 1)]
+                    .into_iter()
+                    .map(|(su, sv)| {
+                        let q = dir_from_oct([snorm_value(su, layout.u_bits), snorm_value(sv, layout.v_bits)]);
+                        crate::normals::vec::distance_squared(n, q)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                let got = crate::normals::vec::distance_squared(n, decode(encode_range(n, layout), layout));
+                assert!(got <= best * (1.0 + 1e-6) + 1e-30, "{bits}: {got:e} vs {best:e}");
+            }
         }
     }
 

@@ -40,7 +40,8 @@ impl ScLayout {
 pub fn params_from_dir(n: Dir) -> (f64, f64) {
     let rho = n[0].hypot(n[1]);
     let theta = rho.atan2(n[2]);
-    let mut phi = n[1].atan2(n[0]);
+    // At the poles φ is arbitrary; fix it to 0 so that (±0, ±0, ±1) all give one code.
+    let mut phi = if rho == 0.0 { 0.0 } else { n[1].atan2(n[0]) };
     if phi < 0.0 {
         phi += TAU;
     }

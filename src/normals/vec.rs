@@ -79,7 +79,7 @@ mod tests {
     #[test]
     fn atan2_angle_is_accurate_where_acos_fails() {
         let a = [1.0, 0.0, 0.0];
-        for k in [1e-3, 1e-7, 1e-9, 1e-12] {
+        for k in [1e-3f64, 1e-7, 1e-9, 1e-12] {
             let b = [k.cos(), k.sin(), 0.0];
             assert!((angle_between(a, b) - k).abs() <= 1e-15 * k + 1e-30, "{k}");
         }
