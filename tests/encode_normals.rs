@@ -207,8 +207,10 @@ fn table_json_rows_deserialize_and_respect_the_bounds() {
     }
     for r in rows.iter().filter(|r| r.scheme != "fpnv") {
         assert_eq!(r.bits, 32);
-        assert!(r.max_error <= r.bound * (1.0 + 1e-6), "{r:?}");
-        assert!(r.max_error >= 0.97 * r.bound, "adversarial directions must reach the bound: {r:?}");
+        // SPP exceeds the printed eq. 7 by up to ~1.5ε relative (docs/encode-normals.md).
+        let slack = if r.scheme == "spp" { 2.0 * r.spacing } else { 1e-6 };
+        assert!(r.max_error <= r.bound * (1.0 + slack), "{r:?}");
+        assert!(r.max_error >= 0.999 * r.bound, "adversarial directions must reach the bound: {r:?}");
         assert!(r.mean_error < r.max_error);
     }
     let range = rows.iter().find(|r| r.scheme == "onv-range").unwrap();

@@ -56,15 +56,23 @@ fn cell_candidates(a: (f64, f64), b: (f64, f64), to_dir: &dyn Fn(f64, f64) -> Op
                 out.push(normalize(m));
             }
         }
-        // Circumcentre of the triple leaving out corner i.
+        // Circumcentre of the triple leaving out corner i: the centre of the triple's circle in
+        // its plane, `a + ((|e1|²e2 - |e2|²e1) × (e1×e2)) / (2|e1×e2|²)`, lies on the ray of
+        // the spherical circumcentre. Computed as `a` plus a small offset, it keeps its accuracy
+        // relative to the cell size (the plane normal `e1×e2` alone is only accurate to
+        // ~1e-16/|e|, 0.5 % of the circumradius at 48 bits).
         let t: Vec<Dir> = (0..4).filter(|&k| k != i).map(|k| corners[k]).collect();
         let e1 = [t[1][0] - t[0][0], t[1][1] - t[0][1], t[1][2] - t[0][2]];
         let e2 = [t[2][0] - t[0][0], t[2][1] - t[0][1], t[2][2] - t[0][2]];
         let n = cross(e1, e2);
-        if dot(n, n) > 0.0 {
-            let n = normalize(n);
-            let s = [t[0][0] + t[1][0] + t[2][0], t[0][1] + t[1][1] + t[2][1], t[0][2] + t[1][2] + t[2][2]];
-            out.push(if dot(n, s) >= 0.0 { n } else { n.map(|c| -c) });
+        let n2 = dot(n, n);
+        if n2 > 0.0 {
+            let (l1, l2) = (dot(e1, e1), dot(e2, e2));
+            let w = cross([l1 * e2[0] - l2 * e1[0], l1 * e2[1] - l2 * e1[1], l1 * e2[2] - l2 * e1[2]], n);
+            let p = [t[0][0] + w[0] / (2.0 * n2), t[0][1] + w[1] / (2.0 * n2), t[0][2] + w[2] / (2.0 * n2)];
+            if dot(p, p) > 0.0 {
+                out.push(normalize(p));
+            }
         }
     }
 }
@@ -130,13 +138,14 @@ fn sc_directions(bits: u32) -> Vec<Dir> {
 
 fn pp_directions(bits: u32) -> Vec<Dir> {
     // Eq. 6: a lattice point on (or just outside) the unit circle, reached from half a cell
-    // inwards along the diagonal, where z = sqrt(1 - x² - y²) is steepest.
+    // inwards along the cell diagonal, where z = sqrt(1 - x² - y²) is steepest.
     let layout = PpLayout::new(bits);
     let (kx, ky) = (layout.x_bits, layout.y_bits);
     let (qx, qy) = (snorm_max(kx), snorm_max(ky));
     let (ex, ey) = (1.0 / qx as f64, 1.0 / qy as f64);
     let mut out = Vec::new();
-    let centre = snorm_round(FRAC_1_SQRT_2, kx);
+    // The half-cell diagonal (ex, ey)/2 is radial where (cos ψ, sin ψ) ∝ (ex, ey).
+    let centre = snorm_round(ex / ex.hypot(ey), kx);
     let span = 4096.min(qx);
     for i in (centre - span).max(1)..=(centre + span).min(qx) {
         let x = snorm_value(i, kx);

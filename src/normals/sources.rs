@@ -235,9 +235,9 @@ fn read_ply(path: &Path, bytes: Vec<u8>) -> Result<NormalSource, IoError> {
     let header = std::str::from_utf8(&bytes[..end]).map_err(|_| bad("header is not text".into()))?;
     let mut encoding = None;
     let mut elements: Vec<PlyElement> = Vec::new();
-    let mut header_lines = 0usize;
+    // Body line numbers: the header's lines, then `end_header`, then the first data line.
+    let header_lines = header.lines().count() + 2;
     for (i, line) in header.lines().enumerate() {
-        header_lines = i + 2;
         let t: Vec<&str> = line.split_whitespace().collect();
         let at = |msg: &str| bad(format!("line {}: {msg}", i + 1));
         match t.first().copied() {
