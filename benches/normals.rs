@@ -19,7 +19,7 @@ fn best_of<T>(reps: usize, mut f: impl FnMut() -> T) -> (f64, T) {
         best = best.min(t.elapsed().as_secs_f64());
         out = Some(r);
     }
-    (best, out.unwrap_or_else(|| f()))
+    (best, out.unwrap_or_else(f))
 }
 
 fn max_error_f32(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, f64) {
