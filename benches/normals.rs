@@ -10,16 +10,37 @@ use prtkit::normals::{Codec, Scheme};
 use rayon::prelude::*;
 use std::time::Instant;
 
-fn best_of<T>(reps: usize, mut f: impl FnMut() -> T) -> (f64, T) {
+/// CPU seconds used by this process so far (user + system, /proc/self/stat, 100 ticks/s).
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit_once(')').map_or("", |(_, rest)| rest);
+    let f: Vec<f64> = after.split_whitespace().map(|x| x.parse().unwrap_or(0.0)).collect();
+    (f.get(11).copied().unwrap_or(0.0) + f.get(12).copied().unwrap_or(0.0)) / 100.0
+}
+
+/// Timing of a phase: best wall time of `reps` runs, and CPU seconds per run (all threads).
+struct Timing {
+    wall: f64,
+    cpu: f64,
+}
+
+impl Timing {
+    /// "wall M/s (M/s per CPU-second × threads)": the second number is what the machine would
+    /// do with its cores to itself, independent of other processes' load.
+    fn show(&self, n: usize, threads: usize) -> String {
+        format!("{:.1} ({:.1})", n as f64 / self.wall / 1e6, n as f64 / self.cpu * threads as f64 / 1e6)
+    }
+}
+
+fn best_of(reps: usize, mut f: impl FnMut()) -> Timing {
     let mut best = f64::INFINITY;
-    let mut out = None;
+    let cpu0 = cpu_seconds();
     for _ in 0..reps {
         let t = Instant::now();
-        let r = f();
+        f();
         best = best.min(t.elapsed().as_secs_f64());
-        out = Some(r);
     }
-    (best, out.unwrap_or_else(f))
+    Timing { wall: best, cpu: (cpu_seconds() - cpu0) / reps as f64 }
 }
 
 fn max_error_f32(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, f64) {
@@ -47,18 +68,17 @@ fn main() {
         .collect();
     let mut codes = vec![0u64; n];
     let mut decoded = vec![[0f32; 3]; n];
+    println!("Throughput in M normals/s: best wall-clock run, and in parentheses the CPU-time rate");
+    println!("(normals per CPU-second × {threads} threads), which discounts other processes' load.");
+    println!();
     println!("| codec | encode M/s | decode M/s | max error (rad) | mean error (rad) |");
     println!("| --- | --- | --- | --- | --- |");
     for scheme in [Scheme::OnvDomain, Scheme::OnvRange] {
         let codec = Codec::new(scheme, 32).expect("32 bits is a valid budget");
-        let (te, _) = best_of(5, || codec.encode_all_f32(&normals, &mut codes));
-        let (td, _) = best_of(5, || codec.decode_all_f32(&codes, &mut decoded));
+        let te = best_of(5, || codec.encode_all_f32(&normals, &mut codes));
+        let td = best_of(5, || codec.decode_all_f32(&codes, &mut decoded));
         let (max, mean) = max_error_f32(&normals, &decoded);
-        println!(
-            "| prtkit {scheme} 32 | {:.1} | {:.1} | {max:.3e} | {mean:.3e} |",
-            n as f64 / te / 1e6,
-            n as f64 / td / 1e6
-        );
+        println!("| prtkit {scheme} 32 | {} | {} | {max:.3e} | {mean:.3e} |", te.show(n, threads), td.show(n, threads));
     }
     meshopt_cross_check(&normals);
 }
@@ -72,7 +92,7 @@ fn meshopt_cross_check(normals: &[[f32; 3]]) {
     let input: Vec<f32> = normals.iter().flat_map(|v| [v[0], v[1], v[2], 0.0]).collect();
     let chunk = 1 << 16;
     let mut encoded = vec![0u8; n * 8];
-    let (te, _) = best_of(5, || {
+    let te = best_of(5, || {
         encoded.par_chunks_mut(chunk * 8).zip(input.par_chunks(chunk * 4)).for_each(|(dst, src)| {
             let count = src.len() / 4;
             // SAFETY: dst holds count*8 bytes, src count*4 floats; stride 8 with 16-bit output.
@@ -80,7 +100,7 @@ fn meshopt_cross_check(normals: &[[f32; 3]]) {
         })
     });
     let mut buffer = encoded.clone();
-    let (td, _) = best_of(5, || {
+    let td = best_of(5, || {
         buffer.copy_from_slice(&encoded);
         buffer.par_chunks_mut(chunk * 8).for_each(|b| {
             // SAFETY: in-place decode of b.len()/8 vectors of stride 8.
@@ -96,10 +116,11 @@ fn meshopt_cross_check(normals: &[[f32; 3]]) {
         .collect();
     let (max, mean) = max_error_f32(normals, &decoded);
     // The decode timing includes the copy that restores the encoded buffer (in-place API).
+    let threads = rayon::current_num_threads();
     println!(
-        "| meshopt filter oct 16+16 | {:.1} | {:.1} | {max:.3e} | {mean:.3e} |",
-        n as f64 / te / 1e6,
-        n as f64 / td / 1e6
+        "| meshopt filter oct 16+16 | {} | {} | {max:.3e} | {mean:.3e} |",
+        te.show(n, threads),
+        td.show(n, threads)
     );
     println!("(meshopt decode time includes re-copying the encoded buffer, since its decoder works in place)");
 }

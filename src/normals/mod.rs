@@ -222,8 +222,16 @@ impl Codec {
         });
     }
 
-    /// Encodes f32 normals that are already unit length, in parallel.
+    /// Encodes f32 normals (nonzero and finite; ONV needs no normalization, the other schemes
+    /// expect unit length), in parallel. ONV takes the vectorized block path with identical codes.
     pub fn encode_all_f32(&self, normals: &[[f32; 3]], codes: &mut [u64]) {
+        if let Layout::Onv(l) = self.layout {
+            let range = self.scheme == Scheme::OnvRange;
+            normals.par_chunks(1 << 14).zip(codes.par_chunks_mut(1 << 14)).for_each(|(n, c)| {
+                onv::encode_block_f32(n, c, l, range);
+            });
+            return;
+        }
         normals.par_chunks(1 << 14).zip(codes.par_chunks_mut(1 << 14)).for_each(|(n, c)| {
             for (n, c) in n.iter().zip(c.iter_mut()) {
                 *c = self.encode([n[0] as f64, n[1] as f64, n[2] as f64]);

@@ -18,7 +18,7 @@
 //! (`[σ(v)-v, σ(u)-u]`), which agrees in the first quadrant only and would tear the other three
 //! fold edges apart; both unfold the same octahedron, ours keeps rounding across the fold local.
 
-use super::fixed::{field, from_field, snorm_floor, snorm_max, snorm_round, snorm_value, to_field};
+use super::fixed::{field, floor_small, from_field, round_ties_even, snorm_max, snorm_value, to_field};
 use super::vec::{cross, dot, normalize, sign_not_zero, Dir};
 
 /// Field widths of an ONV code: `u` in the low `u_bits`, `v` in the next `v_bits`
@@ -82,39 +82,104 @@ pub fn unpack(code: u64, layout: OnvLayout) -> (i64, i64) {
     )
 }
 
+/// Per-layout constants of the encoders: `q` of each field and its reciprocal.
+#[derive(Clone, Copy, Debug)]
+struct Consts {
+    qu: f64,
+    qv: f64,
+    ru: f64,
+    rv: f64,
+}
+
+impl Consts {
+    #[inline]
+    fn new(layout: OnvLayout) -> Self {
+        let (qu, qv) = (snorm_max(layout.u_bits) as f64, snorm_max(layout.v_bits) as f64);
+        Consts { qu, qv, ru: 1.0 / qu, rv: 1.0 / qv }
+    }
+}
+
+/// ONV_domain for one direction: the lattice integers (as f64) nearest to `[u, v]`.
+#[inline(always)]
+fn domain_lane(n: Dir, k: Consts) -> (f64, f64) {
+    let p = oct_from_dir(n);
+    (round_ties_even(p[0] * k.qu).clamp(-k.qu, k.qu), round_ties_even(p[1] * k.qv).clamp(-k.qv, k.qv))
+}
+
+/// `sin²` numerator and denominator of the angle between `n` and the octahedron point `(u, v)`:
+/// `|n×p|²` and `|p|²` (eq. 9 unfolded branch-free: `x = u - σ(u)·max(-z, 0)`).
+#[inline(always)]
+fn sine2(n: Dir, u: f64, v: f64) -> (f64, f64) {
+    let z = 1.0 - u.abs() - v.abs();
+    let t = (-z).max(0.0);
+    let x = u - if u >= 0.0 { t } else { -t };
+    let y = v - if v >= 0.0 { t } else { -t };
+    let c = cross(n, [x, y, z]);
+    (dot(c, c), x * x + y * y + z * z)
+}
+
+/// ONV_range for one direction: the lattice integers (as f64) of the best of the four corners of
+/// the parameter cell. Candidates are visited in the order (0,0), (1,0), (0,1), (1,1) and the
+/// first strictly smaller one wins, so ties resolve the same way everywhere.
+#[inline(always)]
+fn range_lane(n: Dir, k: Consts) -> (f64, f64) {
+    let p = oct_from_dir(n);
+    let u0 = floor_small(p[0] * k.qu).clamp(-k.qu, k.qu - 1.0);
+    let v0 = floor_small(p[1] * k.qv).clamp(-k.qv, k.qv - 1.0);
+    // Candidate coordinates by a reciprocal multiply (the decoder divides; the two differ by at
+    // most an ulp, which can only matter between exactly tied candidates).
+    let (ua, ub) = (u0 * k.ru, (u0 + 1.0) * k.ru);
+    let (va, vb) = (v0 * k.rv, (v0 + 1.0) * k.rv);
+    let mut best = sine2(n, ua, va);
+    let (mut du, mut dv) = (0.0, 0.0);
+    for (cu, cv, u, v) in [(1.0, 0.0, ub, va), (0.0, 1.0, ua, vb), (1.0, 1.0, ub, vb)] {
+        let cand = sine2(n, u, v);
+        // sin²(cand) < sin²(best) without dividing: cand.0/cand.1 < best.0/best.1.
+        let better = cand.0 * best.1 < best.0 * cand.1;
+        best = if better { cand } else { best };
+        du = if better { cu } else { du };
+        dv = if better { cv } else { dv };
+    }
+    (u0 + du, v0 + dv)
+}
+
 /// ONV_domain: rounds `u` and `v` to the nearest lattice values.
 #[inline]
 pub fn encode_domain(n: Dir, layout: OnvLayout) -> u64 {
-    let p = oct_from_dir(n);
-    pack(snorm_round(p[0], layout.u_bits), snorm_round(p[1], layout.v_bits), layout)
+    let (su, sv) = domain_lane(n, Consts::new(layout));
+    pack(su as i64, sv as i64, layout)
 }
 
 /// ONV_range (§5): of the four corners of the parameter cell holding the input, the one whose
-/// decoded unit normal is nearest on the sphere. `n` must be unit length (the distance compares
-/// unit vectors).
+/// decoded normal is nearest on the sphere. `n` need not be unit length (the `sin²` comparison
+/// scales out).
 #[inline]
 pub fn encode_range(n: Dir, layout: OnvLayout) -> u64 {
-    let p = oct_from_dir(n);
-    let u0 = snorm_floor(p[0], layout.u_bits);
-    let v0 = snorm_floor(p[1], layout.v_bits);
-    // best = (sin² numerator |n×p|², denominator |p|², su, sv); 0/1 < anything else is false,
-    // so start with +inf/1.
-    let mut best = (f64::INFINITY, 1.0, u0, v0);
-    // Candidate coordinates by a reciprocal multiply (the decoder divides; the two differ by at
-    // most an ulp, which can only matter between exactly tied candidates).
-    let (ru, rv) = (1.0 / snorm_max(layout.u_bits) as f64, 1.0 / snorm_max(layout.v_bits) as f64);
-    let (ua, ub) = (u0 as f64 * ru, (u0 + 1) as f64 * ru);
-    let (va, vb) = (v0 as f64 * rv, (v0 + 1) as f64 * rv);
-    for (su, sv, u, v) in [(u0, v0, ua, va), (u0 + 1, v0, ub, va), (u0, v0 + 1, ua, vb), (u0 + 1, v0 + 1, ub, vb)] {
-        let p = octahedron_from_oct([u, v]);
-        let c = cross(n, p);
-        let (s2, p2) = (dot(c, c), dot(p, p));
-        // sin²(n, p) < sin²(best) without dividing: s2/p2 < best.0/best.1.
-        if s2 * best.1 < best.0 * p2 {
-            best = (s2, p2, su, sv);
+    let (su, sv) = range_lane(n, Consts::new(layout));
+    pack(su as i64, sv as i64, layout)
+}
+
+/// Batch encoder for f32 normals: blocks of 64 in structure-of-arrays form so the arithmetic
+/// vectorizes; the same lane functions as [`encode_domain`] / [`encode_range`], so the codes are
+/// identical.
+pub fn encode_block_f32(normals: &[[f32; 3]], codes: &mut [u64], layout: OnvLayout, range: bool) {
+    let k = Consts::new(layout);
+    for (n, c) in normals.chunks(64).zip(codes.chunks_mut(64)) {
+        let mut su = [0f64; 64];
+        let mut sv = [0f64; 64];
+        if range {
+            for (i, d) in n.iter().enumerate() {
+                (su[i], sv[i]) = range_lane(d.map(f64::from), k);
+            }
+        } else {
+            for (i, d) in n.iter().enumerate() {
+                (su[i], sv[i]) = domain_lane(d.map(f64::from), k);
+            }
+        }
+        for (i, c) in c.iter_mut().enumerate() {
+            *c = pack(su[i] as i64, sv[i] as i64, layout);
         }
     }
-    pack(best.2, best.3, layout)
 }
 
 /// The f32 decoder of the batch path for codes of at most 32 bits (fields of at most 16 bits,
@@ -202,7 +267,10 @@ mod tests {
             for _ in 0..20_000 {
                 let n = crate::normals::rng::uniform_direction(&mut state);
                 let p = oct_from_dir(n);
-                let (u0, v0) = (snorm_floor(p[0], layout.u_bits), snorm_floor(p[1], layout.v_bits));
+                let (u0, v0) = (
+                    crate::normals::fixed::snorm_floor(p[0], layout.u_bits),
+                    crate::normals::fixed::snorm_floor(p[1], layout.v_bits),
+                );
                 let best = [(u0, v0), (u0 + 1, v0), (u0, v0 + 1), (u0 + 1, v0 + 1)]
                     .into_iter()
                     .map(|(su, sv)| {

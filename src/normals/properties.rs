@@ -192,6 +192,23 @@ fn octahedron_fold_is_handled() {
 }
 
 #[test]
+fn f32_block_encoder_gives_the_scalar_codes() {
+    let mut state = 8u64;
+    let mut normals: Vec<[f32; 3]> = (0..20_000).map(|_| uniform_direction(&mut state).map(|c| c as f32)).collect();
+    normals.extend([[0.0, 0.0, -1.0], [-0.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.5, -0.5, 0.0], [-0.0, -0.0, -1.0]]);
+    for scheme in [Scheme::OnvDomain, Scheme::OnvRange] {
+        for bits in [8, 15, 16, 32, 47, 64] {
+            let codec = Codec::new(scheme, bits).unwrap();
+            let mut codes = vec![0; normals.len()];
+            codec.encode_all_f32(&normals, &mut codes);
+            for (n, c) in normals.iter().zip(&codes) {
+                assert_eq!(codec.encode(n.map(f64::from)), *c, "{scheme} {bits} {n:?}");
+            }
+        }
+    }
+}
+
+#[test]
 fn batch_encode_is_independent_of_chunking() {
     let mut state = 1u64;
     let dirs: Vec<Dir> = (0..50_000).map(|_| uniform_direction(&mut state)).collect();
