@@ -203,6 +203,9 @@ fn run_encode(args: &Args, codec: &Codec, input: &Path) -> Result<Outcome> {
         bail!("only one of --output -, --report - and --json can use stdout");
     }
     let source = NormalSource::read(input, args.unorm)?;
+    if source.normals.is_empty() {
+        bail!("{}: no normals to encode", input.display());
+    }
     let (dirs, replaced) = prepare(&source.normals, args.on_invalid).map_err(|e| match e {
         NormalsError::Invalid { index, .. } => {
             anyhow::anyhow!(

@@ -314,7 +314,7 @@ fn read_ply(path: &Path, bytes: Vec<u8>) -> Result<NormalSource, IoError> {
             let mut lines = text.split_inclusive('\n');
             let mut line_numbers = Vec::with_capacity(n);
             // Skip elements before the vertices, one line each.
-            let before: usize = elements[..vi].iter().map(|e| e.count).sum();
+            let before = elements[..vi].iter().fold(0usize, |acc, e| acc.saturating_add(e.count));
             for _ in 0..before {
                 let l = lines.next().ok_or_else(|| bad("file ends before the vertex element".into()))?;
                 pos += l.len();
@@ -359,6 +359,14 @@ fn read_ply(path: &Path, bytes: Vec<u8>) -> Result<NormalSource, IoError> {
             for (ei, el) in elements.iter().enumerate() {
                 if ei > vi {
                     break;
+                }
+                // Every element with properties takes at least one byte: a larger count is
+                // garbage (and would loop for ever).
+                if el.props.is_empty() {
+                    continue;
+                }
+                if el.count > bytes.len() {
+                    return Err(bad(format!("element {} count {} exceeds the file size", el.name, el.count)));
                 }
                 for v in 0..el.count {
                     let mut offs = [0usize; 3];
@@ -524,6 +532,32 @@ mod tests {
         std::fs::write(&p, "vn 0 x 1\n").unwrap();
         let e = NormalSource::read(&p, false).unwrap_err().to_string();
         assert!(e.contains("line 1, column 6") && e.contains("a.obj"), "{e}");
+    }
+
+    #[test]
+    fn garbled_files_give_errors_not_panics() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut state = 99u64;
+        let headers = [
+            "ply\nformat binary_little_endian 1.0\nelement face 3\nproperty list uchar int vertex_indices\nelement vertex 4\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n",
+            "ply\nformat binary_big_endian 1.0\nelement vertex 99999999999\nproperty double nx\nproperty double ny\nproperty double nz\nend_header\n",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n",
+            "ply\nformat ascii 1.0\nelement empty 18446744073709551615\nelement vertex 1\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n",
+            "",
+        ];
+        for (h, header) in headers.iter().enumerate() {
+            for trial in 0..100 {
+                let len = (crate::normals::rng::next_u64(&mut state) % 64) as usize;
+                let mut bytes = header.as_bytes().to_vec();
+                bytes.extend((0..len).map(|_| crate::normals::rng::next_u64(&mut state) as u8));
+                for ext in ["ply", "obj", "raw"] {
+                    let p = dir.path().join(format!("g{h}_{trial}.{ext}"));
+                    std::fs::write(&p, &bytes).unwrap();
+                    // Either outcome is fine; a panic or a hang is not.
+                    let _ = NormalSource::read(&p, false);
+                }
+            }
+        }
     }
 
     #[test]
