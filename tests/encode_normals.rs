@@ -232,6 +232,21 @@ fn table_json_rows_deserialize_and_respect_the_bounds() {
 }
 
 #[test]
+fn table_defaults_to_the_papers_48_bits() {
+    let out = cmd().args(["--table", "--samples", "65536", "--json", "--quiet"]).output().unwrap();
+    assert!(out.status.success());
+    let rows: Vec<Row> = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(rows.iter().filter(|r| r.scheme != "fpnv").all(|r| r.bits == 48));
+    // Table 1, row 3: ONV_range 1.69e-7, ONV_domain 2.53e-7 (our splits equal the paper's here).
+    let get = |s: &str| rows.iter().find(|r| r.scheme == s).unwrap().max_error;
+    assert!((get("onv-range") - 1.69e-7).abs() < 0.01e-7);
+    assert!((get("onv-domain") - 2.53e-7).abs() < 0.01e-7);
+    // FPNV at 48 bits is three binary16 values: 4.60e-4.
+    let half = rows.iter().find(|r| r.scheme == "fpnv" && r.bits == 48).unwrap();
+    assert!((half.max_error - 4.60e-4).abs() < 0.01e-4);
+}
+
+#[test]
 fn emit_decoder_prints_a_function_for_each_language() {
     for (lang, sig) in [
         ("glsl", "vec3 prtkit_decode_normal(uint code)"),

@@ -27,9 +27,9 @@ pub struct Args {
     /// Parameterization: onv-range, onv-domain, sc, pp, spp, cm.
     #[arg(long, default_value = "onv-range", value_parser = parse_scheme)]
     pub scheme: Scheme,
-    /// Bits per normal, 8..=64 (for --table: the budget of the table).
-    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(8..=64))]
-    pub bits: u32,
+    /// Bits per normal, 8..=64 [default: 32; with --table: 48, the paper's Table 1].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(8..=64))]
+    pub bits: Option<u32>,
     /// Codes output (encode) or normals output (--decode); `-` is stdout.
     #[arg(short, long)]
     pub output: Option<String>,
@@ -167,7 +167,7 @@ pub fn run(args: Args) -> Result<Outcome> {
         // Only fails if a global pool exists already (tests calling run twice); harmless then.
         let _ = rayon::ThreadPoolBuilder::new().num_threads(args.threads).build_global();
     }
-    let codec = Codec::new(args.scheme, args.bits)?;
+    let codec = Codec::new(args.scheme, args.bits.unwrap_or(32))?;
     if let Some(lang) = args.emit_decoder {
         Output::Stdout.write(shader::decoder(&codec, lang).as_bytes())?;
         return Ok(Outcome::Success);
@@ -343,22 +343,23 @@ fn paper_48(scheme: &str) -> Option<f64> {
 
 fn run_table(args: &Args) -> Result<Outcome> {
     let bar = Bar::new(args.quiet);
-    let rows = table::table(TableConfig { bits: args.bits, samples: args.samples, seed: args.seed }, &bar)?;
+    let bits = args.bits.unwrap_or(48);
+    let rows = table::table(TableConfig { bits, samples: args.samples, seed: args.seed }, &bar)?;
     if args.json {
         Output::Stdout.write(crate::io::document::to_json_pretty(&rows).as_bytes())?;
     } else {
-        Output::Stdout.write(markdown(&rows, args).as_bytes())?;
+        Output::Stdout.write(markdown(&rows, bits, args.seed).as_bytes())?;
     }
     Ok(Outcome::Success)
 }
 
-fn markdown(rows: &[Row], args: &Args) -> String {
-    let paper_col = args.bits == 48;
+fn markdown(rows: &[Row], bits: u32, seed: u64) -> String {
+    let paper_col = bits == 48;
     let mut s = format!(
         "### {} bits ({} random directions, seed {}, plus adversarial directions)\n\n",
-        args.bits,
+        bits,
         rows.first().map_or(0, |r| r.samples),
-        args.seed
+        seed
     );
     s += "| scheme | bits | split | ε | closed-form Δmax | measured max | max / bound | random only / bound | mean | rms |";
     s += if paper_col { " paper Δmax(48) |\n" } else { "\n" };
