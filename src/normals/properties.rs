@@ -219,3 +219,41 @@ fn batch_encode_is_independent_of_chunking() {
         assert_eq!(codec.encode(*d), *c);
     }
 }
+
+#[test]
+fn choosing_range_candidates_by_f32_dot_product_breaks_where_ours_does_not() {
+    // The trap the issue names: picking the corner with the largest f32 dot product. From ~24
+    // bits the four cosines round to the same f32, the pick becomes arbitrary and the error
+    // exceeds eq. 11 (measured: 1.13x the bound at 24 bits, 3.0x at 32 and 48); our f64 sin²
+    // comparison stays within it.
+    use super::fixed::{snorm_floor, snorm_value};
+    use super::onv::{dir_from_oct, oct_from_dir, OnvLayout};
+    for bits in [24u32, 32, 48] {
+        let layout = OnvLayout::new(bits);
+        let codec = Codec::new(Scheme::OnvRange, bits).unwrap();
+        let mut dirs = adversarial::directions(Scheme::OnvRange, bits);
+        let mut state = 21u64;
+        dirs.extend((0..20_000).map(|_| uniform_direction(&mut state)));
+        let (mut naive, mut ours) = (0f64, 0f64);
+        for n in dirs {
+            let p = oct_from_dir(n);
+            let (u0, v0) = (snorm_floor(p[0], layout.u_bits), snorm_floor(p[1], layout.v_bits));
+            let nf = n.map(|c| c as f32);
+            let mut best = (f32::NEG_INFINITY, [0.0; 3]);
+            for (su, sv) in [(u0, v0), (u0 + 1, v0), (u0, v0 + 1), (u0 + 1, v0 + 1)] {
+                let q = dir_from_oct([snorm_value(su, layout.u_bits), snorm_value(sv, layout.v_bits)]);
+                let qf = q.map(|c| c as f32);
+                let d = nf[0] * qf[0] + nf[1] * qf[1] + nf[2] * qf[2];
+                if d > best.0 {
+                    best = (d, q);
+                }
+            }
+            naive = naive.max(angle_between(n, best.1));
+            ours = ours.max(angle_between(n, codec.decode(codec.encode(n))));
+        }
+        let bound = bounds::bound(Scheme::OnvRange, bits);
+        assert!(ours <= allowed(Scheme::OnvRange, bits), "{bits}: ours {ours:e}");
+        println!("{bits}: naive {:.3} x bound, ours {:.6} x bound", naive / bound, ours / bound);
+        assert!(naive > 1.05 * bound, "{bits}: f32 dot products stayed within the bound ({naive:e} vs {bound:e})");
+    }
+}
