@@ -100,6 +100,12 @@ fn packed_codes_decode_to_the_same_normals() {
         .assert()
         .success();
     assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&decoded).unwrap());
+    // The encode run's report can stand in for --scheme/--bits/--packed.
+    let report = dir.path().join("r.json");
+    cmd().arg(&input).args(["--scheme", "cm", "--bits", "19", "--packed", "--report"]).arg(&report).assert().success();
+    let out2 = dir.path().join("out2.raw");
+    cmd().arg(&codes).arg("--decode").arg("--header").arg(&report).arg("-o").arg(&out2).assert().success();
+    assert_eq!(std::fs::read(&out2).unwrap(), std::fs::read(&decoded).unwrap());
     // --decode to OBJ and PLY writes the same numbers.
     let obj = dir.path().join("out.obj");
     cmd()

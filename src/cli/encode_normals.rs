@@ -55,6 +55,10 @@ pub struct Args {
     /// Decode INPUT (codes) to normals written to --output (format by its extension).
     #[arg(long, conflicts_with_all = ["table", "emit_decoder", "decoded", "report"])]
     pub decode: bool,
+    /// With --decode: take scheme, bits and stream layout from this prtkit.normal-codes report
+    /// (the --report of the encode run) instead of --scheme/--bits/--packed.
+    #[arg(long, requires = "decode")]
+    pub header: Option<PathBuf>,
     /// Image size for --decode to .exr.
     #[arg(long, value_parser = super::common::parse_size)]
     pub size: Option<(usize, usize)>,
@@ -177,7 +181,15 @@ pub fn run(args: Args) -> Result<Outcome> {
     }
     let input = args.input.as_deref().context("missing INPUT (or use --table / --emit-decoder)")?;
     if args.decode {
-        return run_decode(&args, &codec, input);
+        if let Some(path) = &args.header {
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            let doc = crate::io::document::parse_document::<EncodeReport>(&text, "prtkit.normal-codes", 1)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            let codec = Codec::new(doc.body.scheme, doc.body.bits)?;
+            let packed = doc.body.layout.stream == "packed";
+            return run_decode(&args, &codec, input, packed);
+        }
+        return run_decode(&args, &codec, input, args.packed);
     }
     run_encode(&args, &codec, input)
 }
@@ -289,12 +301,12 @@ fn run_encode(args: &Args, codec: &Codec, input: &Path) -> Result<Outcome> {
     Ok(Outcome::Success)
 }
 
-fn run_decode(args: &Args, codec: &Codec, input: &Path) -> Result<Outcome> {
+fn run_decode(args: &Args, codec: &Codec, input: &Path, packed: bool) -> Result<Outcome> {
     let out_path = args.output.as_deref().context("--decode needs --output (normals; format by extension)")?;
     let output = Output::parse(out_path);
     output.check_writable()?;
     let bytes = crate::io::read_bytes(input)?;
-    let codes = if args.packed {
+    let codes = if packed {
         pack::from_packed(&bytes, codec.bits())
     } else {
         pack::from_words(&bytes, codec.bits()).with_context(|| {
