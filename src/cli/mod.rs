@@ -4,6 +4,7 @@
 pub mod common;
 pub mod convert;
 pub mod count_terms;
+pub mod encode_normals;
 pub mod envinput;
 pub mod factor_brdf;
 pub mod prefilter;

@@ -26,6 +26,8 @@ enum Stage {
     CountTerms(super::count_terms::Args),
     /// Bake a procedural shader with guaranteed error bounds (adaptive area sampling).
     SampleShader(super::sample_shader::Args),
+    /// Encode normal vectors at a bit budget and measure the exact angular error.
+    EncodeNormals(super::encode_normals::Args),
 }
 
 /// Parses `prtkit <stage> …` and runs the stage.
@@ -37,5 +39,6 @@ pub fn main() -> ExitCode {
         Stage::FactorBrdf(args) => run_stage("factor-brdf", || super::factor_brdf::run(args)),
         Stage::CountTerms(args) => run_stage("count-terms", || super::count_terms::run(args)),
         Stage::SampleShader(args) => run_stage("sample-shader", || super::sample_shader::run(args)),
+        Stage::EncodeNormals(args) => run_stage("encode-normals", || super::encode_normals::run(args)),
     }
 }
