@@ -96,7 +96,7 @@ fn microfacet_shrm_matches_the_angular_reference() {
     let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), 1e-3, 33);
     for view in [DVec3::Z, DVec3::new(0.5, -0.3, 0.8).normalize()] {
         let freq = shrm::reflection_map(&local, view);
-        let reference = angular::view_map(&cone, |wi, wo| model.rho_hat(wi, wo), &cutoff, view, 128, 64, &NoProgress);
+        let reference = angular::view_map(&cone, &model, &cutoff, view, 128, 64, &NoProgress);
         let err = rel_rms(&freq, &reference);
         eprintln!("microfacet σ=0.2 F_B={fb} P_B=2 (ε achieved {achieved:.4}) view {view}: rel RMS {err:.4}");
         assert!(err <= achieved.max(0.01), "view {view}: relative RMS {err} > ε {achieved}");

@@ -11,7 +11,7 @@ use crate::envmap::{latlong_row_solid_angle, latlong_texel, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::Progress;
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -220,10 +220,11 @@ pub fn radial_map(
 }
 
 /// Angular reflection map for a distant viewer in direction `view`: for each reflection vector
-/// R, B̃(R) = ∫_{cone(θ*(θ_o))} L(ω) ρ̂(R⁻¹ω, R⁻¹view) dω with R's frame as in the SHRM.
+/// R, B̃(R) = ∫_{cone(θ*(θ_o))} L(ω) ρ̂(ω, view) dω, with cos θ_o = R·view. Everything that depends
+/// on R and the view only (the normal and its frame) is computed once per output texel.
 pub fn view_map(
     env: &ConeIntegrator,
-    rho_hat: impl Fn(DVec3, DVec3) -> [f64; 3] + Sync,
+    model: &super::model::Model,
     cutoff: &CutoffTable,
     view: DVec3,
     width: usize,
@@ -233,12 +234,10 @@ pub fn view_map(
     let mut image = RgbImage::new(width, height);
     image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
         for (x, px) in row.iter_mut().enumerate() {
-            let frame: DMat3 = super::shrm::texel_frame(width, height, x, y);
-            let r = frame.z_axis;
-            let local_from_world = frame.transpose();
-            let wo = local_from_world * view;
-            let theta_star = cutoff.at(wo.z.clamp(-1.0, 1.0).acos());
-            let v = env.integrate(r, theta_star, |l| rho_hat(local_from_world * l, wo));
+            let (r, _) = latlong_texel(width, height, x, y);
+            let Some(prepared) = model.prepare_view(r, view) else { continue };
+            let theta_star = cutoff.at(r.dot(view).clamp(-1.0, 1.0).acos());
+            let v = env.integrate(r, theta_star, |l| model.rho_hat_prepared(&prepared, l));
             *px = [v[0] as f32, v[1] as f32, v[2] as f32];
         }
         progress.advance(1);

@@ -35,6 +35,15 @@ pub enum ModelError {
     },
 }
 
+/// The per-texel part of ρ̂ for one reflection vector and view: see [`Model::prepare_view`].
+#[derive(Clone, Copy, Debug)]
+pub struct PreparedView {
+    n: DVec3,
+    t: DVec3,
+    b: DVec3,
+    wo_n: DVec3,
+}
+
 /// Which direction a radially symmetric lobe is centred on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Centre {
@@ -104,6 +113,33 @@ impl Model {
         let wi_n = DVec3::new(wi.dot(t), wi.dot(b), cos_i);
         let wo_n = DVec3::new(wo.dot(t), wo.dot(b), wo.dot(n));
         let v = self.brdf.eval(wi_n, wo_n);
+        let k = if self.cosine { cos_i } else { 1.0 };
+        [v[0] * k, v[1] * k, v[2] * k]
+    }
+
+    /// Everything of ρ̂ that depends only on the reflection vector `r` and the view `v` (world
+    /// space): the normal N = normalize(R + V) and its frame, hoisted out of the angular
+    /// method's loop over environment texels. `None` when R = −V (no normal).
+    pub fn prepare_view(&self, r: DVec3, v: DVec3) -> Option<PreparedView> {
+        let n = r + v;
+        let len = n.length();
+        if len < 1e-9 {
+            return None;
+        }
+        let n = n / len;
+        let (t, b) = n.any_orthonormal_pair();
+        Some(PreparedView { n, t, b, wo_n: DVec3::new(v.dot(t), v.dot(b), v.dot(n)) })
+    }
+
+    /// ρ̂ for light from world direction `l`, given [`Model::prepare_view`]; equal to
+    /// [`Model::rho_hat`] in the reflection frame.
+    #[inline]
+    pub fn rho_hat_prepared(&self, view: &PreparedView, l: DVec3) -> [f64; 3] {
+        let cos_i = view.n.dot(l);
+        if cos_i <= 0.0 {
+            return [0.0; 3];
+        }
+        let v = self.brdf.eval(DVec3::new(l.dot(view.t), l.dot(view.b), cos_i), view.wo_n);
         let k = if self.cosine { cos_i } else { 1.0 };
         [v[0] * k, v[1] * k, v[2] * k]
     }
@@ -192,4 +228,26 @@ pub fn albedo(model: &Model, wo: DVec3, n: usize) -> f64 {
         }
     }
     sum * (PI / n as f64) * (PI / n as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prepared_evaluation_equals_the_reflection_frame_form() {
+        let model = Model::new(Brdf::parse("torrance-sparrow:sigma=0.3").unwrap(), true).unwrap();
+        let r = DVec3::new(0.3, -0.5, 0.8).normalize();
+        let v = DVec3::new(-0.2, 0.6, 0.4).normalize();
+        // A frame with R as +Z.
+        let (t, b) = r.any_orthonormal_pair();
+        let to_local = |w: DVec3| DVec3::new(w.dot(t), w.dot(b), w.dot(r));
+        let prepared = model.prepare_view(r, v).unwrap();
+        for k in 0..20 {
+            let l = DVec3::new((k as f64 * 0.7).sin(), (k as f64 * 1.9).cos(), 0.5 - k as f64 / 20.0).normalize();
+            let a = model.rho_hat_prepared(&prepared, l);
+            let b = model.rho_hat(to_local(l), to_local(v));
+            assert!((a[0] - b[0]).abs() < 1e-12 * (1.0 + b[0].abs()), "{a:?} vs {b:?}");
+        }
+    }
 }

@@ -181,10 +181,7 @@ pub fn angular_maps(
     }
     let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), epsilon, 65);
     progress.start("angular", (views.len() * height) as u64);
-    let maps = views
-        .iter()
-        .map(|&v| angular::view_map(&cone, |wi, wo| model.rho_hat(wi, wo), &cutoff, v, width, height, progress))
-        .collect();
+    let maps = views.iter().map(|&v| angular::view_map(&cone, model, &cutoff, v, width, height, progress)).collect();
     progress.finish();
     Ok(maps)
 }
