@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Regenerates every measured number in docs/: runs each benchmark and reproduction script (each
+# writes its section into docs/results/), then assembles docs/results.md from the sections.
+#   scripts/update-results.sh            # run everything (about 20 minutes on 2 cores), assemble
+#   scripts/update-results.sh --assemble # only assemble docs/results.md from the sections
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if [ "${1:-}" != "--assemble" ]; then
+  scripts/bench-sh-project.sh
+  scripts/probe-coefficients.sh
+  scripts/reproduce-table4.sh
+  scripts/reproduce-table5.sh
+  scripts/reproduce-terms.sh
+  scripts/reproduce-normals-table.sh
+  scripts/reproduce-shader-table.sh
+fi
+{
+  echo "# Results"
+  echo
+  echo "Every number here was measured on the project's 2-core machine by the script named in its"
+  echo "section; \`scripts/update-results.sh\` reruns them all and rebuilds this file from"
+  echo "\`docs/results/*.md\`. Speeds are ratios measured in one run (the machine is shared and"
+  echo "noisy); absolute times are for orientation only."
+  echo
+  for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader; do
+    f="docs/results/$section.md"
+    if [ -f "$f" ]; then
+      cat "$f"
+      echo
+    fi
+  done
+} > docs/results.md
+echo "wrote docs/results.md" >&2
