@@ -23,14 +23,17 @@ fn phong_sphere_singular_values_are_f_l_with_multiplicity_2l_plus_1() {
     // Mahajan et al. 2008, eq. 9: on the full sphere σ = F_l = f_l √(4π/(2l+1)), 2l+1 times.
     let s = 4.0;
     let f = phong_f(s, 12);
-    let fact = factor(&Brdf::parse("phong:s=4").unwrap(), &sampling(32, Domain::Sphere, false), Method::Fft, 0, &NoProgress)
+    // The grid is a quadrature whose error is largest for the zonal (m = 0) modes near the
+    // poles and falls like 1/n (1.4 % at n = 32, 0.34 % at n = 128 for l = 5); n = 128 keeps
+    // every σ of bands l ≤ 5 within 0.5 % of F_l.
+    let fact = factor(&Brdf::parse("phong:s=4").unwrap(), &sampling(128, Domain::Sphere, false), Method::Fft, 0, &NoProgress)
         .unwrap();
     let sv = &fact.singular_values;
     let mut k = 0;
     for (l, fl) in f.iter().enumerate().take(6) {
         for _ in 0..(2 * l + 1) {
             let rel = (sv[k] - fl).abs() / fl;
-            assert!(rel < 0.01, "band {l}: sigma_{k} = {} vs F_l = {fl} (rel {rel:.2e})", sv[k]);
+            assert!(rel < 0.005, "band {l}: sigma_{k} = {} vs F_l = {fl} (rel {rel:.2e})", sv[k]);
             k += 1;
         }
         // The multiplicity is exactly 2l+1: the next value belongs to the next band.
