@@ -119,7 +119,7 @@ pub fn count(
     }
     let rule = match &prediction {
         Some(p) => p.rule.clone(),
-        None => predict::no_prediction_reason(&material.brdf, sampling.cosine).unwrap_or_default(),
+        None => predict::no_prediction_reason(&material.brdf, sampling.domain, sampling.cosine).unwrap_or_default(),
     };
     let row = Row {
         name: material.name.clone(),
