@@ -41,7 +41,10 @@ fn main() {
                 continue;
             }
             let (t, k) = time_k99(&brdf, n, domain, method, runs);
-            println!("| {label} | {size} | {method} ({runs} run{}) | {k} | {t:.3} s | {target} |", if runs > 1 { "s" } else { "" });
+            println!(
+                "| {label} | {size} | {method} ({runs} run{}) | {k} | {t:.3} s | {target} |",
+                if runs > 1 { "s" } else { "" }
+            );
         }
     }
     println!();

@@ -95,7 +95,12 @@ fn plot_is_an_svg_and_bad_input_writes_nothing() {
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg") && text.contains("phong:s=10"));
     let bad = dir.path().join("bad.svg");
-    cmd().args(["--brdf", "phong:s=x", "--plot"]).arg(&bad).assert().code(2).stderr(predicate::str::contains("not a number"));
+    cmd()
+        .args(["--brdf", "phong:s=x", "--plot"])
+        .arg(&bad)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("not a number"));
     cmd().assert().code(2).stderr(predicate::str::contains("no material"));
     assert!(!bad.exists());
 }

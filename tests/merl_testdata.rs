@@ -105,7 +105,11 @@ fn analytic_channels_match_the_reference_on_the_same_grid() {
             let brdf = Brdf::parse(spec).unwrap();
             let sampling = Sampling { resolution: n, domain: Domain::Hemisphere, cosine, channel: Channel::Luminance };
             let s = factor(&brdf, &sampling, Method::Fft, 0, &NoProgress).unwrap().singular_values;
-            assert_eq!(energy::terms_for_fraction(&s, 0.99), u(&per_channel[key]["K99_analytic_same_grid"]), "{case} {spec}");
+            assert_eq!(
+                energy::terms_for_fraction(&s, 0.99),
+                u(&per_channel[key]["K99_analytic_same_grid"]),
+                "{case} {spec}"
+            );
         }
     }
 }

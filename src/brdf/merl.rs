@@ -93,11 +93,7 @@ pub fn theta_h_of_index(i: usize) -> f64 {
 
 /// Bin indices of a half/difference-angle configuration.
 pub fn index_of(hd: &HalfDiff) -> MerlIndex {
-    MerlIndex {
-        theta_h: theta_h_index(hd.theta_h),
-        theta_d: theta_d_index(hd.theta_d),
-        phi_d: phi_d_index(hd.phi_d),
-    }
+    MerlIndex { theta_h: theta_h_index(hd.theta_h), theta_d: theta_d_index(hd.theta_d), phi_d: phi_d_index(hd.phi_d) }
 }
 
 impl MerlBrdf {
@@ -137,7 +133,8 @@ impl MerlBrdf {
         let mut values = Vec::with_capacity(3 * CHANNEL_LEN);
         let mut missing = [0usize; 3];
         for (n, chunk) in bytes[HEADER_BYTES..].chunks_exact(8).enumerate() {
-            let raw = f64::from_le_bytes([chunk[0], chunk[1], chunk[2], chunk[3], chunk[4], chunk[5], chunk[6], chunk[7]]);
+            let raw =
+                f64::from_le_bytes([chunk[0], chunk[1], chunk[2], chunk[3], chunk[4], chunk[5], chunk[6], chunk[7]]);
             let c = n / CHANNEL_LEN;
             if !raw.is_finite() {
                 return Err(bad(format!(
@@ -187,9 +184,8 @@ impl MerlBrdf {
     /// (θ_h of each row, curve per channel); a row with no valid entry is 0.
     pub fn half_angle_curve(&self, max_theta_d: f64) -> (Vec<f64>, [Vec<f64>; 3]) {
         let theta_h: Vec<f64> = (0..RES_THETA_H).map(theta_h_of_index).collect();
-        let td_rows: Vec<usize> = (0..RES_THETA_D)
-            .filter(|&j| (j as f64) * (PI / 2.0) / (RES_THETA_D as f64) < max_theta_d)
-            .collect();
+        let td_rows: Vec<usize> =
+            (0..RES_THETA_D).filter(|&j| (j as f64) * (PI / 2.0) / (RES_THETA_D as f64) < max_theta_d).collect();
         let curves = [0, 1, 2].map(|c| {
             (0..RES_THETA_H)
                 .map(|i| {

@@ -201,7 +201,11 @@ impl Params<'_> {
             _ => return Ok(()),
         };
         if let Some((k, _)) = self.params.iter().find(|(k, _)| !known.contains(&k.as_str())) {
-            return Err(self.err(format!("{} does not take parameter {k:?}; accepted: {}", self.model, self.accepted())));
+            return Err(self.err(format!(
+                "{} does not take parameter {k:?}; accepted: {}",
+                self.model,
+                self.accepted()
+            )));
         }
         Ok(())
     }

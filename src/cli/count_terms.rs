@@ -89,12 +89,9 @@ pub struct Args {
 /// Parses `25%` or `0.25`.
 pub fn parse_tolerance(s: &str) -> Result<f64, String> {
     let t = s.trim();
-    let v = if let Some(p) = t.strip_suffix('%') {
-        p.trim().parse::<f64>().map(|v| v / 100.0)
-    } else {
-        t.parse::<f64>()
-    }
-    .map_err(|_| format!("expected a fraction like 0.25 or a percentage like 25%, got {s:?}"))?;
+    let v =
+        if let Some(p) = t.strip_suffix('%') { p.trim().parse::<f64>().map(|v| v / 100.0) } else { t.parse::<f64>() }
+            .map_err(|_| format!("expected a fraction like 0.25 or a percentage like 25%, got {s:?}"))?;
     if !(v.is_finite() && v >= 0.0) {
         return Err(format!("tolerance must be >= 0, got {s:?}"));
     }
@@ -169,12 +166,8 @@ pub fn run(args: Args) -> Result<Outcome> {
         spectra.push(spectrum);
     }
     if let Some(out) = &plot_out {
-        let title = format!(
-            "count-terms: {} , n = {}, {:.1} % energy",
-            args.domain,
-            args.resolution,
-            100.0 * args.energy
-        );
+        let title =
+            format!("count-terms: {} , n = {}, {:.1} % energy", args.domain, args.resolution, 100.0 * args.energy);
         let svg = plot::count_plot(&title, &rows, &spectra).map_err(anyhow::Error::msg)?;
         out.write(svg.as_bytes())?;
     }

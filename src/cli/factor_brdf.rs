@@ -145,7 +145,8 @@ pub fn run(args: Args) -> Result<Outcome> {
     let spec = BrdfSpec::parse(&args.brdf)?;
     let output = Output::parse(&args.output);
     output.check_writable()?;
-    let sampling = Sampling { resolution: args.resolution, domain: args.domain, cosine: args.cosine, channel: args.channel };
+    let sampling =
+        Sampling { resolution: args.resolution, domain: args.domain, cosine: args.cosine, channel: args.channel };
     let terms = if args.maps.is_some() { args.terms.min(sampling.grid().len()) } else { 0 };
     if args.maps.is_some() && terms == 0 {
         anyhow::bail!("--terms must be at least 1 with --maps");

@@ -87,7 +87,8 @@ fn fields(line: &str) -> Result<Vec<(usize, String)>, (usize, String)> {
 
 /// Parses manifest text; `file` names it in errors and `base` resolves relative MERL paths.
 pub fn parse(text: &str, file: &str, base: &Path) -> Result<Vec<Entry>, ManifestError> {
-    let err = |line: usize, column: usize, reason: String| ManifestError { file: file.to_string(), line, column, reason };
+    let err =
+        |line: usize, column: usize, reason: String| ManifestError { file: file.to_string(), line, column, reason };
     let mut entries: Vec<Entry> = Vec::new();
     for (idx, line) in text.lines().enumerate() {
         let n = idx + 1;
@@ -129,7 +130,8 @@ mod tests {
 
     #[test]
     fn parses_fields_quotes_comments_and_budgets() {
-        let text = "# header\n\nglossy phong:s=30 80\n\"matte floor\"\tlambert   # no budget\npaint merl:a/b.binary -\n";
+        let text =
+            "# header\n\nglossy phong:s=30 80\n\"matte floor\"\tlambert   # no budget\npaint merl:a/b.binary -\n";
         let e = parse(text, "m.txt", Path::new("/data")).unwrap();
         assert_eq!(e.len(), 3);
         assert_eq!((e[0].name.as_str(), e[0].budget, e[0].line), ("glossy", Some(80), 3));

@@ -46,7 +46,10 @@ pub fn count_plot(title: &str, rows: &[Row], spectra: &[Spectrum]) -> Result<Str
     Ok(svg)
 }
 
-fn draw_spectra<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>, spectra: &[Spectrum]) -> Result<(), String> {
+fn draw_spectra<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    spectra: &[Spectrum],
+) -> Result<(), String> {
     // Normalize every curve by its largest measured σ so materials share one axis; show the terms
     // up to 1e-4 of σ_1.
     let floor = 1e-4;
@@ -116,13 +119,9 @@ fn draw_counts<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift
         })
     };
     let xmax = rows.iter().filter_map(x_of).fold(4.0f64, f64::max) * 1.05;
-    let ymax = rows
-        .iter()
-        .flat_map(|r| [r.measured_k, r.predicted_k])
-        .flatten()
-        .map(|k| k as f64)
-        .fold(4.0f64, f64::max)
-        * 1.1;
+    let ymax =
+        rows.iter().flat_map(|r| [r.measured_k, r.predicted_k]).flatten().map(|k| k as f64).fold(4.0f64, f64::max)
+            * 1.1;
     let mut chart = ChartBuilder::on(area)
         .caption("K at the energy fraction vs (l*)^2 [reflection lobes: (l*+1)^2]", ("sans-serif", 16))
         .margin(12)
@@ -131,7 +130,8 @@ fn draw_counts<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift
         .build_cartesian_2d(0.0..xmax, 0.0..ymax)
         .map_err(err)?;
     chart.configure_mesh().x_desc("(l*)^2").y_desc("K").draw().map_err(err)?;
-    let lines = [(1.0, "K = x (sphere, reflection lobe)"), (0.5, "K = x/2"), (0.25, "K = x/4 (hemisphere, half-angle)")];
+    let lines =
+        [(1.0, "K = x (sphere, reflection lobe)"), (0.5, "K = x/2"), (0.25, "K = x/4 (hemisphere, half-angle)")];
     for (i, (slope, label)) in lines.iter().enumerate() {
         let color = PALETTE[(i + 5) % PALETTE.len()];
         chart
@@ -140,10 +140,8 @@ fn draw_counts<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift
             .label(*label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
     }
-    let measured: Vec<(f64, f64)> =
-        rows.iter().filter_map(|r| Some((x_of(r)?, r.measured_k? as f64))).collect();
-    let predicted: Vec<(f64, f64)> =
-        rows.iter().filter_map(|r| Some((x_of(r)?, r.predicted_k? as f64))).collect();
+    let measured: Vec<(f64, f64)> = rows.iter().filter_map(|r| Some((x_of(r)?, r.measured_k? as f64))).collect();
+    let predicted: Vec<(f64, f64)> = rows.iter().filter_map(|r| Some((x_of(r)?, r.predicted_k? as f64))).collect();
     let blue = PALETTE[0];
     let orange = PALETTE[1];
     chart

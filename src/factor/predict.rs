@@ -226,7 +226,13 @@ pub fn no_prediction_reason(brdf: &Brdf, domain: Domain, cosine: bool) -> Option
 /// Predicts K at energy `fraction` (reflection lobes) or with the e⁻³ cut (half-angle curves,
 /// hemisphere only). `None` with --cosine, for anisotropic BRDFs and for half-angle models on
 /// the sphere ([`no_prediction_reason`]).
-pub fn predict(brdf: &Brdf, domain: Domain, cosine: bool, channel: super::Channel, fraction: f64) -> Option<Prediction> {
+pub fn predict(
+    brdf: &Brdf,
+    domain: Domain,
+    cosine: bool,
+    channel: super::Channel,
+    fraction: f64,
+) -> Option<Prediction> {
     if no_prediction_reason(brdf, domain, cosine).is_some() {
         return None;
     }
@@ -293,7 +299,8 @@ pub fn half_angle_curve_samples(brdf: &Brdf, channel: super::Channel) -> (Vec<f6
     if let Brdf::Merl(table) = brdf {
         let (theta_h, curves) = table.half_angle_curve(MAX_THETA_D);
         let w = channel.weights();
-        let curve = (0..theta_h.len()).map(|i| w[0] * curves[0][i] + w[1] * curves[1][i] + w[2] * curves[2][i]).collect();
+        let curve =
+            (0..theta_h.len()).map(|i| w[0] * curves[0][i] + w[1] * curves[1][i] + w[2] * curves[2][i]).collect();
         return (theta_h, curve);
     }
     let theta_h: Vec<f64> = (0..merl::RES_THETA_H).map(merl::theta_h_of_index).collect();

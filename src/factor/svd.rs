@@ -21,9 +21,9 @@ use super::channel::Channel;
 use super::grid::{Domain, Grid};
 use crate::brdf::Brdf;
 use crate::progress::Progress;
+use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::svd::{self, ComputeSvdVectors};
-use faer::diag::Diag;
 use faer::{Mat, MatRef, Par};
 use rayon::prelude::*;
 
@@ -354,8 +354,11 @@ fn factor_fft(
     progress.finish();
     let blocks = blocks.into_iter().collect::<Result<Vec<_>, _>>()?;
     // Global order: value descending, ties by (m, index) so the order is deterministic.
-    let mut all: Vec<(f64, usize, usize)> =
-        blocks.iter().enumerate().flat_map(|(b, blk)| blk.values.iter().enumerate().map(move |(i, &s)| (s, b, i))).collect();
+    let mut all: Vec<(f64, usize, usize)> = blocks
+        .iter()
+        .enumerate()
+        .flat_map(|(b, blk)| blk.values.iter().enumerate().map(move |(i, &s)| (s, b, i)))
+        .collect();
     all.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
     let singular_values = all.iter().map(|t| t.0).collect();
     let azimuthal_frequency = all.iter().map(|t| blocks[t.1].m).collect();

@@ -26,8 +26,9 @@ fn phong_sphere_singular_values_are_f_l_with_multiplicity_2l_plus_1() {
     // The grid is a quadrature whose error is largest for the zonal (m = 0) modes near the
     // poles and falls like 1/n (1.4 % at n = 32, 0.34 % at n = 128 for l = 5); n = 128 keeps
     // every σ of bands l ≤ 5 within 0.5 % of F_l.
-    let fact = factor(&Brdf::parse("phong:s=4").unwrap(), &sampling(128, Domain::Sphere, false), Method::Fft, 0, &NoProgress)
-        .unwrap();
+    let fact =
+        factor(&Brdf::parse("phong:s=4").unwrap(), &sampling(128, Domain::Sphere, false), Method::Fft, 0, &NoProgress)
+            .unwrap();
     let sv = &fact.singular_values;
     let mut k = 0;
     for (l, fl) in f.iter().enumerate().take(6) {
