@@ -98,6 +98,30 @@ else
 fi
 cat <<'MD'
 
+### Where these numbers and the paper's sentences disagree
+
+- **Phong s = 1 needs more than "2–3 terms" (§3.4; "2–4" in §5) at 99 %.** Measured: 9 on the
+  sphere, 6 on the hemisphere. The sphere count is exact, not a sampling artefact: eq. 9 gives
+  σ = F_l with F_l = 2∫₀¹ t P_l(t) dt = 1, 2/3, 1/4, 0, −1/24, 0, 1/64, … for s = 1, so the band
+  energies (2l+1)F_l² are 1, 4/3, 5/16, 0, 1/64, …; bands 0–1 (4 terms) hold 87.5 % of the
+  energy and 99 % needs all of band 2, K = 9. On the hemisphere `factor-brdf phong:s=1` gives
+  K = 3 at 90 %, 4 at 95 %, 6 at 99 %: the paper's "2–3" matches roughly 90 % energy, not 99 %.
+  Likewise the linear laws 5s and 2.5s hold from s ≈ 5 up; at s = 1–2 the counts have an
+  offset (the (l*+1)² form captures it, the linear law does not).
+- **Torrance-Sparrow: the printed shortcut l* ≈ 1/(2σ²) is inconsistent** with the paper's own
+  K values ("paper" column: 39 at σ = 0.2, 2.4 at σ = 0.4, against "about 60" and "10–20" in
+  the text). The Legendre transform of eq. 14 gives l* ≈ 3.46/σ at the paper's e⁻³ threshold
+  (17 at σ = 0.2, 9 at σ = 0.4), and K = (l*)²/4 then predicts 73 and 21 terms; the converged
+  SVD (n = 160) measures 82 and 21. The paper's "about 60" for σ = 0.2 is what its n = 40
+  grid measures (64 here): at n = 40 the first ring of cells around the normal reaches θ = 12.8°
+  (σ = 0.1 is 5.7°), so narrow lobes are
+  under-resolved (σ = 0.1: 172 terms at n = 40, 302 at n = 160).
+- **The half-angle rule is for half-angle lobes.** The Phong s = 10 channel (B) of the
+  MERL-format test file, read as a half-angle curve, has l* = 14 and a predicted 49 terms but
+  needs 27, as the Phong rule says (2.5s = 25): `--check` flags it at the 25 % tolerance, which
+  is the intended behaviour for a material whose lobe is not a function of θ_h. The RGB mean
+  mixes three lobes of different widths and is also over-predicted.
+
 ### Benchmark: SVD and K(99 %) for Phong s = 30 (`cargo bench --bench factor`)
 
 Method "fft": the matrix of an isotropic BRDF is block-circulant in φ, so a real FFT over

@@ -20,9 +20,9 @@
 //! Gaussian exp(−θ_h²/σ²) on the sphere of half vectors; its zonal transform is
 //! F_l ≈ exp(−l(l+1)σ²/4). The paper's conservative cut F_l < e⁻³ (§3.3) gives
 //! l* ≈ √12/σ ≈ 3.46/σ; a 99 % band-energy cut, Σ_{l≤L}(2l+1)F_l² ≈ 1 − exp(−σ²L²/2), gives
-//! l* ≈ √(2 ln 100)/σ ≈ 3.03/σ. With K ≈ (l*)²/4 these predict 75 / 57 terms at σ = 0.2 and
-//! 19 / 14 at σ = 0.4; converged hemisphere SVDs measure about 82 and 21 (docs/results), and
-//! the paper says ~60 and 10–20. prtkit therefore uses the **e⁻³ coefficient cut** for
+//! l* ≈ √(2 ln 100)/σ ≈ 3.03/σ. The numerical transform gives l* = 17 / 15 at σ = 0.2 and
+//! 9 / 7 at σ = 0.4, so K ≈ (l*)²/4 predicts 73 / 57 and 21 / 13 terms; converged hemisphere
+//! SVDs measure 82 and 21 (docs/results/terms.md), and the paper says ~60 and 10–20. prtkit therefore uses the **e⁻³ coefficient cut** for
 //! half-angle curves. The paper's printed shortcut l* ≈ 1/(2σ²) (12.5 at σ = 0.2, 3.1 at
 //! σ = 0.4 → K ≈ 39 and 2.4) contradicts its own K values and is reported only as
 //! `paper_shortcut_k`.
