@@ -128,9 +128,12 @@ Method "fft": the matrix of an isotropic BRDF is block-circulant in φ, so a rea
 φ_o − φ_i splits it into n/2 + 1 independent real blocks (n × n for m = 0 and n/2,
 2n × 2n for the pairs m, n − m) whose singular values together are exactly those of the full
 matrix (tests: `fft_and_dense_give_the_same_singular_values`, max difference 1e-14 σ_1 at
-n = 64 on the sphere). Method "dense": faer's SVD of the whole n² × n² matrix, singular values
-only, run sequentially (Par::Seq) so results are bit-identical for any thread count. Times on
-this shared 2-core machine, while other builds were running:
+n = 64 on the sphere). Method "randomized": the dense matrix, a Gaussian sketch with two power
+iterations (Halko, Martinsson & Tropp 2011), rank doubled from 64 until the leading terms hold
+99.9 % of ‖M‖_F² — for anisotropic BRDFs, where no FFT applies. Method "dense": faer's SVD of
+the whole n² × n² matrix, singular values only. All three run faer sequentially (Par::Seq) so
+results are bit-identical for any thread count. Times on this shared 2-core machine, while
+other builds were running:
 
 MD
 if [ -n "${SKIP_DENSE_64:-}" ]; then

@@ -179,3 +179,29 @@ fn absurd_resolutions_are_refused_with_the_memory_needed() {
     assert!(e.contains("GiB"), "{e}");
     assert!(super::svd::check_budget(&sampling(40, Domain::Sphere, false), Method::Fft, 0, 4 << 30).is_ok());
 }
+
+#[test]
+fn randomized_svd_matches_the_dense_leading_terms() {
+    // Anisotropic (no FFT) and isotropic cases; n = 24 gives a 576² matrix, wide enough for the
+    // randomized path not to fall back to the dense one.
+    for spec in ["kajiya-kay:s=16", "phong:s=10"] {
+        let brdf = Brdf::parse(spec).unwrap();
+        let s = sampling(24, Domain::Hemisphere, false);
+        let dense = factor(&brdf, &s, Method::Dense, 0, &NoProgress).unwrap();
+        let rand = factor(&brdf, &s, Method::Randomized, 4, &NoProgress).unwrap();
+        assert_eq!(rand.method, Method::Randomized);
+        assert!((rand.total_energy - dense.total_energy).abs() <= 1e-12 * dense.total_energy);
+        for fraction in super::energy::STANDARD_FRACTIONS {
+            assert_eq!(rand.terms_for(fraction), dense.terms_for(fraction), "{spec} at {fraction}");
+        }
+        for k in 0..10 {
+            let (a, b) = (rand.singular_values[k], dense.singular_values[k]);
+            assert!((a - b).abs() <= 1e-8 * dense.singular_values[0], "{spec}: sigma_{k} {a} vs {b}");
+        }
+        // Factor functions are unit vectors in the grid's L² inner product.
+        let w = s.grid().cell_solid_angle();
+        for v in rand.g.iter().chain(&rand.h) {
+            assert!((v.iter().map(|x| x * x).sum::<f64>() * w - 1.0).abs() < 1e-9);
+        }
+    }
+}
