@@ -51,13 +51,15 @@ fn draw_spectra<DB: DrawingBackend>(
     spectra: &[Spectrum],
 ) -> Result<(), String> {
     // Normalize every curve by its largest measured σ so materials share one axis; show the terms
-    // up to 1e-4 of σ_1.
+    // down to 1e-4 of σ_1, but no further than twice the K holding 99.9 % of each spectrum's
+    // energy (long measured tails would squash the interesting part).
     let floor = 1e-4;
     let kmax = spectra
         .iter()
         .map(|s| {
             let top = s.measured.first().copied().unwrap_or(1.0).max(f64::MIN_POSITIVE);
-            s.measured.iter().take_while(|v| **v / top >= floor).count()
+            let above_floor = s.measured.iter().take_while(|v| **v / top >= floor).count();
+            above_floor.min(2 * super::energy::terms_for_fraction(&s.measured, 0.999))
         })
         .max()
         .unwrap_or(1)
