@@ -120,7 +120,8 @@ fn draw_counts<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift
             _ => (l * l) as f64,
         })
     };
-    let xmax = rows.iter().filter_map(x_of).fold(4.0f64, f64::max) * 1.05;
+    // Room on the right for the material labels.
+    let xmax = rows.iter().filter_map(x_of).fold(4.0f64, f64::max) * 1.3;
     let ymax =
         rows.iter().flat_map(|r| [r.measured_k, r.predicted_k]).flatten().map(|k| k as f64).fold(4.0f64, f64::max)
             * 1.1;
