@@ -123,3 +123,24 @@ fn broken_merl_files_are_errors_naming_the_file() {
     cmd().arg("merl:/nonexistent/x.binary").assert().code(2).stderr(predicate::str::contains("x.binary"));
     assert!(!out.exists());
 }
+
+#[test]
+fn output_is_identical_for_any_thread_count() {
+    // Everything but provenance (which records the command line) must be byte-identical.
+    let run = |threads: &str, method: &str, spec: &str| {
+        let out = cmd()
+            .env("RAYON_NUM_THREADS", threads)
+            .args([spec, "--resolution", "20", "--method", method])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let mut doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+        doc.as_object_mut().unwrap().remove("provenance");
+        serde_json::to_string(&doc).unwrap()
+    };
+    for (method, spec) in
+        [("fft", "torrance-sparrow:sigma=0.3"), ("randomized", "kajiya-kay:s=8"), ("dense", "phong:s=5")]
+    {
+        assert_eq!(run("1", method, spec), run("3", method, spec), "{method}");
+    }
+}
