@@ -21,8 +21,9 @@
 //! F_l ≈ exp(−l(l+1)σ²/4). The paper's conservative cut F_l < e⁻³ (§3.3) gives
 //! l* ≈ √12/σ ≈ 3.46/σ; a 99 % band-energy cut, Σ_{l≤L}(2l+1)F_l² ≈ 1 − exp(−σ²L²/2), gives
 //! l* ≈ √(2 ln 100)/σ ≈ 3.03/σ. The numerical transform gives l* = 17 / 15 at σ = 0.2 and
-//! 9 / 7 at σ = 0.4, so K ≈ (l*)²/4 predicts 73 / 57 and 21 / 13 terms; converged hemisphere
-//! SVDs measure 82 and 21 (docs/results/terms.md), and the paper says ~60 and 10–20. prtkit therefore uses the **e⁻³ coefficient cut** for
+//! 9 / 7 at σ = 0.4, so K ≈ (l*)²/4 predicts 73 / 57 and 21 / 13 terms; fine hemisphere
+//! SVDs measure 75 (n = 160; 73 at n = 256) and 21 (docs/results/terms.md), and the paper says
+//! ~60 and 10–20. prtkit therefore uses the **e⁻³ coefficient cut** for
 //! half-angle curves. The paper's printed shortcut l* ≈ 1/(2σ²) (12.5 at σ = 0.2, 3.1 at
 //! σ = 0.4 → K ≈ 39 and 2.4) contradicts its own K values and is reported only as
 //! `paper_shortcut_k`.
