@@ -138,7 +138,11 @@ fn draw_counts<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift
     for (i, (slope, label)) in lines.iter().enumerate() {
         let color = PALETTE[(i + 5) % PALETTE.len()];
         chart
-            .draw_series(LineSeries::new(vec![(0.0, 0.0), (xmax, slope * xmax)], color.stroke_width(1)))
+            // End inside the chart: plotters drops segments whose end point lies outside it.
+            .draw_series(LineSeries::new(
+                vec![(0.0, 0.0), (xmax.min(ymax / slope), (slope * xmax).min(ymax))],
+                color.stroke_width(1),
+            ))
             .map_err(err)?
             .label(*label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
@@ -166,7 +170,7 @@ fn draw_counts<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(SeriesLabelPosition::LowerRight)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font(("sans-serif", 12))
