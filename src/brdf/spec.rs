@@ -64,6 +64,7 @@ impl BrdfSpec {
         }
         let params = parse_params(rest.unwrap_or(""), spec)?;
         let mut p = Params { spec, model: model_lc.clone(), params, used: vec![] };
+        p.check_known()?;
         let parsed = match model_lc.as_str() {
             "lambert" => {
                 let albedo = p.optional("albedo", 1.0)?;
@@ -188,6 +189,25 @@ impl Params<'_> {
             "lafortune" => "kd (>= 0, default 0) and lobe=CXY/CZ/N or lobe=CX/CY/CZ/N (N > 0), repeatable",
             _ => "",
         }
+    }
+
+    /// Rejects parameters the model does not take, before any is required.
+    fn check_known(&self) -> Result<(), SpecError> {
+        let known: &[&str] = match self.model.as_str() {
+            "lambert" => &["albedo"],
+            "phong" | "blinn-phong" | "kajiya-kay" => &["s"],
+            "torrance-sparrow" => &["sigma"],
+            "lafortune" => &["kd", "lobe"],
+            _ => return Ok(()),
+        };
+        if let Some((k, _)) = self.params.iter().find(|(k, _)| !known.contains(&k.as_str())) {
+            return Err(self.err(format!(
+                "{} does not take parameter {k:?}; accepted: {}",
+                self.model,
+                self.accepted()
+            )));
+        }
+        Ok(())
     }
 
     fn number(&self, key: &str, value: &str) -> Result<f64, SpecError> {

@@ -34,8 +34,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = Channel::Luminance)]
     pub channel: Channel,
 
-    /// SVD method: fft (isotropic BRDFs, block-circulant in φ), dense, or auto (fft when
-    /// isotropic).
+    /// SVD method: fft (isotropic BRDFs, block-circulant in φ), dense, randomized (leading
+    /// terms of the dense matrix, for large n), or auto (fft when isotropic, else dense).
     #[arg(long, value_enum, default_value_t = Method::Auto)]
     pub method: Method,
 
@@ -103,7 +103,7 @@ pub struct FactorBody {
     pub matrix: String,
     /// Σ σ².
     pub total_energy: f64,
-    /// σ_k descending.
+    /// σ_k descending (the leading ones only for the randomized method).
     pub singular_values: Vec<f64>,
     /// Entry k: energy fraction of the first k+1 terms.
     pub cumulative_energy: Vec<f64>,
@@ -157,12 +157,12 @@ pub fn run(args: Args) -> Result<Outcome> {
     let bar = Bar::new(args.quiet);
     let f = svd::factor(&brdf, &sampling, method, terms, &bar)?;
     let s = &f.singular_values;
-    let cumulative = energy::cumulative_energy(s);
+    let cumulative = f.cumulative_energy();
     let mut term_counts = BTreeMap::new();
     let mut reconstruction = Vec::new();
     let mut ks: Vec<usize> = Vec::new();
     for fraction in energy::STANDARD_FRACTIONS {
-        let k = energy::terms_for_fraction(s, fraction);
+        let k = f.terms_for(fraction);
         term_counts.insert(percent_label(fraction), k);
         ks.push(k);
     }
@@ -174,8 +174,8 @@ pub fn run(args: Args) -> Result<Outcome> {
     for k in ks {
         reconstruction.push(Reconstruction {
             terms: k,
-            energy: if k == 0 { 0.0 } else { cumulative[k - 1] },
-            relative_frobenius_error: energy::reconstruction_error(s, k),
+            energy: if k == 0 { 0.0 } else { cumulative.get(k - 1).copied().unwrap_or(1.0) },
+            relative_frobenius_error: f.reconstruction_error(k),
         });
     }
     let maps_dir = if let Some(dir) = &args.maps {
@@ -201,7 +201,7 @@ pub fn run(args: Args) -> Result<Outcome> {
             if args.cosine { " * max(cos(theta_i), 0)" } else { "" },
             if args.domain == Domain::Sphere { "4 pi" } else { "2 pi" }
         ),
-        total_energy: s.iter().map(|v| v * v).sum(),
+        total_energy: f.total_energy,
         singular_values: s.clone(),
         cumulative_energy: cumulative,
         terms: term_counts.clone(),

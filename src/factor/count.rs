@@ -3,7 +3,7 @@
 
 use super::predict::{self, Prediction};
 use super::svd::{self, FactorError, Method, Sampling};
-use super::{energy, Channel};
+use super::Channel;
 use crate::brdf::Brdf;
 use crate::progress::Progress;
 
@@ -85,12 +85,17 @@ pub fn count(
     let prediction: Option<Prediction> =
         predict::predict(&material.brdf, sampling.domain, sampling.cosine, material.channel, config.energy);
     let predicted_k = prediction.as_ref().map(|p| p.predicted_k.ceil().max(1.0) as usize);
-    let singular_values = if config.predict_only {
-        vec![]
+    let (singular_values, measured_k) = if config.predict_only {
+        (vec![], None)
     } else {
-        svd::factor(&material.brdf, &sampling, config.method, 0, progress)?.singular_values
+        let f = if config.method == Method::Randomized {
+            svd::factor_randomized(&material.brdf, &sampling, config.energy.max(svd::RANDOMIZED_TARGET), 0, progress)?
+        } else {
+            svd::factor(&material.brdf, &sampling, config.method, 0, progress)?
+        };
+        let k = f.terms_for(config.energy);
+        (f.singular_values, Some(k))
     };
-    let measured_k = (!config.predict_only).then(|| energy::terms_for_fraction(&singular_values, config.energy));
     let spectrum = super::plot::Spectrum {
         label: material.name.clone(),
         measured: singular_values,
@@ -119,7 +124,7 @@ pub fn count(
     }
     let rule = match &prediction {
         Some(p) => p.rule.clone(),
-        None => predict::no_prediction_reason(&material.brdf, sampling.cosine).unwrap_or_default(),
+        None => predict::no_prediction_reason(&material.brdf, sampling.domain, sampling.cosine).unwrap_or_default(),
     };
     let row = Row {
         name: material.name.clone(),

@@ -7,7 +7,11 @@ pub const STANDARD_FRACTIONS: [f64; 4] = [0.90, 0.95, 0.99, 0.999];
 /// Cumulative energy fractions: entry k is Σ_{j≤k} σ_j² / Σ σ² (so entry K−1 is the energy of
 /// K terms). All zeros for a zero matrix.
 pub fn cumulative_energy(singular_values: &[f64]) -> Vec<f64> {
-    let total: f64 = singular_values.iter().map(|s| s * s).sum();
+    cumulative_energy_of(singular_values, singular_values.iter().map(|s| s * s).sum())
+}
+
+/// [`cumulative_energy`] against a known total (‖M‖_F², when only leading σ are known).
+pub fn cumulative_energy_of(singular_values: &[f64], total: f64) -> Vec<f64> {
     let mut acc = 0.0;
     singular_values
         .iter()
@@ -25,22 +29,31 @@ pub fn cumulative_energy(singular_values: &[f64]) -> Vec<f64> {
 /// The smallest K whose terms hold at least `fraction` of the energy (0 for a zero matrix).
 /// A relative slack of 1e-12 absorbs rounding when the fraction is reached exactly.
 pub fn terms_for_fraction(singular_values: &[f64], fraction: f64) -> usize {
-    let cumulative = cumulative_energy(singular_values);
-    if cumulative.last().is_none_or(|&t| t == 0.0) {
+    terms_for_fraction_of(singular_values, singular_values.iter().map(|s| s * s).sum(), fraction)
+}
+
+/// [`terms_for_fraction`] against a known total; `len + 1` if the known terms fall short.
+pub fn terms_for_fraction_of(singular_values: &[f64], total: f64, fraction: f64) -> usize {
+    if total == 0.0 {
         return 0;
     }
-    cumulative.iter().position(|&c| c >= fraction - 1e-12).map_or(cumulative.len(), |k| k + 1)
+    let cumulative = cumulative_energy_of(singular_values, total);
+    cumulative.iter().position(|&c| c >= fraction - 1e-12).map_or(cumulative.len() + 1, |k| k + 1)
 }
 
 /// Relative Frobenius error of the best K-term reconstruction: √(Σ_{k>K} σ_k² / Σ σ_k²)
 /// (Eckart–Young: truncating the SVD is the optimal rank-K approximation).
 pub fn reconstruction_error(singular_values: &[f64], terms: usize) -> f64 {
-    let total: f64 = singular_values.iter().map(|s| s * s).sum();
+    reconstruction_error_of(singular_values, singular_values.iter().map(|s| s * s).sum(), terms)
+}
+
+/// [`reconstruction_error`] against a known total: √((total − Σ_{k≤K} σ_k²)/total).
+pub fn reconstruction_error_of(singular_values: &[f64], total: f64, terms: usize) -> f64 {
     if total == 0.0 {
         return 0.0;
     }
-    let tail: f64 = singular_values.iter().skip(terms).map(|s| s * s).sum();
-    (tail / total).sqrt()
+    let head: f64 = singular_values.iter().take(terms).map(|s| s * s).sum();
+    ((total - head).max(0.0) / total).sqrt()
 }
 
 #[cfg(test)]

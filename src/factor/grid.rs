@@ -96,11 +96,15 @@ mod tests {
             let total = g.cell_solid_angle() * g.len() as f64;
             let want = if domain == Domain::Sphere { 4.0 * PI } else { 2.0 * PI };
             assert!((total - want).abs() < 1e-12);
-            // Midpoint rule in cos θ integrates z² exactly up to the O(h²) midpoint error:
-            // ∫ z² dω = 4π/3 (sphere), 2π/3 (hemisphere).
-            let g = Grid { n: 200, domain };
+            // ∫ z² dω = 4π/3 (sphere), 2π/3 (hemisphere). The midpoint rule in cos θ with bin
+            // width h misses it by exactly 2π · span · h² · f''/24 (f = z², f'''' = 0), so a
+            // grid in θ, or off-centre samples, would fail this.
+            let g = Grid { n: 50, domain };
+            let span = want / (2.0 * PI);
+            let h = span / g.n as f64;
             let z2: f64 = (0..g.len()).map(|i| g.direction(i).z.powi(2)).sum::<f64>() * g.cell_solid_angle();
-            assert!((z2 - want / 3.0).abs() < 1e-4, "{z2}");
+            let midpoint = want / 3.0 - 2.0 * PI * span * h * h * 2.0 / 24.0;
+            assert!((z2 - midpoint).abs() < 1e-12, "{z2} vs {midpoint}");
             assert!((0..g.len()).all(|i| domain == Domain::Sphere || g.direction(i).z > 0.0));
         }
     }

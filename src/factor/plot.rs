@@ -51,13 +51,15 @@ fn draw_spectra<DB: DrawingBackend>(
     spectra: &[Spectrum],
 ) -> Result<(), String> {
     // Normalize every curve by its largest measured σ so materials share one axis; show the terms
-    // up to 1e-4 of σ_1.
+    // down to 1e-4 of σ_1, but no further than twice the K holding 99.9 % of each spectrum's
+    // energy (long measured tails would squash the interesting part).
     let floor = 1e-4;
     let kmax = spectra
         .iter()
         .map(|s| {
             let top = s.measured.first().copied().unwrap_or(1.0).max(f64::MIN_POSITIVE);
-            s.measured.iter().take_while(|v| **v / top >= floor).count()
+            let above_floor = s.measured.iter().take_while(|v| **v / top >= floor).count();
+            above_floor.min(2 * super::energy::terms_for_fraction(&s.measured, 0.999))
         })
         .max()
         .unwrap_or(1)
@@ -118,7 +120,8 @@ fn draw_counts<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift
             _ => (l * l) as f64,
         })
     };
-    let xmax = rows.iter().filter_map(x_of).fold(4.0f64, f64::max) * 1.05;
+    // Room on the right for the material labels.
+    let xmax = rows.iter().filter_map(x_of).fold(4.0f64, f64::max) * 1.3;
     let ymax =
         rows.iter().flat_map(|r| [r.measured_k, r.predicted_k]).flatten().map(|k| k as f64).fold(4.0f64, f64::max)
             * 1.1;
@@ -135,7 +138,11 @@ fn draw_counts<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift
     for (i, (slope, label)) in lines.iter().enumerate() {
         let color = PALETTE[(i + 5) % PALETTE.len()];
         chart
-            .draw_series(LineSeries::new(vec![(0.0, 0.0), (xmax, slope * xmax)], color.stroke_width(1)))
+            // End inside the chart: plotters drops segments whose end point lies outside it.
+            .draw_series(LineSeries::new(
+                vec![(0.0, 0.0), (xmax.min(ymax / slope), (slope * xmax).min(ymax))],
+                color.stroke_width(1),
+            ))
             .map_err(err)?
             .label(*label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
@@ -163,7 +170,7 @@ fn draw_counts<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(SeriesLabelPosition::LowerRight)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font(("sans-serif", 12))

@@ -12,16 +12,18 @@
 //! **Half-angle BRDFs** (Torrance-Sparrow eq. 14, Blinn-Phong, measured data): the frequency
 //! content lives in the half-angle curve ρ(θ_h). Its Legendre transform, normalized to F_0 = 1,
 //! F_l = ∫ ρ(θ_h) P_l(cos θ_h) sin θ_h dθ_h / ∫ ρ(θ_h) sin θ_h dθ_h, gives l*, and K ≈ (l*)²/4
-//! on the hemisphere (§4, Fig. 7C); on the sphere twice that. For measured data the curve is
+//! on the visible hemispheres (§4, Fig. 7C; no sphere form: see [`no_prediction_reason`]).
+//! For measured data the curve is
 //! the mean over θ_d below 60° (grazing angles skipped) and all φ_d (§4).
 //!
 //! **The threshold for l\* (derived, see `docs/count-terms.md`).** For eq. 14, ρ(θ_h) is a
 //! Gaussian exp(−θ_h²/σ²) on the sphere of half vectors; its zonal transform is
 //! F_l ≈ exp(−l(l+1)σ²/4). The paper's conservative cut F_l < e⁻³ (§3.3) gives
 //! l* ≈ √12/σ ≈ 3.46/σ; a 99 % band-energy cut, Σ_{l≤L}(2l+1)F_l² ≈ 1 − exp(−σ²L²/2), gives
-//! l* ≈ √(2 ln 100)/σ ≈ 3.03/σ. With K ≈ (l*)²/4 these predict 75 / 57 terms at σ = 0.2 and
-//! 19 / 14 at σ = 0.4; converged hemisphere SVDs measure about 82 and 21 (docs/results), and
-//! the paper says ~60 and 10–20. prtkit therefore uses the **e⁻³ coefficient cut** for
+//! l* ≈ √(2 ln 100)/σ ≈ 3.03/σ. The numerical transform gives l* = 17 / 15 at σ = 0.2 and
+//! 9 / 7 at σ = 0.4, so K ≈ (l*)²/4 predicts 73 / 57 and 21 / 13 terms; fine hemisphere
+//! SVDs measure 75 (n = 160; 73 at n = 256) and 21 (docs/results/terms.md), and the paper says
+//! ~60 and 10–20. prtkit therefore uses the **e⁻³ coefficient cut** for
 //! half-angle curves. The paper's printed shortcut l* ≈ 1/(2σ²) (12.5 at σ = 0.2, 3.1 at
 //! σ = 0.4 → K ≈ 39 and 2.4) contradicts its own K values and is reported only as
 //! `paper_shortcut_k`.
@@ -185,7 +187,7 @@ pub fn l_star_band_energy(spectrum: &[f64], fraction: f64) -> Option<usize> {
 pub enum PredictionKind {
     /// Radially symmetric lobe: exact SH spectrum, K = (l*+1)² (sphere) or half (hemisphere).
     ReflectionLobe,
-    /// Half-angle curve: K ≈ (l*)²/4 (hemisphere) or (l*)²/2 (sphere).
+    /// Half-angle curve: K ≈ (l*)²/4 on the visible hemispheres.
     HalfAngle,
 }
 
@@ -205,19 +207,26 @@ pub struct Prediction {
     pub rule: String,
 }
 
-/// Why no prediction is made.
-pub fn no_prediction_reason(brdf: &Brdf, cosine: bool) -> Option<String> {
+/// Why no prediction is made, if none is.
+pub fn no_prediction_reason(brdf: &Brdf, domain: Domain, cosine: bool) -> Option<String> {
     if cosine {
-        Some("the paper's closed forms are for ρ without the cosine (--cosine off)".into())
+        Some("the paper's closed forms are for rho without the cosine (--cosine off)".into())
     } else if !brdf.is_isotropic() {
         Some(format!("{} is anisotropic: no closed form", brdf.name()))
+    } else if !brdf.is_radially_symmetric() && domain == Domain::Sphere {
+        // Extended to the sphere, a half-angle model also lights pairs with ω_i and ω_o in
+        // opposite hemispheres; its sphere SVD is not twice the hemisphere one (measured:
+        // σ = 0.4 needs 59 terms on the sphere, 21 on the hemisphere), and §4 only covers the
+        // visible hemispheres.
+        Some("the half-angle closed form (section 4) is for the visible hemispheres only".into())
     } else {
         None
     }
 }
 
-/// Predicts K at energy `fraction` (reflection lobes) or with the e⁻³ cut (half-angle curves)
-/// for the domain. `None` with --cosine or for anisotropic BRDFs ([`no_prediction_reason`]).
+/// Predicts K at energy `fraction` (reflection lobes) or with the e⁻³ cut (half-angle curves,
+/// hemisphere only). `None` with --cosine, for anisotropic BRDFs and for half-angle models on
+/// the sphere ([`no_prediction_reason`]).
 pub fn predict(
     brdf: &Brdf,
     domain: Domain,
@@ -225,7 +234,7 @@ pub fn predict(
     channel: super::Channel,
     fraction: f64,
 ) -> Option<Prediction> {
-    if no_prediction_reason(brdf, cosine).is_some() {
+    if no_prediction_reason(brdf, domain, cosine).is_some() {
         return None;
     }
     if brdf.is_radially_symmetric() {
@@ -247,11 +256,7 @@ pub fn predict(
     }
     let spectrum = half_angle_spectrum_of(brdf, channel, HALF_ANGLE_LMAX)?;
     let l_star = l_star_coefficient(&spectrum, E3)?;
-    let quarter = (l_star * l_star) as f64 / 4.0;
-    let predicted_k = match domain {
-        Domain::Hemisphere => quarter,
-        Domain::Sphere => 2.0 * quarter,
-    };
+    let predicted_k = (l_star * l_star) as f64 / 4.0;
     Some(Prediction {
         kind: PredictionKind::HalfAngle,
         l_star,

@@ -1,0 +1,146 @@
+//! `factor-brdf` end to end: JSON document, factor maps, bad input (exit 2, no partial output).
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+use serde_json::Value;
+
+fn cmd() -> Command {
+    Command::cargo_bin("factor-brdf").unwrap()
+}
+
+#[test]
+fn writes_a_factor_document_with_consistent_energy() {
+    let out = cmd().args(["phong:s=30", "--domain", "hemisphere", "--resolution", "40"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["format"], "prtkit.factor");
+    assert_eq!(doc["method"], "fft");
+    let s: Vec<f64> = doc["singular_values"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!(s.len(), 1600);
+    assert!(s.windows(2).all(|w| w[0] >= w[1]));
+    let total: f64 = s.iter().map(|x| x * x).sum();
+    assert!((total - doc["total_energy"].as_f64().unwrap()).abs() <= 1e-12 * total);
+    let k99 = doc["terms"]["99%"].as_u64().unwrap() as usize;
+    let cumulative = doc["cumulative_energy"].as_array().unwrap();
+    assert!(cumulative[k99 - 1].as_f64().unwrap() >= 0.99 && cumulative[k99 - 2].as_f64().unwrap() < 0.99);
+    // The paper's Fig. 3A/6: K ≈ 2.5 s = 75 on the hemisphere for s = 30.
+    assert!((68..=82).contains(&k99), "K99 = {k99}");
+    let k90 = doc["terms"]["90%"].as_u64().unwrap();
+    assert!(k90 < k99 as u64 && k99 as u64 <= doc["terms"]["99.9%"].as_u64().unwrap());
+}
+
+#[test]
+fn factor_maps_show_spherical_harmonics() {
+    let dir = tempfile::tempdir().unwrap();
+    let maps = dir.path().join("maps");
+    cmd()
+        .args(["phong:s=8", "--domain", "sphere", "--resolution", "48", "--terms", "4", "-o"])
+        .arg(dir.path().join("f.json"))
+        .arg("--maps")
+        .arg(&maps)
+        .assert()
+        .success();
+    let bytes = std::fs::read(maps.join("factors.exr")).unwrap();
+    let layers = prtkit::io::exr::decode_layers(&maps.join("factors.exr"), &bytes).unwrap();
+    assert_eq!(layers.len(), 8);
+    assert!(maps.join("factors.png").exists());
+    // g_0 is Y_00 = 1/√(4π) everywhere (up to sign): one colour, constant magnitude (to the
+    // grid's quadrature error: 2 % at n = 24, under 1.5 % at n = 48).
+    let g0 = &layers.iter().find(|(n, _)| n == "g_000").unwrap().1;
+    let y00 = 1.0 / (4.0 * std::f64::consts::PI).sqrt();
+    let mags: Vec<f64> = g0.pixels.iter().map(|p| (p[0] - p[2]) as f64).collect();
+    let (lo, hi) = mags.iter().fold((f64::MAX, f64::MIN), |(a, b), m| (a.min(m.abs()), b.max(m.abs())));
+    assert!((lo - y00).abs() < 0.015 * y00 && (hi - y00).abs() < 0.015 * y00, "g_0 spans {lo}..{hi}, Y_00 = {y00}");
+    assert!(mags.iter().all(|m| m.signum() == mags[0].signum()));
+    // g_1..g_3 span band 1: each is a linear function of (x, y, z), so it changes sign.
+    for k in 1..4 {
+        let g = &layers.iter().find(|(n, _)| *n == format!("g_{k:03}")).unwrap().1;
+        assert!(g.pixels.iter().any(|p| p[0] > 0.1) && g.pixels.iter().any(|p| p[2] > 0.1), "g_{k}");
+    }
+}
+
+#[test]
+fn bad_specs_are_errors_with_exit_2_and_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.json");
+    for (spec, needle) in [
+        ("glossy:s=3", "accepted: lambert"),
+        ("phong:s=-2", "s must be > 0"),
+        ("phong:s=0", "s must be > 0"),
+        ("torrance-sparrow:roughness=0.2", "does not take parameter"),
+    ] {
+        cmd().arg(spec).arg("-o").arg(&out).assert().code(2).stderr(predicate::str::contains(needle));
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn absurd_resolutions_say_how_much_memory_they_need() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.json");
+    cmd()
+        .args(["kajiya-kay:s=4", "--resolution", "2000", "-o"])
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("needs about").and(predicate::str::contains("TiB")));
+    cmd()
+        .args(["phong:s=4", "--resolution", "5000", "-o"])
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("needs about").and(predicate::str::contains("--max-memory")));
+    cmd().args(["phong:s=4", "--resolution", "1"]).assert().code(2).stderr(predicate::str::contains("at least 2"));
+    assert!(!out.exists());
+}
+
+#[test]
+fn broken_merl_files_are_errors_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let truncated = dir.path().join("short.binary");
+    let mut bytes = Vec::new();
+    for d in [90i32, 90, 180] {
+        bytes.extend_from_slice(&d.to_le_bytes());
+    }
+    bytes.extend_from_slice(&[0u8; 800]);
+    std::fs::write(&truncated, &bytes).unwrap();
+    let wrong = dir.path().join("wrong.binary");
+    bytes[0..4].copy_from_slice(&64i32.to_le_bytes());
+    std::fs::write(&wrong, &bytes).unwrap();
+    let out = dir.path().join("f.json");
+    cmd()
+        .arg(format!("merl:{}", truncated.display()))
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("short.binary").and(predicate::str::contains("truncated")));
+    cmd()
+        .arg(format!("merl:{}", wrong.display()))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("wrong.binary").and(predicate::str::contains("64x90x180")));
+    cmd().arg("merl:/nonexistent/x.binary").assert().code(2).stderr(predicate::str::contains("x.binary"));
+    assert!(!out.exists());
+}
+
+#[test]
+fn output_is_identical_for_any_thread_count() {
+    // Everything but provenance (which records the command line) must be byte-identical.
+    let run = |threads: &str, method: &str, spec: &str| {
+        let out = cmd()
+            .env("RAYON_NUM_THREADS", threads)
+            .args([spec, "--resolution", "20", "--method", method])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let mut doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+        doc.as_object_mut().unwrap().remove("provenance");
+        serde_json::to_string(&doc).unwrap()
+    };
+    for (method, spec) in
+        [("fft", "torrance-sparrow:sigma=0.3"), ("randomized", "kajiya-kay:s=8"), ("dense", "phong:s=5")]
+    {
+        assert_eq!(run("1", method, spec), run("3", method, spec), "{method}");
+    }
+}
