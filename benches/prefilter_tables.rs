@@ -110,7 +110,7 @@ fn table5(env: &EnvMap, angular_views: usize, md: &mut String) {
             let r = pipeline::frequency(&model, Lighting::Map(env), orders, S, S, &NoProgress).expect("frequency");
             let global = shrm::to_global(&r.shrm);
             let shrm_s = t.elapsed().as_secs_f64();
-            let maps: Vec<RgbImage> = views.iter().map(|&v| shrm::reflection_map(&global, v)).collect();
+            let maps = shrm::reflection_maps(&global, &views);
             (shrm_s, r.brdf.f, r.brdf.p, r.epsilon_achieved, maps)
         });
         let t = Instant::now();

@@ -116,6 +116,10 @@ fn global_shrm_at_a_view_equals_the_local_shrm_re_expressed() {
     let a = shrm::reflection_map(&local, view);
     let b = shrm::reflection_map(&global, view);
     assert!(rel_rms(&b, &a) < 1e-5, "{}", rel_rms(&b, &a));
+    // The batched maps equal the one-at-a-time ones (f32 accumulation: ~1e-7).
+    let batch = shrm::reflection_maps(&global, &[view, -view]);
+    assert!(rel_rms(&batch[0], &b) < 1e-6);
+    assert!(rel_rms(&batch[1], &shrm::reflection_map(&local, -view)) < 1e-5);
     for (x, y) in back.layers.iter().zip(&local.layers) {
         assert!(rel_rms(x, y) < 1e-5);
     }

@@ -257,8 +257,8 @@ pub fn run(args: Args) -> Result<Outcome> {
                 .with_context(|| format!("cannot prefilter {source}"))?;
             let t = Instant::now();
             let global = shrm::to_global(&result.shrm);
-            for (path, view) in &views {
-                let image = shrm::reflection_map(&global, view.unwrap_or(DVec3::Z));
+            let dirs: Vec<DVec3> = views.iter().map(|(_, v)| v.unwrap_or(DVec3::Z)).collect();
+            for ((path, view), image) in views.iter().zip(shrm::reflection_maps(&global, &dirs)) {
                 maps.push((path.clone(), *view, image));
             }
             let maps_seconds = t.elapsed().as_secs_f64();

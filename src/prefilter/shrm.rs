@@ -267,6 +267,42 @@ pub fn reflection_map(shrm: &Shrm, view: DVec3) -> RgbImage {
     image
 }
 
+/// Reflection maps for many views at once (eq. 12). For a global SHRM the layers are first packed
+/// texel by texel, so each map is a contiguous (P+1)²-term dot product per texel; a local SHRM
+/// takes [`reflection_map`] per view.
+pub fn reflection_maps(shrm: &Shrm, views: &[DVec3]) -> Vec<RgbImage> {
+    if !shrm.global {
+        return views.iter().map(|&v| reflection_map(shrm, v)).collect();
+    }
+    let (w, h, n) = (shrm.width(), shrm.height(), count(shrm.p_b));
+    let mut packed = vec![[0.0f32; 3]; w * h * n];
+    for (k, layer) in shrm.layers.iter().enumerate() {
+        for (i, v) in layer.pixels.iter().enumerate() {
+            packed[i * n + k] = *v;
+        }
+    }
+    let table = crate::sh::legendre::LegendreTable::new(shrm.p_b);
+    views
+        .par_iter()
+        .map(|&view| {
+            let mut y64 = vec![0.0; n];
+            crate::sh::basis::eval_basis_dir(&table, view, &mut y64);
+            let weights: Vec<f32> = y64.iter().map(|&v| v as f32).collect();
+            let mut image = RgbImage::new(w, h);
+            for (px, texel) in image.pixels.iter_mut().zip(packed.chunks_exact(n)) {
+                let mut acc = [0.0f32; 3];
+                for (c, &wt) in texel.iter().zip(&weights) {
+                    acc[0] += wt * c[0];
+                    acc[1] += wt * c[1];
+                    acc[2] += wt * c[2];
+                }
+                *px = acc;
+            }
+            image
+        })
+        .collect()
+}
+
 /// The twelve view directions of Cabral et al. 1999: the vertices of an icosahedron.
 pub fn icosahedron_views() -> Vec<DVec3> {
     let t = (1.0 + 5f64.sqrt()) / 2.0;
