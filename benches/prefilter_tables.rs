@@ -37,28 +37,10 @@ fn environment() -> (EnvMap, String) {
     (EnvMap::latlong(img).expect("latlong"), "procedural sky, 128×128 lat-long".into())
 }
 
-fn rel_rms(a: &RgbImage, b: &RgbImage) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (p, q) in a.pixels.iter().zip(&b.pixels) {
-        for k in 0..3 {
-            num += (p[k] as f64 - q[k] as f64).powi(2);
-            den += (q[k] as f64).powi(2);
-        }
-    }
-    (num / den).sqrt()
-}
+use prtkit::metrics::relative_rms as rel_rms;
 
-fn best_of<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
-    let mut best = f64::INFINITY;
-    let mut out = None;
-    for _ in 0..runs {
-        let t = Instant::now();
-        let v = f();
-        best = best.min(t.elapsed().as_secs_f64());
-        out = Some(v);
-    }
-    (best, out.expect("one run"))
-}
+mod common;
+use common::best_of;
 
 fn table4(env: &EnvMap, md: &mut String) {
     let paper: [(f64, f64, f64, f64); 7] = [

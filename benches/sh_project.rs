@@ -10,17 +10,8 @@ use prtkit::sh::project::{project, project_naive};
 use std::path::Path;
 use std::time::Instant;
 
-fn best_of<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
-    let mut best = f64::INFINITY;
-    let mut out = None;
-    for _ in 0..runs {
-        let t = Instant::now();
-        let v = f();
-        best = best.min(t.elapsed().as_secs_f64());
-        out = Some(v);
-    }
-    (best, out.expect("at least one run"))
-}
+mod common;
+use common::best_of;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

@@ -25,16 +25,7 @@ fn sky(w: usize, h: usize) -> EnvMap {
     .unwrap()
 }
 
-fn rel_rms(a: &RgbImage, b: &RgbImage) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (p, q) in a.pixels.iter().zip(&b.pixels) {
-        for k in 0..3 {
-            num += (p[k] as f64 - q[k] as f64).powi(2);
-            den += (q[k] as f64).powi(2);
-        }
-    }
-    (num / den).sqrt()
-}
+use prtkit::metrics::relative_rms as rel_rms;
 
 #[test]
 fn phong_reflection_maps_match_the_angular_reference() {

@@ -5,6 +5,7 @@ use glam::{DMat3, DVec3};
 use prtkit::envmap::{resample, EnvMap, Layout};
 use prtkit::io::RgbImage;
 use prtkit::progress::NoProgress;
+use prtkit::quadrature::gauss_legendre;
 use prtkit::sh::basis::eval_basis_dir;
 use prtkit::sh::legendre::LegendreTable;
 use prtkit::sh::project::{map_energy, project, project_naive};
@@ -172,31 +173,6 @@ fn rotating_the_map_about_z_rotates_the_coefficients() {
             assert!((x[k] - y[k]).abs() < 1e-9, "{x:?} vs {y:?}");
         }
     }
-}
-
-/// Gauss–Legendre nodes and weights on [−1, 1] by Newton's method on P_n.
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 0.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-16 {
-                    break;
-                }
-            }
-            (x, 2.0 / ((1.0 - x * x) * dp * dp))
-        })
-        .collect()
 }
 
 #[test]

@@ -38,55 +38,13 @@ pub const E3: f64 = 0.049_787_068_367_863_944;
 /// Largest θ_d averaged into a measured half-angle curve (grazing angles skipped, §4).
 pub const MAX_THETA_D: f64 = PI / 3.0;
 
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton iteration on P_n; Golub–Welsch not needed
-/// at these orders).
+/// Gauss–Legendre nodes and weights on [−1, 1] as two vectors (the rule itself lives in
+/// [`crate::quadrature`]).
 pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut nodes = vec![0.0; n];
-    let mut weights = vec![0.0; n];
-    for i in 0..n.div_ceil(2) {
-        // Tricomi's initial guess, then Newton.
-        let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, x);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            let pn = if n == 1 { x } else { p1 };
-            let pn1 = if n == 1 { 1.0 } else { p0 };
-            dp = n as f64 * (x * pn - pn1) / (x * x - 1.0);
-            let dx = pn / dp;
-            x -= dx;
-            if dx.abs() < 1e-16 {
-                break;
-            }
-        }
-        nodes[i] = x;
-        nodes[n - 1 - i] = -x;
-        let w = 2.0 / ((1.0 - x * x) * dp * dp);
-        weights[i] = w;
-        weights[n - 1 - i] = w;
-    }
-    (nodes, weights)
+    crate::quadrature::gauss_legendre_cached(n).iter().copied().unzip()
 }
 
-/// Legendre polynomials P_0..P_lmax at x by Bonnet's recurrence
-/// (l+1) P_{l+1} = (2l+1) x P_l − l P_{l−1} (stable for |x| ≤ 1). These are the plain
-/// polynomials of the Funk–Hecke integral; the SH basis itself lives in `sh`.
-pub fn legendre_polynomials(x: f64, out: &mut [f64]) {
-    if out.is_empty() {
-        return;
-    }
-    out[0] = 1.0;
-    if out.len() > 1 {
-        out[1] = x;
-    }
-    for l in 1..out.len().saturating_sub(1) {
-        out[l + 1] = ((2 * l + 1) as f64 * x * out[l] - l as f64 * out[l - 1]) / (l + 1) as f64;
-    }
-}
+pub use crate::sh::legendre::legendre_polynomials;
 
 /// ∫_a^b g(θ) P_l(cos θ) sin θ dθ for l = 0..=lmax by composite Gauss–Legendre in θ
 /// (`panels` panels of 16 nodes; panels uniform in θ so narrow lobes near θ = 0 are resolved).

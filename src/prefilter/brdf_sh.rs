@@ -270,16 +270,9 @@ mod tests {
         // Λ_l ρ̂_l = (s+1) ∫_0^1 x^s P_l(x) dx (Funk–Hecke), by a fine midpoint rule with the
         // plain Legendre recurrence — no Gauss nodes, no normalized tables.
         let legendre = |l: usize, x: f64| {
-            let (mut p0, mut p1) = (1.0, x);
-            if l == 0 {
-                return 1.0;
-            }
-            for k in 2..=l {
-                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            p1
+            let mut p = vec![0.0; l + 1];
+            crate::sh::legendre::legendre_polynomials(x, &mut p);
+            p[l]
         };
         for s in [8.0, 32.0, 128.0] {
             let b = from_radial(phong(s), 30, 400);

@@ -72,15 +72,8 @@ mod tests {
     }
 
     fn legendre_p(l: usize, x: f64) -> f64 {
-        let (mut p0, mut p1) = (1.0, x);
-        if l == 0 {
-            return 1.0;
-        }
-        for k in 2..=l {
-            let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-            p0 = p1;
-            p1 = p2;
-        }
-        p1
+        let mut p = vec![0.0; l + 1];
+        crate::sh::legendre::legendre_polynomials(x, &mut p);
+        p[l]
     }
 }

@@ -12,6 +12,22 @@
 
 use std::f64::consts::PI;
 
+/// Legendre polynomials P_0..P_lmax at x by Bonnet's recurrence
+/// (l+1) P_{l+1} = (2l+1) x P_l − l P_{l−1} (stable for |x| ≤ 1). These are the plain
+/// polynomials of the Funk–Hecke integral; the normalized SH functions are [`LegendreTable`].
+pub fn legendre_polynomials(x: f64, out: &mut [f64]) {
+    if out.is_empty() {
+        return;
+    }
+    out[0] = 1.0;
+    if out.len() > 1 {
+        out[1] = x;
+    }
+    for l in 1..out.len().saturating_sub(1) {
+        out[l + 1] = ((2 * l + 1) as f64 * x * out[l] - l as f64 * out[l - 1]) / (l + 1) as f64;
+    }
+}
+
 /// Precomputed recurrence coefficients for all (l, m) up to an order.
 #[derive(Clone, Debug)]
 pub struct LegendreTable {

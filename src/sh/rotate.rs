@@ -93,11 +93,64 @@ impl ShRotation {
     }
 }
 
+/// The u, v, w coefficients of Ivanic–Ruedenberg's Table 2 for one band: they depend on l, m, n
+/// only, not on the rotation, so they are computed once per band and shared.
+struct BandCoefficients {
+    uvw: Vec<[f64; 3]>, // (2l+1)², row-major by (m + l, n + l)
+}
+
+fn band_coefficients(l: usize) -> std::sync::Arc<BandCoefficients> {
+    use std::sync::{Arc, Mutex, OnceLock};
+    static CACHE: OnceLock<Mutex<Vec<Arc<BandCoefficients>>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(|| Mutex::new(Vec::new()));
+    if let Ok(c) = cache.lock() {
+        if let Some(b) = c.get(l) {
+            return b.clone();
+        }
+    }
+    let mut built = Vec::new();
+    let start = cache.lock().map(|c| c.len()).unwrap_or(0);
+    for band in start..=l {
+        let li = band as isize;
+        let w = 2 * li + 1;
+        let mut uvw = vec![[0.0; 3]; (w * w) as usize];
+        if band >= 2 {
+            for m in -li..=li {
+                for n in -li..=li {
+                    let d = if m == 0 { 1.0 } else { 0.0 };
+                    let denom =
+                        if n.abs() == li { (2 * li * (2 * li - 1)) as f64 } else { ((li + n) * (li - n)) as f64 };
+                    let am = m.abs();
+                    let u = (((li + m) * (li - m)) as f64 / denom).sqrt();
+                    let v = 0.5 * ((1.0 + d) * ((li + am - 1) * (li + am)) as f64 / denom).sqrt() * (1.0 - 2.0 * d);
+                    let wc = -0.5 * (((li - am - 1) * (li - am)) as f64 / denom).sqrt() * (1.0 - d);
+                    uvw[((m + li) * w + (n + li)) as usize] = [u, v, wc];
+                }
+            }
+        }
+        built.push(Arc::new(BandCoefficients { uvw }));
+    }
+    match cache.lock() {
+        Ok(mut c) => {
+            // Another thread may have extended the cache meanwhile: append each band only at
+            // its own position.
+            for (i, b) in built.into_iter().enumerate() {
+                if c.len() == start + i {
+                    c.push(b);
+                }
+            }
+            c[l].clone()
+        }
+        Err(_) => built.pop().unwrap_or_else(|| Arc::new(BandCoefficients { uvw: Vec::new() })),
+    }
+}
+
 /// Builds band l from band 1 (`r1`) and band l−1 (`prev`), Ivanic–Ruedenberg Table 2 with the
 /// 1998 corrections.
 fn band(r1: &[f64], prev: &[f64], l: isize) -> Vec<f64> {
     let w = 2 * l + 1;
     let wp = 2 * l - 1;
+    let coefficients = band_coefficients(l as usize);
     let r1e = |i: isize, j: isize| r1[((i + 1) * 3 + (j + 1)) as usize];
     let pe = |a: isize, b: isize| prev[((a + l - 1) * wp + (b + l - 1)) as usize];
     // P(i, a, b) of the paper.
@@ -113,13 +166,7 @@ fn band(r1: &[f64], prev: &[f64], l: isize) -> Vec<f64> {
     let mut out = vec![0.0; (w * w) as usize];
     for m in -l..=l {
         for n in -l..=l {
-            let d = if m == 0 { 1.0 } else { 0.0 };
-            let denom = if n.abs() == l { (2 * l * (2 * l - 1)) as f64 } else { ((l + n) * (l - n)) as f64 };
-            let am = m.abs();
-            let u = (((l + m) * (l - m)) as f64 / denom).sqrt();
-            let v = 0.5 * ((1.0 + d) * ((l + am - 1) * (l + am)) as f64 / denom).sqrt() * (1.0 - 2.0 * d);
-            let wc = -0.5 * (((l - am - 1) * (l - am)) as f64 / denom).sqrt() * (1.0 - d);
-
+            let [u, v, wc] = coefficients.uvw[((m + l) * w + (n + l)) as usize];
             let mut value = 0.0;
             if u != 0.0 {
                 value += u * p(0, m, n);
