@@ -8,7 +8,6 @@ use prtkit::io::{exr, RgbImage};
 use prtkit::progress::NoProgress;
 use prtkit::sh::project::{project, project_naive};
 use std::path::Path;
-use std::time::Instant;
 
 mod common;
 use common::best_of;
