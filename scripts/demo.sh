@@ -34,9 +34,9 @@ say "3. prefilter: Phong s=32 reflection map; microfacet (σ = 0.2) SHRM and two
     --view 1,0,0.2 --reflection-map "$out/microfacet-side.png" --exposure -2 -o "$out/microfacet.shrm.json" -q
 
 say "4. count-terms: in-out BRDF terms for the demo materials (measured by SVD)"
-"$bin/count-terms" --brdf phong:s=32 --brdf torrance-sparrow:sigma=0.2 --resolution 24 \
+"$bin/count-terms" --brdf phong:s=32 --brdf torrance-sparrow:sigma=0.2 --resolution 40 \
     --json > "$out/terms.json"
-"$bin/count-terms" --brdf phong:s=32 --brdf torrance-sparrow:sigma=0.2 --resolution 24 >&2
+"$bin/count-terms" --brdf phong:s=32 --brdf torrance-sparrow:sigma=0.2 --resolution 40 >&2
 
 say "done: $(ls "$out" | wc -l) files in $out"
 ls "$out" >&2
