@@ -25,7 +25,8 @@ fi
   for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader; do
     f="docs/results/$section.md"
     if [ -f "$f" ]; then
-      cat "$f"
+      # Sections link their figures relative to docs/results/; this file lives in docs/.
+      sed -E 's#\]\(([A-Za-z0-9_.-]+\.(svg|png))\)#](results/\1)#g' "$f"
       echo
     fi
   done
