@@ -142,3 +142,25 @@ fn rotating_the_environment_rotates_the_output() {
     let rolled = RgbImage::from_fn(w, h, |x, y| ma.get((x + w - w / 4) % w, y));
     assert!(rel_rms(&mb, &rolled) < 1e-4, "{}", rel_rms(&mb, &rolled));
 }
+
+#[test]
+fn kajiya_kay_by_the_tangent_matches_the_angular_reference() {
+    // R&H 2002 §3.1, §7.1: reparameterized by the fibre tangent, Kajiya–Kay needs only q = 0
+    // terms but a larger P (the paper finds P = 8 for s = 32 at ε < .03).
+    let env = sky(256, 128);
+    let cone = ConeIntegrator::new(&env).unwrap();
+    let model = Model::new(Brdf::parse("kajiya-kay:s=8").unwrap(), false).unwrap();
+    let coeffs = model.coefficients_for_epsilon(0.01, 12).unwrap();
+    let achieved = coeffs.residual(coeffs.f, coeffs.p);
+    let light = project(&env, coeffs.f, &NoProgress).unwrap();
+    let local = shrm::local_shrm(&light, &coeffs, 128, 64, &NoProgress).unwrap();
+    let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), 1e-3, 33);
+    let view = DVec3::new(0.3, -0.2, 0.9).normalize();
+    let freq = shrm::reflection_map(&local, view);
+    let reference = angular::view_map(&cone, &model, &cutoff, view, 128, 64, &NoProgress);
+    let err = rel_rms(&freq, &reference);
+    eprintln!("kajiya-kay s=8: F_B={} P_B={} (ε achieved {achieved:.4}): rel RMS {err:.4}", coeffs.f, coeffs.p);
+    // Measured 1.7 % at ε = .01 (F_B = 5, P_B = 5): the BRDF-energy ε is a heuristic, not a
+    // bound (§5.1), and Kajiya–Kay's ridge along the reflection cone converges more slowly in p.
+    assert!(err <= 0.02, "relative RMS {err} (ε achieved {achieved})");
+}

@@ -372,7 +372,14 @@ pub fn run(args: Args) -> Result<Outcome> {
         epsilon: args.order.is_none().then_some(args.epsilon),
         epsilon_achieved,
         epsilon_bound: bound,
-        parameterization: if model.centre() == Some(Centre::Normal) { "normal" } else { "reflection" }.into(),
+        parameterization: if model.centre() == Some(Centre::Normal) {
+            "normal"
+        } else if model.is_tangent() {
+            "tangent"
+        } else {
+            "reflection"
+        }
+        .into(),
         layout: layout.name().into(),
         width,
         height,

@@ -58,15 +58,25 @@ pub enum Centre {
 pub struct Model {
     brdf: Brdf,
     cosine: bool,
+    tangent: bool,
 }
 
 impl Model {
     /// Wraps a BRDF. `cosine` folds max(N·ω_i, 0) into ρ̂ for general BRDFs.
     pub fn new(brdf: Brdf, cosine: bool) -> Result<Self, ModelError> {
-        if !brdf.is_isotropic() {
+        // Kajiya–Kay depends on T·ω_i and T·ω_o only: reparameterized by the tangent it is a 2-D
+        // function, handled like an isotropic BRDF whose central direction is T (§3.1, §7.1).
+        let tangent = matches!(brdf, Brdf::KajiyaKay(_));
+        if !brdf.is_isotropic() && !tangent {
             return Err(ModelError::Anisotropic(brdf.spec()));
         }
-        Ok(Model { brdf, cosine })
+        Ok(Model { brdf, cosine, tangent })
+    }
+
+    /// True for a BRDF reparameterized by the fibre tangent (Kajiya–Kay): texels are indexed by
+    /// T and only the q = 0 terms are non-zero.
+    pub fn is_tangent(&self) -> bool {
+        self.tangent
     }
 
     /// The BRDF.
@@ -83,7 +93,7 @@ impl Model {
     pub fn centre(&self) -> Option<Centre> {
         match &self.brdf {
             Brdf::Lambert(_) => Some(Centre::Normal),
-            b if b.is_radially_symmetric() => Some(Centre::Reflection),
+            b if b.is_radially_symmetric() && !self.tangent => Some(Centre::Reflection),
             _ => None,
         }
     }
@@ -97,8 +107,14 @@ impl Model {
         [v; 3]
     }
 
-    /// ρ̂(ω_i, ω_o) in the reflection frame (+Z = R), for the general path.
+    /// ρ̂(ω_i, ω_o) in the central frame (+Z = R, or T for Kajiya–Kay), for the general path.
     pub fn rho_hat(&self, wi: DVec3, wo: DVec3) -> [f64; 3] {
+        if self.tangent {
+            // The model's own frame has its tangent along +X: a cyclic permutation takes the
+            // central frame's +Z there. R&H use ρ̂ = cos^s(θ_i − θ_o) itself (no N·L).
+            let to_model = |w: DVec3| DVec3::new(w.z, w.x, w.y);
+            return self.brdf.eval(to_model(wi), to_model(wo));
+        }
         let n = DVec3::Z + wo;
         let len = n.length();
         if len < 1e-9 {
@@ -121,6 +137,10 @@ impl Model {
     /// space): the normal N = normalize(R + V) and its frame, hoisted out of the angular
     /// method's loop over environment texels. `None` when R = −V (no normal).
     pub fn prepare_view(&self, r: DVec3, v: DVec3) -> Option<PreparedView> {
+        if self.tangent {
+            let (t, b) = r.any_orthonormal_pair();
+            return Some(PreparedView { n: r, t, b, wo_n: DVec3::new(v.dot(t), v.dot(b), v.dot(r)) });
+        }
         let n = r + v;
         let len = n.length();
         if len < 1e-9 {
@@ -135,6 +155,9 @@ impl Model {
     /// [`Model::rho_hat`] in the reflection frame.
     #[inline]
     pub fn rho_hat_prepared(&self, view: &PreparedView, l: DVec3) -> [f64; 3] {
+        if self.tangent {
+            return self.rho_hat(DVec3::new(l.dot(view.t), l.dot(view.b), l.dot(view.n)), view.wo_n);
+        }
         let cos_i = view.n.dot(l);
         if cos_i <= 0.0 {
             return [0.0; 3];
@@ -249,5 +272,31 @@ mod tests {
             let b = model.rho_hat(to_local(l), to_local(v));
             assert!((a[0] - b[0]).abs() < 1e-12 * (1.0 + b[0].abs()), "{a:?} vs {b:?}");
         }
+    }
+
+    #[test]
+    fn kajiya_kay_reparameterized_by_the_tangent_has_only_q_zero_terms() {
+        let model = Model::new(Brdf::parse("kajiya-kay:s=8").unwrap(), false).unwrap();
+        assert!(model.is_tangent() && model.centre().is_none());
+        let c = model.coefficients(12, 6);
+        let (mut q0, mut rest) = (0.0, 0.0);
+        for l in 0..=12 {
+            for p in 0..=6usize {
+                for q in 0..=(l.min(p) as isize) {
+                    let e = c.get(l, p, q)[0].powi(2);
+                    if q == 0 {
+                        q0 += e;
+                    } else {
+                        rest += e;
+                    }
+                }
+            }
+        }
+        assert!(rest < 1e-20 * q0, "q > 0 energy {rest} vs q = 0 {q0}");
+        // And ρ̂ in the tangent frame is the paper's cos^s(θ_i − θ_o) up to the model's scale:
+        // peak where the angles to T are supplementary (the reflection cone).
+        let (ti, to) = (0.6f64, std::f64::consts::PI - 0.6);
+        let v = model.rho_hat(crate::sh::basis::direction(ti, 0.0), crate::sh::basis::direction(to, 1.0))[0];
+        assert!((v - 9.0 / (2.0 * PI)).abs() < 1e-12, "{v}");
     }
 }
