@@ -13,5 +13,6 @@ pub mod normals;
 pub mod prefilter;
 pub mod progress;
 pub mod quadrature;
+pub mod render;
 pub mod sh;
 pub mod shader;
