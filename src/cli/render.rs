@@ -100,6 +100,10 @@ pub struct Args {
     #[arg(long, default_value_t = 64)]
     pub factor_resolution: usize,
 
+    /// factored: lighting samples per grid cell along each axis (averaged: a box prefilter).
+    #[arg(long, default_value_t = 2)]
+    pub cell_samples: usize,
+
     /// factored (sphere): size WxH of the lat-long table of normals the lighting is projected at.
     #[arg(long, value_parser = parse_size, default_value = "128x64")]
     pub normal_table: (usize, usize),
@@ -280,6 +284,9 @@ pub fn run(args: Args) -> Result<Outcome> {
             if args.terms == 0 {
                 bail!("--terms must be at least 1");
             }
+            if !(1..=8).contains(&args.cell_samples) {
+                bail!("--cell-samples {} must be in 1..=8", args.cell_samples);
+            }
             if !(2..=256).contains(&args.factor_resolution) {
                 bail!("--factor-resolution {} must be in 2..=256", args.factor_resolution);
             }
@@ -296,7 +303,7 @@ pub fn run(args: Args) -> Result<Outcome> {
             };
             extra.insert("k".into(), args.terms.into());
             extra.insert("energy".into(), f.cumulative_energy().get(args.terms - 1).copied().unwrap_or(1.0).into());
-            let shader = Factored::new(&f, args.terms, transport, &env);
+            let shader = Factored::new(&f, args.terms, transport, &env, args.cell_samples);
             label = format!("K={}", shader.terms());
             render(&scene, &camera, &env, &shader, &bar)
         }

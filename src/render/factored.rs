@@ -115,7 +115,8 @@ pub struct Factored {
 
 impl Factored {
     /// Keeps the first `terms` terms of `f` and projects `env` onto them at every point.
-    pub fn new(f: &Factorization, terms: usize, transport: Transport, env: &EnvMap) -> Self {
+    /// `sub`×`sub` lighting samples per grid cell.
+    pub fn new(f: &Factorization, terms: usize, transport: Transport, env: &EnvMap, sub: usize) -> Self {
         let k = terms.min(f.g.len());
         let mut s = Factored {
             sigma: f.singular_values[..k].to_vec(),
@@ -124,7 +125,7 @@ impl Factored {
             transport,
             coeffs: Vec::new(),
         };
-        s.coeffs = project(&f.g[..k], &f.grid, &s.transport, env);
+        s.coeffs = project(&f.g[..k], &f.grid, &s.transport, env, sub.max(1));
         s
     }
 
@@ -134,8 +135,8 @@ impl Factored {
     }
 
     /// Re-projects a new environment onto the factors (the per-frame relighting step).
-    pub fn relight(&mut self, g: &[Vec<f64>], env: &EnvMap) {
-        self.coeffs = project(&g[..self.terms()], &self.grid, &self.transport, env);
+    pub fn relight(&mut self, g: &[Vec<f64>], env: &EnvMap, sub: usize) {
+        self.coeffs = project(&g[..self.terms()], &self.grid, &self.transport, env, sub.max(1));
     }
 
     /// h_k(ω) bilinearly on the hemisphere grid (cos θ bins from the pole, φ wraps).
@@ -166,9 +167,26 @@ impl Factored {
 
 /// c_k = Σ_cells V g_k L ΔΩ at every point: per point the lighting of each cell is looked up
 /// once, then K dot products over the cells.
-fn project(g: &[Vec<f64>], grid: &Grid, transport: &Transport, env: &EnvMap) -> Vec<[f64; 3]> {
+fn project(g: &[Vec<f64>], grid: &Grid, transport: &Transport, env: &EnvMap, sub: usize) -> Vec<[f64; 3]> {
     let cells = grid.len();
-    let dirs: Vec<DVec3> = (0..cells).map(|c| grid.direction(c)).collect();
+    // Each cell's lighting is the mean of sub×sub samples uniform in (cos θ, φ) inside it (equal
+    // solid angles), a box prefilter of the environment: point samples alias bright sources.
+    let n = grid.n;
+    let span = match grid.domain {
+        crate::factor::Domain::Sphere => 2.0,
+        crate::factor::Domain::Hemisphere => 1.0,
+    };
+    let dirs: Vec<DVec3> = (0..cells)
+        .flat_map(|c| {
+            let (j, k) = (c / n, c % n);
+            (0..sub * sub).map(move |s| {
+                let z = 1.0 - (j as f64 + ((s / sub) as f64 + 0.5) / sub as f64) * span / n as f64;
+                let phi = (k as f64 + ((s % sub) as f64 + 0.5) / sub as f64) * 2.0 * PI / n as f64;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                DVec3::new(r * phi.cos(), r * phi.sin(), z)
+            })
+        })
+        .collect();
     let da = grid.cell_solid_angle();
     let kk = g.len();
     (0..transport.len())
@@ -182,9 +200,15 @@ fn project(g: &[Vec<f64>], grid: &Grid, transport: &Transport, env: &EnvMap) -> 
                 {
                     continue;
                 }
-                let l = env.lookup(frame * dirs[c]);
+                let mut l = [0.0f64; 3];
+                for d in &dirs[c * sub * sub..(c + 1) * sub * sub] {
+                    let v = env.lookup(frame * *d);
+                    for ch in 0..3 {
+                        l[ch] += v[ch] as f64;
+                    }
+                }
                 for ch in 0..3 {
-                    light[ch][c] = l[ch] as f64 * da;
+                    light[ch][c] = l[ch] * da / (sub * sub) as f64;
                 }
             }
             (0..kk).map(move |k| {
