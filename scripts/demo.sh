@@ -38,5 +38,14 @@ say "4. count-terms: in-out BRDF terms for the demo materials (measured by SVD)"
     --json > "$out/terms.json"
 "$bin/count-terms" --brdf phong:s=32 --brdf torrance-sparrow:sigma=0.2 --resolution 40 >&2
 
+say "5. render: a Phong s=32 sphere from the SHRM next to the reference (panel.png)"
+"$bin/prefilter" "$out/sky.exr" --brdf phong:s=32 --shrm "$out/phong32.shrm.exr" -o "$out/phong32-render.shrm.json" -q
+# The reference integrates what the SHRM represents (Phong's lobe about R, R&H 2002 §6.3).
+"$bin/render" "$out/sky.exr" --brdf phong:s=32 --res 128x128 --eye 0,-4,0.8 --fov 30 --integrand prefilter \
+    -o "$out/ref.exr" -q
+"$bin/render" "$out/sky.exr" --brdf phong:s=32 --res 128x128 --eye 0,-4,0.8 --fov 30 --shading shrm \
+    --shrm "$out/phong32-render.shrm.json" -o "$out/shrm.exr" --compare "$out/ref.exr" --exposure -2 \
+    --panel "$out/panel.png" --panel-item "reference=$out/ref.exr" -q
+
 say "done: $(ls "$out" | wc -l) files in $out"
 ls "$out" >&2

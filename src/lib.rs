@@ -14,5 +14,6 @@ pub mod normals;
 pub mod prefilter;
 pub mod progress;
 pub mod quadrature;
+pub mod render;
 pub mod sh;
 pub mod shader;

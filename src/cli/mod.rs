@@ -8,6 +8,7 @@ pub mod encode_normals;
 pub mod envinput;
 pub mod factor_brdf;
 pub mod prefilter;
+pub mod render;
 pub mod sample_shader;
 pub mod sh_project;
 pub mod umbrella;

@@ -28,6 +28,8 @@ enum Stage {
     SampleShader(super::sample_shader::Args),
     /// Encode normal vectors at a bit budget and measure the exact angular error.
     EncodeNormals(super::encode_normals::Args),
+    /// Render a sphere or mesh with a bake (SH, SHRM, factored) or the reference, and compare.
+    Render(super::render::Args),
 }
 
 /// Parses `prtkit <stage> …` and runs the stage.
@@ -40,5 +42,6 @@ pub fn main() -> ExitCode {
         Stage::CountTerms(args) => run_stage("count-terms", || super::count_terms::run(args)),
         Stage::SampleShader(args) => run_stage("sample-shader", || super::sample_shader::run(args)),
         Stage::EncodeNormals(args) => run_stage("encode-normals", || super::encode_normals::run(args)),
+        Stage::Render(args) => run_stage("render", || super::render::run(args)),
     }
 }

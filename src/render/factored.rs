@@ -1,0 +1,251 @@
+//! View-dependent relighting with the in-out factorization (Mahajan, Tseng & Ramamoorthi 2008,
+//! eq. 3–4). `factor` gives ρ(ω_i, ω_o) max(cos θ_i, 0) ≈ Σ_k σ_k h_k(ω_o) g_k(ω_i) on its
+//! equal-solid-angle hemisphere grid (g_k, h_k L²-orthonormal). With the transport
+//! T_k(x, ω_i) = V(x, ω_i) g_k(ω_i) (the cosine is folded into g_k), the radiance is
+//!
+//!   B(x, ω_o) = Σ_k σ_k h_k(ω_o) c_k(x),   c_k(x) = Σ_cells T_k(x, ω_c) L(ω_c) ΔΩ      (eq. 4)
+//!
+//! — the lighting projected onto the factors, K numbers per point and colour. For the sphere
+//! (no visibility) c_k depends on the normal only and is tabulated on a lat-long grid of
+//! normals; for meshes it is computed per vertex with visibility by ray casting (the
+//! visibility bits are kept, so relighting under a new environment only redoes the sums) and
+//! interpolated across triangles. ω_i, ω_o are expressed in the frame of [`super::normal_frame`].
+
+use super::reflection::latlong_taps;
+use super::{normal_frame, Hit, Scene, Shade};
+use crate::envmap::EnvMap;
+use crate::factor::{Factorization, Grid};
+use crate::progress::Progress;
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Where the coefficient vectors c_k live.
+#[derive(Clone, Debug)]
+enum Support {
+    /// A W×H lat-long table of normals (sphere).
+    NormalTable { width: usize, height: usize },
+    /// One per mesh vertex.
+    Vertices,
+}
+
+/// Per-point transport: the frames, and visibility bits per grid cell for meshes.
+#[derive(Clone, Debug)]
+pub struct Transport {
+    support: Support,
+    frames: Vec<DMat3>,
+    /// `cells` bits per point (1 = visible), empty for the sphere.
+    visible: Vec<u64>,
+    words: usize,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Transport {
+    /// The sphere: a `width`×`height` lat-long table of normals, no visibility.
+    pub fn sphere(width: usize, height: usize) -> Self {
+        let frames = (0..height)
+            .flat_map(|y| (0..width).map(move |x| crate::prefilter::shrm::texel_frame(width, height, x, y)))
+            .collect();
+        Transport {
+            support: Support::NormalTable { width, height },
+            frames,
+            visible: Vec::new(),
+            words: 0,
+            triangles: Vec::new(),
+        }
+    }
+
+    /// A mesh: per-vertex frames and visibility of every grid cell by ray casting.
+    pub fn mesh(scene: &Scene, grid: &Grid, progress: &dyn Progress) -> Self {
+        let Scene::Mesh(mesh) = scene else {
+            return Transport::sphere(64, 32);
+        };
+        let cells = grid.len();
+        let words = cells.div_ceil(64);
+        let frames: Vec<DMat3> = mesh.normals.iter().map(|n| normal_frame(*n)).collect();
+        progress.start("visibility", mesh.positions.len() as u64);
+        let visible: Vec<u64> = (0..mesh.positions.len())
+            .into_par_iter()
+            .flat_map_iter(|v| {
+                let mut bits = vec![0u64; words];
+                let (p, n) = (mesh.positions[v], mesh.normals[v]);
+                for c in 0..cells {
+                    let d = frames[v] * grid.direction(c);
+                    if !scene.occluded(p, n, d) {
+                        bits[c / 64] |= 1 << (c % 64);
+                    }
+                }
+                progress.advance(1);
+                bits
+            })
+            .collect();
+        progress.finish();
+        Transport { support: Support::Vertices, frames, visible, words, triangles: mesh.triangles.clone() }
+    }
+
+    /// Number of points (normals or vertices).
+    pub fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Whether there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.frames.is_empty()
+    }
+
+    /// Fraction of (point, cell) pairs that are visible (1 for the sphere).
+    pub fn visible_fraction(&self, cells: usize) -> f64 {
+        if self.visible.is_empty() {
+            return 1.0;
+        }
+        let ones: u64 = self.visible.iter().map(|w| w.count_ones() as u64).sum();
+        ones as f64 / (self.len() * cells) as f64
+    }
+}
+
+/// The factored shader: σ_k, h_k and the projected lighting c_k per point.
+pub struct Factored {
+    sigma: Vec<f64>,
+    h: Vec<Vec<f64>>,
+    grid: Grid,
+    transport: Transport,
+    /// c_k per point: `coeffs[(point * K + k)]` RGB.
+    coeffs: Vec<[f64; 3]>,
+}
+
+impl Factored {
+    /// Keeps the first `terms` terms of `f` and projects `env` onto them at every point.
+    /// `sub`×`sub` lighting samples per grid cell.
+    pub fn new(f: &Factorization, terms: usize, transport: Transport, env: &EnvMap, sub: usize) -> Self {
+        let k = terms.min(f.g.len());
+        let mut s = Factored {
+            sigma: f.singular_values[..k].to_vec(),
+            h: f.h[..k].to_vec(),
+            grid: f.grid,
+            transport,
+            coeffs: Vec::new(),
+        };
+        s.coeffs = project(&f.g[..k], &f.grid, &s.transport, env, sub.max(1));
+        s
+    }
+
+    /// Number of terms K.
+    pub fn terms(&self) -> usize {
+        self.sigma.len()
+    }
+
+    /// Re-projects a new environment onto the factors (the per-frame relighting step).
+    pub fn relight(&mut self, g: &[Vec<f64>], env: &EnvMap, sub: usize) {
+        self.coeffs = project(&g[..self.terms()], &self.grid, &self.transport, env, sub.max(1));
+    }
+
+    /// h_k(ω) bilinearly on the hemisphere grid (cos θ bins from the pole, φ wraps).
+    fn h_at(&self, k: usize, wo: DVec3) -> f64 {
+        let n = self.grid.n;
+        let z = wo.z.clamp(0.0, 1.0);
+        let span = match self.grid.domain {
+            crate::factor::Domain::Sphere => 2.0,
+            crate::factor::Domain::Hemisphere => 1.0,
+        };
+        let fj = ((1.0 - z) / span * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
+        let mut phi = wo.y.atan2(wo.x);
+        if phi < 0.0 {
+            phi += 2.0 * PI;
+        }
+        let fk = phi / (2.0 * PI) * n as f64 - 0.5;
+        let k0f = fk.floor();
+        let (tk, tj) = (fk - k0f, fj - fj.floor());
+        let k0 = (k0f as isize).rem_euclid(n as isize) as usize;
+        let k1 = (k0 + 1) % n;
+        let j0 = fj.floor() as usize;
+        let j1 = (j0 + 1).min(n - 1);
+        let h = &self.h[k];
+        (1.0 - tj) * ((1.0 - tk) * h[j0 * n + k0] + tk * h[j0 * n + k1])
+            + tj * ((1.0 - tk) * h[j1 * n + k0] + tk * h[j1 * n + k1])
+    }
+}
+
+/// c_k = Σ_cells V g_k L ΔΩ at every point: per point the lighting of each cell is looked up
+/// once, then K dot products over the cells.
+fn project(g: &[Vec<f64>], grid: &Grid, transport: &Transport, env: &EnvMap, sub: usize) -> Vec<[f64; 3]> {
+    let cells = grid.len();
+    // Each cell's lighting is the mean of sub×sub samples uniform in (cos θ, φ) inside it (equal
+    // solid angles), a box prefilter of the environment: point samples alias bright sources.
+    let n = grid.n;
+    let span = match grid.domain {
+        crate::factor::Domain::Sphere => 2.0,
+        crate::factor::Domain::Hemisphere => 1.0,
+    };
+    let dirs: Vec<DVec3> = (0..cells)
+        .flat_map(|c| {
+            let (j, k) = (c / n, c % n);
+            (0..sub * sub).map(move |s| {
+                let z = 1.0 - (j as f64 + ((s / sub) as f64 + 0.5) / sub as f64) * span / n as f64;
+                let phi = (k as f64 + ((s % sub) as f64 + 0.5) / sub as f64) * 2.0 * PI / n as f64;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                DVec3::new(r * phi.cos(), r * phi.sin(), z)
+            })
+        })
+        .collect();
+    let da = grid.cell_solid_angle();
+    let kk = g.len();
+    (0..transport.len())
+        .into_par_iter()
+        .flat_map_iter(|pt| {
+            let frame = transport.frames[pt];
+            let mut light = [vec![0.0; cells], vec![0.0; cells], vec![0.0; cells]];
+            for c in 0..cells {
+                if !transport.visible.is_empty()
+                    && transport.visible[pt * transport.words + c / 64] & (1 << (c % 64)) == 0
+                {
+                    continue;
+                }
+                let mut l = [0.0f64; 3];
+                for d in &dirs[c * sub * sub..(c + 1) * sub * sub] {
+                    let v = env.lookup(frame * *d);
+                    for ch in 0..3 {
+                        l[ch] += v[ch] as f64;
+                    }
+                }
+                for ch in 0..3 {
+                    light[ch][c] = l[ch] * da / (sub * sub) as f64;
+                }
+            }
+            (0..kk).map(move |k| {
+                let gk = &g[k];
+                let mut out = [0.0; 3];
+                for ch in 0..3 {
+                    out[ch] = gk.iter().zip(&light[ch]).map(|(a, b)| a * b).sum();
+                }
+                out
+            })
+        })
+        .collect()
+}
+
+impl Shade for Factored {
+    fn shade(&self, hit: &Hit, wo: DVec3) -> [f64; 3] {
+        let kk = self.terms();
+        // Interpolation weights over points.
+        let taps: Vec<(usize, f64)> = match (&self.transport.support, hit.triangle) {
+            (Support::Vertices, Some((t, u, v))) => {
+                let [a, b, c] = self.transport.triangles[t].map(|i| i as usize);
+                vec![(a, 1.0 - u - v), (b, u), (c, v)]
+            }
+            (Support::NormalTable { width, height }, _) => latlong_taps(*width, *height, hit.n).to_vec(),
+            _ => return [0.0; 3],
+        };
+        let wo_l = normal_frame(hit.n).transpose() * wo;
+        let mut out = [0.0; 3];
+        for k in 0..kk {
+            let hk = self.sigma[k] * self.h_at(k, wo_l);
+            for &(p, w) in &taps {
+                let c = self.coeffs[p * kk + k];
+                for ch in 0..3 {
+                    out[ch] += hk * w * c[ch];
+                }
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,374 @@
+//! Triangle meshes from OBJ files (via `tobj`) with per-vertex normals, and a bounding-volume
+//! hierarchy for primary rays and visibility (shadow) rays.
+
+use glam::DVec3;
+use std::path::Path;
+
+/// Errors of loading a mesh.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// tobj could not read or parse the file.
+    #[error("{path}: cannot read OBJ: {reason}")]
+    Load {
+        /// The file.
+        path: String,
+        /// tobj's message.
+        reason: String,
+    },
+    /// Parsed, but holds no triangles.
+    #[error("{0}: the OBJ holds no triangles")]
+    Empty(String),
+    /// Bad numbers (NaN, infinite) or indices.
+    #[error("{path}: {reason}")]
+    Invalid {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// An indexed triangle mesh with unit vertex normals.
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub positions: Vec<DVec3>,
+    /// Unit vertex normals (same length as `positions`).
+    pub normals: Vec<DVec3>,
+    /// Triangles as vertex indices.
+    pub triangles: Vec<[u32; 3]>,
+    /// True when the file had no normals and they were computed (area-weighted face normals).
+    pub normals_computed: bool,
+    bvh: Bvh,
+}
+
+/// A ray hit on a mesh: distance, triangle and barycentrics (u, v) of vertices 1 and 2.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshHit {
+    /// Ray parameter.
+    pub t: f64,
+    /// Triangle index.
+    pub triangle: usize,
+    /// Barycentric weight of vertex 1.
+    pub u: f64,
+    /// Barycentric weight of vertex 2.
+    pub v: f64,
+}
+
+impl Mesh {
+    /// Reads an OBJ file (all its objects, triangulated).
+    pub fn load(path: &Path) -> Result<Mesh, MeshError> {
+        let name = path.display().to_string();
+        let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
+        let (models, _) = tobj::load_obj(path, &options)
+            .map_err(|e| MeshError::Load { path: name.clone(), reason: e.to_string() })?;
+        let mut positions = Vec::new();
+        let mut normals = Vec::new();
+        let mut triangles = Vec::new();
+        let mut all_have_normals = true;
+        for m in &models {
+            let mesh = &m.mesh;
+            let base = positions.len() as u32;
+            let nv = mesh.positions.len() / 3;
+            for c in mesh.positions.chunks_exact(3) {
+                positions.push(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
+            }
+            if mesh.normals.len() == mesh.positions.len() && nv > 0 {
+                for c in mesh.normals.chunks_exact(3) {
+                    normals.push(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
+                }
+            } else {
+                all_have_normals = false;
+                normals.extend(std::iter::repeat_n(DVec3::ZERO, nv));
+            }
+            for t in mesh.indices.chunks_exact(3) {
+                if t.iter().any(|&i| i as usize >= nv) {
+                    return Err(MeshError::Invalid { path: name, reason: "a face index is out of range".into() });
+                }
+                triangles.push([base + t[0], base + t[1], base + t[2]]);
+            }
+        }
+        if triangles.is_empty() {
+            return Err(MeshError::Empty(name));
+        }
+        if positions.iter().any(|p| !p.is_finite()) {
+            return Err(MeshError::Invalid { path: name, reason: "a vertex position is not finite".into() });
+        }
+        Mesh::new(positions, if all_have_normals { Some(normals) } else { None }, triangles)
+            .map_err(|reason| MeshError::Invalid { path: name, reason })
+    }
+
+    /// Builds a mesh; computes normals when `normals` is `None` (or when a given normal is zero).
+    pub fn new(positions: Vec<DVec3>, normals: Option<Vec<DVec3>>, triangles: Vec<[u32; 3]>) -> Result<Mesh, String> {
+        if triangles.iter().flatten().any(|&i| i as usize >= positions.len()) {
+            return Err("a face index is out of range".into());
+        }
+        let computed = area_weighted_normals(&positions, &triangles);
+        let (normals, normals_computed) = match normals {
+            Some(n) => {
+                let n: Vec<DVec3> = n.iter().zip(&computed).map(|(g, c)| g.try_normalize().unwrap_or(*c)).collect();
+                (n, false)
+            }
+            None => (computed, true),
+        };
+        let bvh = Bvh::build(&positions, &triangles);
+        Ok(Mesh { positions, normals, triangles, normals_computed, bvh })
+    }
+
+    /// The closest hit of the ray o + t d with t in (t_min, t_max).
+    pub fn intersect(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<MeshHit> {
+        self.bvh.closest(&self.positions, &self.triangles, o, d, t_min, t_max)
+    }
+
+    /// Whether anything blocks the ray o + t d for t in (t_min, ∞).
+    pub fn occluded(&self, o: DVec3, d: DVec3, t_min: f64) -> bool {
+        self.bvh.any(&self.positions, &self.triangles, o, d, t_min)
+    }
+
+    /// Position and interpolated unit normal of a hit.
+    pub fn surface(&self, hit: &MeshHit) -> (DVec3, DVec3) {
+        let [a, b, c] = self.triangles[hit.triangle].map(|i| i as usize);
+        let w = 1.0 - hit.u - hit.v;
+        let p = w * self.positions[a] + hit.u * self.positions[b] + hit.v * self.positions[c];
+        let n = w * self.normals[a] + hit.u * self.normals[b] + hit.v * self.normals[c];
+        (p, n.try_normalize().unwrap_or(self.normals[a]))
+    }
+
+    /// Length of the bounding box diagonal (scale for ray offsets).
+    pub fn extent(&self) -> f64 {
+        let (lo, hi) =
+            self.positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
+        (hi - lo).length()
+    }
+}
+
+/// Vertex normals as the normalized sum of the adjacent faces' cross products (area-weighted).
+fn area_weighted_normals(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DVec3> {
+    let mut n = vec![DVec3::ZERO; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| i as usize);
+        let f = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+        n[a] += f;
+        n[b] += f;
+        n[c] += f;
+    }
+    n.into_iter().map(|v| v.try_normalize().unwrap_or(DVec3::Z)).collect()
+}
+
+/// Möller–Trumbore ray/triangle intersection: (t, u, v).
+#[inline]
+fn ray_triangle(o: DVec3, d: DVec3, p0: DVec3, p1: DVec3, p2: DVec3) -> Option<(f64, f64, f64)> {
+    let e1 = p1 - p0;
+    let e2 = p2 - p0;
+    let pv = d.cross(e2);
+    let det = e1.dot(pv);
+    if det.abs() < 1e-14 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = o - p0;
+    let u = tv.dot(pv) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let qv = tv.cross(e1);
+    let v = d.dot(qv) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    Some((e2.dot(qv) * inv, u, v))
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    lo: DVec3,
+    hi: DVec3,
+    /// Leaf: first triangle in `order`; inner: index of the left child (right = left + 1).
+    start: u32,
+    /// Leaf: triangle count (> 0); inner: 0.
+    count: u32,
+}
+
+/// A binary BVH split at the median centroid along the widest axis, leaves of ≤ 4 triangles.
+#[derive(Clone, Debug)]
+struct Bvh {
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+}
+
+impl Bvh {
+    fn build(positions: &[DVec3], triangles: &[[u32; 3]]) -> Bvh {
+        let centroid: Vec<DVec3> =
+            triangles.iter().map(|t| t.iter().map(|&i| positions[i as usize]).sum::<DVec3>() / 3.0).collect();
+        let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
+        let mut nodes = vec![Node { lo: DVec3::ZERO, hi: DVec3::ZERO, start: 0, count: 0 }];
+        let mut stack = vec![(0usize, 0usize, triangles.len())];
+        while let Some((node, start, end)) = stack.pop() {
+            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            for &t in &order[start..end] {
+                for &i in &triangles[t as usize] {
+                    lo = lo.min(positions[i as usize]);
+                    hi = hi.max(positions[i as usize]);
+                }
+                clo = clo.min(centroid[t as usize]);
+                chi = chi.max(centroid[t as usize]);
+            }
+            nodes[node].lo = lo;
+            nodes[node].hi = hi;
+            let span = chi - clo;
+            if end - start <= 4 || span.max_element() <= 0.0 {
+                nodes[node].start = start as u32;
+                nodes[node].count = (end - start) as u32;
+                continue;
+            }
+            let axis = if span.x >= span.y && span.x >= span.z {
+                0
+            } else if span.y >= span.z {
+                1
+            } else {
+                2
+            };
+            let mid = (start + end) / 2;
+            order[start..end].select_nth_unstable_by(mid - start, |a, b| {
+                centroid[*a as usize][axis].total_cmp(&centroid[*b as usize][axis])
+            });
+            let left = nodes.len();
+            nodes.push(Node { lo, hi, start: 0, count: 0 });
+            nodes.push(Node { lo, hi, start: 0, count: 0 });
+            nodes[node].start = left as u32;
+            nodes[node].count = 0;
+            stack.push((left, start, mid));
+            stack.push((left + 1, mid, end));
+        }
+        Bvh { nodes, order }
+    }
+
+    #[inline]
+    fn slab(node: &Node, o: DVec3, inv: DVec3, t_min: f64, t_max: f64) -> bool {
+        let t0 = (node.lo - o) * inv;
+        let t1 = (node.hi - o) * inv;
+        let near = t0.min(t1).max_element().max(t_min);
+        let far = t0.max(t1).min_element().min(t_max);
+        near <= far
+    }
+
+    fn closest(
+        &self,
+        p: &[DVec3],
+        tris: &[[u32; 3]],
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        mut t_max: f64,
+    ) -> Option<MeshHit> {
+        let inv = d.recip();
+        let mut best = None;
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            if !Self::slab(node, o, inv, t_min, t_max) {
+                continue;
+            }
+            if node.count == 0 {
+                stack.push(node.start);
+                stack.push(node.start + 1);
+                continue;
+            }
+            for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
+                let [a, b, c] = tris[t as usize].map(|i| p[i as usize]);
+                if let Some((tt, u, v)) = ray_triangle(o, d, a, b, c) {
+                    if tt > t_min && tt < t_max {
+                        t_max = tt;
+                        best = Some(MeshHit { t: tt, triangle: t as usize, u, v });
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    fn any(&self, p: &[DVec3], tris: &[[u32; 3]], o: DVec3, d: DVec3, t_min: f64) -> bool {
+        let inv = d.recip();
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            if !Self::slab(node, o, inv, t_min, f64::INFINITY) {
+                continue;
+            }
+            if node.count == 0 {
+                stack.push(node.start);
+                stack.push(node.start + 1);
+                continue;
+            }
+            for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
+                let [a, b, c] = tris[t as usize].map(|i| p[i as usize]);
+                if let Some((tt, _, _)) = ray_triangle(o, d, a, b, c) {
+                    if tt > t_min {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
+/// A UV sphere of radius 1 with `rings` latitude bands and `segments` longitude bands, exact
+/// normals; also used by `testdata/meshes` generation and the tests.
+pub fn uv_sphere(rings: usize, segments: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut p = vec![DVec3::Z];
+    for r in 1..rings {
+        let theta = std::f64::consts::PI * r as f64 / rings as f64;
+        for s in 0..segments {
+            let phi = 2.0 * std::f64::consts::PI * s as f64 / segments as f64;
+            p.push(crate::sh::basis::direction(theta, phi));
+        }
+    }
+    p.push(-DVec3::Z);
+    let last = (p.len() - 1) as u32;
+    let ring = |r: usize, s: usize| (1 + (r - 1) * segments + s % segments) as u32;
+    let mut t = Vec::new();
+    for s in 0..segments {
+        t.push([0, ring(1, s), ring(1, s + 1)]);
+        t.push([last, ring(rings - 1, s + 1), ring(rings - 1, s)]);
+    }
+    for r in 1..rings - 1 {
+        for s in 0..segments {
+            t.push([ring(r, s), ring(r + 1, s), ring(r + 1, s + 1)]);
+            t.push([ring(r, s), ring(r + 1, s + 1), ring(r, s + 1)]);
+        }
+    }
+    (p, t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bvh_hits_agree_with_brute_force_and_normals_point_out() {
+        let (p, t) = uv_sphere(12, 24);
+        let mesh = Mesh::new(p.clone(), None, t.clone()).unwrap();
+        assert!(mesh.normals_computed);
+        for (v, n) in mesh.positions.iter().zip(&mesh.normals) {
+            assert!(v.dot(*n) > 0.95, "normal {n:?} at {v:?}");
+        }
+        for k in 0..200 {
+            let o = DVec3::new((k as f64 * 0.37).sin() * 3.0, -3.0, (k as f64 * 0.11).cos() * 2.0);
+            let d = (DVec3::new((k as f64).sin() * 0.5, 0.0, (k as f64 * 1.3).cos() * 0.5) - o).normalize();
+            let mut brute = f64::INFINITY;
+            for tri in &t {
+                let [a, b, c] = tri.map(|i| p[i as usize]);
+                if let Some((tt, _, _)) = ray_triangle(o, d, a, b, c) {
+                    if tt > 1e-9 {
+                        brute = brute.min(tt);
+                    }
+                }
+            }
+            let hit = mesh.intersect(o, d, 1e-9, f64::INFINITY).map(|h| h.t).unwrap_or(f64::INFINITY);
+            assert!(hit == brute, "ray {k}: bvh {hit} brute {brute}");
+            assert_eq!(mesh.occluded(o, d, 1e-9), brute.is_finite());
+        }
+    }
+}

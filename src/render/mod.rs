@@ -1,0 +1,42 @@
+//! Rendering the bakes against ground truth: a look-at camera, an analytic sphere or an OBJ
+//! mesh in front of the environment, and four shading modes:
+//!
+//! - [`irradiance`]: Lambert from SH lighting, B = (a/π) Σ Â_l L_lm Y_lm(n) (R&H 2001 eq. 8–9);
+//! - [`reflection`]: SHRMs, global for a distant viewer (R&H 2002 eq. 12) or local per pixel (eq. 6);
+//! - [`factored`]: the in-out factorization, B = Σ_k σ_k h_k(ω_o) Σ_i T_k(ω_i) L(ω_i) with
+//!   T_k = V g_k (n·ω_i) (Mahajan et al. 2008, eq. 3–4);
+//! - [`reference`]: direct integration of environment × BRDF × cosine over every env texel.
+//!
+//! [`metrics`] compares renders, [`panel`] lays them out with labels. `docs/render.md` is the
+//! user guide.
+
+pub mod camera;
+pub mod factored;
+pub mod font;
+pub mod frame;
+pub mod irradiance;
+pub mod mesh;
+pub mod metrics;
+pub mod panel;
+pub mod reference;
+pub mod reflection;
+pub mod scene;
+
+pub use camera::Camera;
+pub use frame::{render, Frame, Shade};
+pub use scene::{Hit, Scene};
+
+use glam::{DMat3, DVec3};
+
+/// The shading frame of a normal: R_z(φ)·R_y(θ) of its spherical angles, +Z along n — the same
+/// frame the SHRM texels use (`prefilter::shrm::texel_frame`), smooth away from the poles.
+pub fn normal_frame(n: DVec3) -> DMat3 {
+    let theta = n.z.clamp(-1.0, 1.0).acos();
+    let phi = n.y.atan2(n.x);
+    DMat3::from_rotation_z(phi) * DMat3::from_rotation_y(theta)
+}
+
+/// Mirror reflection of the view direction `wo` (towards the viewer) about `n`.
+pub fn reflect(wo: DVec3, n: DVec3) -> DVec3 {
+    2.0 * n.dot(wo) * n - wo
+}

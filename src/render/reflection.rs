@@ -1,0 +1,180 @@
+//! Shading from a spherical harmonic reflection map (Ramamoorthi & Hanrahan 2002 §4, §7.5).
+//!
+//! - A **global** SHRM (eq. 7–8) is for a distant viewer: one reflection map per frame,
+//!   B̃(R) = Σ_pq B̃_pq(R) Y_pq(v) for the camera's view direction v (eq. 12), then per pixel a
+//!   bilinear lookup at R = reflect(v, n) — the real-time path of §7.5.
+//! - A **local** SHRM is evaluated per pixel with that pixel's own view direction (eq. 6):
+//!   B = Σ_pq B_pq(R) Y_pq(ω_o'), ω_o' the view in the texel frame R_z(β)·R_y(α) of R.
+//! - Lambert SHRMs (`parameterization: normal`) are indexed by n and view-independent.
+
+use super::{Hit, Shade};
+use crate::io::RgbImage;
+use crate::prefilter::document::{layer_name, ShrmBody, FORMAT, VERSION};
+use crate::prefilter::shrm::{reflection_map, Shrm};
+use crate::sh::basis::eval_basis_dir;
+use crate::sh::legendre::LegendreTable;
+use crate::sh::{count, index};
+use glam::{DMat3, DVec3};
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+/// Errors of reading an SHRM.
+#[derive(Debug, thiserror::Error)]
+pub enum ShrmLoadError {
+    /// I/O or EXR decoding.
+    #[error(transparent)]
+    Io(#[from] crate::io::IoError),
+    /// The JSON document is not a valid `prtkit.shrm`.
+    #[error("{path}: {reason}")]
+    Document {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The EXR does not match its document.
+    #[error("{exr}: does not match {doc}: {reason}")]
+    Mismatch {
+        /// The EXR.
+        exr: PathBuf,
+        /// The JSON.
+        doc: PathBuf,
+        /// What differs.
+        reason: String,
+    },
+}
+
+/// Reads a `prtkit.shrm` document and the SHRM EXR it names (relative to the document's
+/// directory when not absolute), checking layout, layer names and grid size.
+pub fn load(doc_path: &Path) -> Result<(Shrm, ShrmBody), ShrmLoadError> {
+    let text = String::from_utf8(crate::io::read_bytes(doc_path)?)
+        .map_err(|_| ShrmLoadError::Document { path: doc_path.into(), reason: "not UTF-8 text".into() })?;
+    let doc = crate::io::document::parse_document::<ShrmBody>(&text, FORMAT, VERSION)
+        .map_err(|reason| ShrmLoadError::Document { path: doc_path.into(), reason })?;
+    let body = doc.body;
+    let bad = |reason: String| ShrmLoadError::Document { path: doc_path.into(), reason };
+    if body.layout != "latlong" {
+        return Err(bad(format!(
+            "the SHRM uses the {} layout; render reads lat-long SHRMs (run prefilter with --output-layout latlong)",
+            body.layout
+        )));
+    }
+    if body.parameterization != "reflection" && body.parameterization != "normal" {
+        return Err(bad(format!("unknown parameterization {:?}", body.parameterization)));
+    }
+    let file = body.shrm_file.clone().ok_or_else(|| bad("the document names no shrm_file".into()))?;
+    let mut exr = PathBuf::from(&file);
+    if exr.is_relative() && !exr.exists() {
+        exr = doc_path.parent().unwrap_or(Path::new(".")).join(Path::new(&file).file_name().unwrap_or_default());
+    }
+    let layers = crate::io::exr::decode_layers(&exr, &crate::io::read_bytes(&exr)?)?;
+    let mismatch = |reason: String| ShrmLoadError::Mismatch { exr: exr.clone(), doc: doc_path.into(), reason };
+    let n = count(body.p_b);
+    let mut ordered = Vec::with_capacity(n);
+    for p in 0..=body.p_b {
+        for q in -(p as isize)..=(p as isize) {
+            let name = layer_name(p, q);
+            let img = layers
+                .iter()
+                .find(|(l, _)| *l == name)
+                .map(|(_, i)| i.clone())
+                .ok_or_else(|| mismatch(format!("no layer {name} (P_B = {})", body.p_b)))?;
+            if img.width != body.width || img.height != body.height {
+                return Err(mismatch(format!(
+                    "layer {name} is {}x{}, the document says {}x{}",
+                    img.width, img.height, body.width, body.height
+                )));
+            }
+            ordered.push(img);
+        }
+    }
+    if ordered.iter().flat_map(|i| &i.pixels).flatten().any(|v| !v.is_finite()) {
+        return Err(mismatch("non-finite coefficients".into()));
+    }
+    Ok((Shrm { f_b: body.f_b, p_b: body.p_b, global: body.global, layers: ordered }, body))
+}
+
+/// Bilinear weights of direction `d` on a W×H lat-long grid (texel centres at half-integers,
+/// φ wraps, θ clamps): four (index, weight) pairs.
+pub fn latlong_taps(w: usize, h: usize, d: DVec3) -> [(usize, f64); 4] {
+    let theta = d.z.clamp(-1.0, 1.0).acos();
+    let mut phi = d.y.atan2(d.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let fx = phi / (2.0 * PI) * w as f64 - 0.5;
+    let fy = (theta / PI * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
+    let x0f = fx.floor();
+    let (tx, ty) = (fx - x0f, fy - fy.floor());
+    let x0 = (x0f as isize).rem_euclid(w as isize) as usize;
+    let x1 = (x0 + 1) % w;
+    let y0 = fy.floor() as usize;
+    let y1 = (y0 + 1).min(h - 1);
+    [
+        (y0 * w + x0, (1.0 - tx) * (1.0 - ty)),
+        (y0 * w + x1, tx * (1.0 - ty)),
+        (y1 * w + x0, (1.0 - tx) * ty),
+        (y1 * w + x1, tx * ty),
+    ]
+}
+
+fn sample(img: &RgbImage, taps: &[(usize, f64); 4]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for &(i, wt) in taps {
+        let v = img.pixels[i];
+        for c in 0..3 {
+            out[c] += wt * v[c] as f64;
+        }
+    }
+    out
+}
+
+/// The SHRM shader.
+pub struct ShrmShader {
+    shrm: Shrm,
+    by_normal: bool,
+    /// For a global SHRM: the reflection map of the frame's view direction (eq. 12).
+    frame_map: Option<RgbImage>,
+    table: LegendreTable,
+}
+
+impl ShrmShader {
+    /// Prepares shading. For a global SHRM, `view` (unit, towards the distant viewer) selects
+    /// the frame's reflection map — the per-frame cost of §7.5, Σ over (P_B+1)² layers per texel.
+    pub fn new(shrm: Shrm, by_normal: bool, view: DVec3) -> Self {
+        let frame_map = (shrm.global || shrm.p_b == 0).then(|| reflection_map(&shrm, view));
+        let table = LegendreTable::new(shrm.p_b);
+        ShrmShader { shrm, by_normal, frame_map, table }
+    }
+
+    /// The reflection map used for this frame (global SHRMs and view-independent ones).
+    pub fn frame_map(&self) -> Option<&RgbImage> {
+        self.frame_map.as_ref()
+    }
+}
+
+impl Shade for ShrmShader {
+    fn shade(&self, hit: &Hit, wo: DVec3) -> [f64; 3] {
+        let key = if self.by_normal { hit.n } else { super::reflect(wo, hit.n) };
+        let (w, h) = (self.shrm.width(), self.shrm.height());
+        let taps = latlong_taps(w, h, key);
+        if let Some(map) = &self.frame_map {
+            return sample(map, &taps);
+        }
+        // Local SHRM, eq. 6: the view in the frame R_z(β)R_y(α) of the continuous (α, β) of R.
+        let frame: DMat3 = super::normal_frame(key);
+        let mut y = vec![0.0; count(self.shrm.p_b)];
+        eval_basis_dir(&self.table, frame.transpose() * wo, &mut y);
+        let mut out = [0.0; 3];
+        for p in 0..=self.shrm.p_b {
+            for q in -(p as isize)..=(p as isize) {
+                let i = index(p, q);
+                let v = sample(&self.shrm.layers[i], &taps);
+                for c in 0..3 {
+                    out[c] += y[i] * v[c];
+                }
+            }
+        }
+        out
+    }
+}

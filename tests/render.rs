@@ -1,0 +1,267 @@
+//! Integration tests of `render`: furnace, irradiance and SHRM against the reference, factored
+//! convergence in K, and bad input.
+
+use assert_cmd::Command;
+use glam::DVec3;
+use predicates::str::contains;
+use prtkit::io::image::{read_image, write_image};
+use prtkit::io::RgbImage;
+use std::path::{Path, PathBuf};
+
+fn bin(name: &str) -> Command {
+    Command::cargo_bin(name).unwrap()
+}
+
+/// Writes a lat-long environment of `f(direction)`.
+fn write_env(dir: &Path, name: &str, w: usize, h: usize, f: impl Fn(DVec3) -> f32) -> PathBuf {
+    let img = RgbImage::from_fn(w, h, |x, y| {
+        let (d, _) = prtkit::envmap::latlong_texel(w, h, x, y);
+        let v = f(d);
+        [v, 0.9 * v, 0.8 * v]
+    });
+    let p = dir.join(name);
+    write_image(&p, &img, 0.0).unwrap();
+    p
+}
+
+/// A smooth sky: bands ≤ 2 plus a wide warm blob (smooth enough for order-2 irradiance to be
+/// nearly exact and for a Phong s = 16 SHRM at ε = 1e-3).
+fn smooth(d: DVec3) -> f32 {
+    let blob = (4.0 * (d.dot(DVec3::new(0.6, -0.5, 0.6).normalize()) - 1.0)).exp();
+    (1.0 + 0.5 * d.z + 0.3 * d.x + 0.2 * (3.0 * d.z * d.z - 1.0) + blob) as f32
+}
+
+/// Mean of the central `r`×`r` pixels (inside the sphere's silhouette at the default camera).
+fn centre(img: &RgbImage, r: usize) -> [f64; 3] {
+    let (cx, cy) = (img.width / 2, img.height / 2);
+    let mut s = [0.0; 3];
+    for y in cy - r / 2..cy + r / 2 {
+        for x in cx - r / 2..cx + r / 2 {
+            for c in 0..3 {
+                s[c] += img.get(x, y)[c] as f64;
+            }
+        }
+    }
+    s.map(|v| v / (r * r) as f64)
+}
+
+fn json_field(out: &[u8], key: &str) -> f64 {
+    let v: serde_json::Value = serde_json::from_slice(out).unwrap();
+    v[key].as_f64().unwrap_or_else(|| panic!("no {key} in {v}"))
+}
+
+#[test]
+fn render_white_furnace_gives_the_albedo_in_every_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = write_env(dir.path(), "white.exr", 64, 32, |_| 1.0);
+    let cases: [(&[&str], f64, f64); 4] = [
+        (&["--shading", "irradiance", "--brdf", "lambert:albedo=0.5"], 0.5, 1e-3),
+        (&["--shading", "reference", "--brdf", "lambert:albedo=0.5"], 0.5, 5e-3),
+        (&["--shading", "factored", "--brdf", "lambert:albedo=0.5", "-K", "1", "--factor-resolution", "16"], 0.5, 5e-3),
+        // Normalized Phong's lobe integrates to 1 over the sphere (the prefilter's ρ̂, §6.3).
+        (&["--shading", "reference", "--brdf", "phong:s=16", "--integrand", "prefilter"], 1.0, 5e-3),
+    ];
+    for (args, want, tol) in cases {
+        let out = dir.path().join("f.exr");
+        bin("render").arg(&env).args(args).args(["--res", "24x24", "-q", "-o"]).arg(&out).assert().success();
+        // The white channel: green and blue of the env are 0.9 and 0.8.
+        let c = centre(&read_image(&out).unwrap(), 6);
+        for (ch, scale) in [(0, 1.0), (1, 0.9), (2, 0.8)] {
+            assert!((c[ch] / scale - want).abs() < tol, "{args:?}: channel {ch} = {} want {want}", c[ch] / scale);
+        }
+    }
+    // SHRM furnace: prefilter's Phong SHRM of the white map gives 1.
+    let shrm = dir.path().join("w.shrm.exr");
+    let doc = dir.path().join("w.shrm.json");
+    bin("prefilter")
+        .arg(&env)
+        .args(["--brdf", "phong:s=16", "-e", "0.001", "-q", "--shrm"])
+        .arg(&shrm)
+        .arg("-o")
+        .arg(&doc)
+        .assert()
+        .success();
+    let out = dir.path().join("s.exr");
+    bin("render")
+        .arg(&env)
+        .args(["--shading", "shrm", "--brdf", "phong:s=16", "--res", "24x24", "-q", "--shrm"])
+        .arg(&doc)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success();
+    let c = centre(&read_image(&out).unwrap(), 6);
+    assert!((c[0] - 1.0).abs() < 2e-3, "shrm furnace {c:?}");
+}
+
+#[test]
+fn render_irradiance_matches_the_reference_for_lambert_within_one_percent() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = write_env(dir.path(), "sky.exr", 128, 64, smooth);
+    let reference = dir.path().join("ref.exr");
+    bin("render")
+        .arg(&env)
+        .args(["--brdf", "lambert", "--res", "32x32", "-q", "-o"])
+        .arg(&reference)
+        .assert()
+        .success();
+    let out = bin("render")
+        .arg(&env)
+        .args(["--shading", "irradiance", "--brdf", "lambert", "--res", "32x32", "-q", "--json", "--compare"])
+        .arg(&reference)
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let e = json_field(&out, "rel_error");
+    assert!(e < 0.01 && e > 0.0, "irradiance vs reference: {e}");
+}
+
+#[test]
+fn render_shrm_matches_the_reference_within_the_prefilter_epsilon() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = write_env(dir.path(), "sky.exr", 128, 64, smooth);
+    let reference = dir.path().join("ref.exr");
+    bin("render")
+        .arg(&env)
+        .args(["--brdf", "phong:s=16", "--integrand", "prefilter", "--res", "32x32", "-q", "-o"])
+        .arg(&reference)
+        .assert()
+        .success();
+    let doc = dir.path().join("p.shrm.json");
+    bin("prefilter")
+        .arg(&env)
+        .args(["--brdf", "phong:s=16", "-e", "0.01", "-q", "--shrm"])
+        .arg(dir.path().join("p.shrm.exr"))
+        .arg("-o")
+        .arg(&doc)
+        .assert()
+        .success();
+    let out = bin("render")
+        .arg(&env)
+        .args(["--shading", "shrm", "--brdf", "phong:s=16", "--res", "32x32", "-q", "--json", "--shrm"])
+        .arg(&doc)
+        .arg("--compare")
+        .arg(&reference)
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let (e, eps) = (json_field(&out, "rel_error"), json_field(&out, "epsilon_achieved"));
+    assert!(eps > 0.0 && eps <= 0.01, "ε {eps}");
+    assert!(e <= eps, "shrm vs reference: rel error {e} > ε {eps}");
+}
+
+#[test]
+fn render_factored_error_falls_monotonically_with_k() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = write_env(dir.path(), "sky.exr", 128, 64, smooth);
+    let reference = dir.path().join("ref.exr");
+    bin("render")
+        .arg(&env)
+        .args(["--brdf", "phong:s=8", "--res", "24x24", "-q", "-o"])
+        .arg(&reference)
+        .assert()
+        .success();
+    let mut errors = Vec::new();
+    for k in [1, 3, 8, 20, 40] {
+        let out = bin("render")
+            .arg(&env)
+            .args(["--shading", "factored", "--brdf", "phong:s=8", "--factor-resolution", "32", "--res", "24x24"])
+            .args(["--normal-table", "64x32", "-q", "--json", "-K", &k.to_string(), "--compare"])
+            .arg(&reference)
+            .assert()
+            .success()
+            .get_output()
+            .stdout
+            .clone();
+        errors.push(json_field(&out, "rel_error"));
+    }
+    for w in errors.windows(2) {
+        assert!(w[1] < w[0], "errors not decreasing: {errors:?}");
+    }
+    assert!(errors[4] < 0.05, "K = 40 error {errors:?}");
+}
+
+#[test]
+fn render_obj_without_normals_is_shaded_with_computed_normals_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = write_env(dir.path(), "white.exr", 32, 16, |_| 1.0);
+    let obj = dir.path().join("tet.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 1\nv 1 0 -0.5\nv -0.5 0.8 -0.5\nv -0.5 -0.8 -0.5\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n",
+    )
+    .unwrap();
+    let out = dir.path().join("t.exr");
+    bin("render")
+        .arg(&env)
+        .args(["--scene"])
+        .arg(&obj)
+        .args(["--shading", "irradiance", "--res", "16x16", "-q", "-o"])
+        .arg(&out)
+        .assert()
+        .success()
+        .stderr(contains("no vertex normals").and(contains("computed")));
+    // Lambert albedo 1 in a white furnace: every object pixel is 1 whatever its normal.
+    let c = centre(&read_image(&out).unwrap(), 2);
+    assert!((c[0] - 1.0).abs() < 1e-3, "{c:?}");
+}
+
+use predicates::prelude::PredicateBooleanExt;
+
+#[test]
+fn render_bad_input_exits_2_without_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = write_env(dir.path(), "white.exr", 32, 16, |_| 1.0);
+    let out = dir.path().join("never.exr");
+    // Unreadable OBJ.
+    let obj = dir.path().join("bad.obj");
+    std::fs::write(&obj, "v 0 0 zero\nf 1 2 3\n").unwrap();
+    bin("render").arg(&env).arg("--scene").arg(&obj).arg("-o").arg(&out).assert().code(2).stderr(contains("bad.obj"));
+    bin("render")
+        .arg(&env)
+        .args(["--scene", "/nonexistent/x.obj", "-o"])
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(contains("x.obj"));
+    // An SHRM document for another BRDF, and one whose EXR has the wrong size.
+    let doc = dir.path().join("p.shrm.json");
+    bin("prefilter")
+        .arg(&env)
+        .args(["--brdf", "phong:s=8", "--order", "8,0", "-q", "--shrm"])
+        .arg(dir.path().join("p.shrm.exr"))
+        .arg("-o")
+        .arg(&doc)
+        .assert()
+        .success();
+    bin("render")
+        .arg(&env)
+        .args(["--shading", "shrm", "--brdf", "phong:s=30", "--shrm"])
+        .arg(&doc)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(contains("phong:s=8"));
+    let text = std::fs::read_to_string(&doc).unwrap().replace("\"width\": ", "\"width\": 1");
+    let bad_doc = dir.path().join("bad.shrm.json");
+    std::fs::write(&bad_doc, text).unwrap();
+    bin("render")
+        .arg(&env)
+        .args(["--shading", "shrm", "--brdf", "phong:s=8", "--shrm"])
+        .arg(&bad_doc)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(contains("does not match"));
+    // A reference of another size.
+    let small = dir.path().join("small.exr");
+    write_image(&small, &RgbImage::new(8, 8), 0.0).unwrap();
+    bin("render").arg(&env).args(["--res", "16x16", "--compare"]).arg(&small).arg("-o").arg(&out).assert().code(2);
+    assert!(!out.exists(), "a failed run left {}", out.display());
+}
