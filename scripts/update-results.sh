@@ -27,7 +27,7 @@ fi
     f="docs/results/$section.md"
     if [ -f "$f" ]; then
       # Sections link their figures relative to docs/results/; this file lives in docs/.
-      sed -E 's#\]\(([A-Za-z0-9_.-]+\.(svg|png))\)#](results/\1)#g' "$f"
+      sed -E -e 's#\]\(([A-Za-z0-9_.-]+\.(svg|png))\)#](results/\1)#g' -e 's#\]\(\.\./#](#g' "$f"
       echo
     fi
   done
