@@ -109,3 +109,11 @@ pub fn init_threads(threads: Option<usize>) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+/// `--json` owns stdout: a document that would also go there must be given a file instead.
+pub fn check_json_output(document: &crate::io::Output, json: bool) -> anyhow::Result<()> {
+    if json && *document == crate::io::Output::Stdout {
+        anyhow::bail!("--json prints the summary on stdout: give the document a file with -o FILE");
+    }
+    Ok(())
+}

@@ -5,7 +5,7 @@ use super::common::{Bar, Outcome};
 use super::factor_brdf::parse_memory;
 use crate::brdf::BrdfSpec;
 use crate::factor::count::{self, CountConfig, Material, Row};
-use crate::factor::{manifest, plot, svd, Channel, Domain, Method, Sampling};
+use crate::factor::{manifest, plot, svd, Channel};
 use crate::io::{self, Output};
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -20,6 +20,9 @@ pub struct Args {
     #[arg(long = "brdf", value_name = "SPEC")]
     pub brdfs: Vec<String>,
 
+    #[command(flatten)]
+    pub matrix: super::factor_brdf::MatrixArgs,
+
     /// A manifest of `name spec [budget]` lines (docs/count-terms.md).
     #[arg(long, value_name = "FILE")]
     pub manifest: Option<PathBuf>,
@@ -27,22 +30,6 @@ pub struct Args {
     /// Term budget for every material without a budget of its own.
     #[arg(long, value_name = "N")]
     pub max_terms: Option<usize>,
-
-    /// Directions sampled for ω_i and ω_o.
-    #[arg(long, value_enum, default_value_t = Domain::Hemisphere)]
-    pub domain: Domain,
-
-    /// Grid bins along cos θ and φ for the measured K (the paper uses 40).
-    #[arg(long, default_value_t = 40)]
-    pub resolution: usize,
-
-    /// Fold max(cos θ_i, 0) into the matrix (no closed-form prediction then).
-    #[arg(long)]
-    pub cosine: bool,
-
-    /// Scalar factored for RGB (measured) data.
-    #[arg(long, value_enum, default_value_t = Channel::Luminance)]
-    pub channel: Channel,
 
     /// One row per R, G, B channel for RGB (measured) materials, named NAME/r, NAME/g, NAME/b.
     #[arg(long)]
@@ -55,10 +42,6 @@ pub struct Args {
     /// Only the closed-form prediction; no SVD.
     #[arg(long)]
     pub predict_only: bool,
-
-    /// SVD method (auto: fft for isotropic BRDFs, dense otherwise).
-    #[arg(long, value_enum, default_value_t = Method::Auto)]
-    pub method: Method,
 
     /// Print a JSON array of rows on stdout instead of the table.
     #[arg(long)]
@@ -132,14 +115,13 @@ pub fn run(args: Args) -> Result<Outcome> {
     if let Some(p) = &plot_out {
         p.check_writable()?;
     }
-    let sampling =
-        Sampling { resolution: args.resolution, domain: args.domain, cosine: args.cosine, channel: args.channel };
+    let sampling = args.matrix.sampling();
     // Load every material and check every budget before the first SVD.
     let mut materials = Vec::new();
     for (name, spec, budget) in entries {
         let brdf = spec.load()?;
         if !args.predict_only {
-            let method = svd::resolve_method(&brdf, args.method)?;
+            let method = svd::resolve_method(&brdf, args.matrix.method)?;
             svd::check_budget(&sampling, method, 0, args.max_memory).with_context(|| format!("material {name}"))?;
         }
         if args.per_channel && brdf.is_rgb() {
@@ -147,14 +129,14 @@ pub fn run(args: Args) -> Result<Outcome> {
                 materials.push(Material { name: format!("{name}/{suffix}"), brdf: brdf.clone(), channel, budget });
             }
         } else {
-            materials.push(Material { name, brdf, channel: args.channel, budget });
+            materials.push(Material { name, brdf, channel: args.matrix.channel, budget });
         }
     }
     let config = CountConfig {
         sampling,
         energy: args.energy,
         predict_only: args.predict_only,
-        method: args.method,
+        method: args.matrix.method,
         tolerance: args.tolerance,
     };
     let bar = Bar::new(args.quiet);
@@ -166,8 +148,12 @@ pub fn run(args: Args) -> Result<Outcome> {
         spectra.push(spectrum);
     }
     if let Some(out) = &plot_out {
-        let title =
-            format!("count-terms: {} , n = {}, {:.1} % energy", args.domain, args.resolution, 100.0 * args.energy);
+        let title = format!(
+            "count-terms: {} , n = {}, {:.1} % energy",
+            args.matrix.domain,
+            args.matrix.resolution,
+            100.0 * args.energy
+        );
         let svg = plot::count_plot(&title, &rows, &spectra).map_err(anyhow::Error::msg)?;
         out.write(svg.as_bytes())?;
     }

@@ -18,26 +18,8 @@ pub struct Args {
     /// (docs/brdf-specs.md).
     pub brdf: String,
 
-    /// Directions sampled for ω_i and ω_o: the full sphere or the visible hemispheres.
-    #[arg(long, value_enum, default_value_t = Domain::Hemisphere)]
-    pub domain: Domain,
-
-    /// Grid bins along cos θ and along φ (n² directions per side; the paper uses 40).
-    #[arg(long, default_value_t = 40)]
-    pub resolution: usize,
-
-    /// Fold max(cos θ_i, 0) into the matrix (off by default, as in the paper).
-    #[arg(long)]
-    pub cosine: bool,
-
-    /// Scalar factored for RGB (measured) data; analytic models are grey.
-    #[arg(long, value_enum, default_value_t = Channel::Luminance)]
-    pub channel: Channel,
-
-    /// SVD method: fft (isotropic BRDFs, block-circulant in φ), dense, randomized (leading
-    /// terms of the dense matrix, for large n), or auto (fft when isotropic, else dense).
-    #[arg(long, value_enum, default_value_t = Method::Auto)]
-    pub method: Method,
+    #[command(flatten)]
+    pub matrix: MatrixArgs,
 
     /// Write the factor maps g_k, h_k (factors.exr with layers g_000, h_000, …, and a
     /// factors.png contact sheet) into this directory.
@@ -140,19 +122,51 @@ pub fn percent_label(f: f64) -> String {
     }
 }
 
+/// How the BRDF matrix is sampled and factored: shared by `factor-brdf` and `count-terms`.
+#[derive(Debug, clap::Args)]
+pub struct MatrixArgs {
+    /// Directions sampled for ω_i and ω_o: the full sphere or the visible hemispheres.
+    #[arg(long, value_enum, default_value_t = Domain::Hemisphere)]
+    pub domain: Domain,
+
+    /// Grid bins along cos θ and along φ (n² directions per side; the paper uses 40).
+    #[arg(long, default_value_t = 40)]
+    pub resolution: usize,
+
+    /// Fold max(cos θ_i, 0) into the matrix (off by default, as in the paper; count-terms
+    /// makes no closed-form prediction then).
+    #[arg(long)]
+    pub cosine: bool,
+
+    /// Scalar factored for RGB (measured) data; analytic models are grey.
+    #[arg(long, value_enum, default_value_t = Channel::Luminance)]
+    pub channel: Channel,
+
+    /// SVD method: fft (isotropic BRDFs, block-circulant in φ), dense, randomized (leading
+    /// terms of the dense matrix, for large n), or auto (fft when isotropic, else dense).
+    #[arg(long, value_enum, default_value_t = Method::Auto)]
+    pub method: Method,
+}
+
+impl MatrixArgs {
+    /// The sampling these options describe.
+    pub fn sampling(&self) -> Sampling {
+        Sampling { resolution: self.resolution, domain: self.domain, cosine: self.cosine, channel: self.channel }
+    }
+}
+
 /// Runs `factor-brdf`.
 pub fn run(args: Args) -> Result<Outcome> {
     let spec = BrdfSpec::parse(&args.brdf)?;
     let output = Output::parse(&args.output);
     output.check_writable()?;
-    let sampling =
-        Sampling { resolution: args.resolution, domain: args.domain, cosine: args.cosine, channel: args.channel };
+    let sampling = args.matrix.sampling();
     let terms = if args.maps.is_some() { args.terms.min(sampling.grid().len()) } else { 0 };
     if args.maps.is_some() && terms == 0 {
         anyhow::bail!("--terms must be at least 1 with --maps");
     }
     let brdf = spec.load()?;
-    let method = svd::resolve_method(&brdf, args.method)?;
+    let method = svd::resolve_method(&brdf, args.matrix.method)?;
     svd::check_budget(&sampling, method, terms, args.max_memory)?;
     let bar = Bar::new(args.quiet);
     let f = svd::factor(&brdf, &sampling, method, terms, &bar)?;
@@ -190,16 +204,16 @@ pub fn run(args: Args) -> Result<Outcome> {
     };
     let body = FactorBody {
         brdf: brdf.spec(),
-        domain: args.domain,
-        resolution: args.resolution,
+        domain: args.matrix.domain,
+        resolution: args.matrix.resolution,
         directions_per_side: sampling.grid().len(),
-        cosine: args.cosine,
-        channel: args.channel,
+        cosine: args.matrix.cosine,
+        channel: args.matrix.channel,
         method: f.method,
         matrix: format!(
             "M[o,i] = rho(w_i, w_o){} * dOmega, dOmega = {}/n^2; n x n cells uniform in cos(theta) and phi, samples at bin midpoints; direction index = j*n + k (j: cos(theta) bin from the pole, k: phi bin)",
-            if args.cosine { " * max(cos(theta_i), 0)" } else { "" },
-            if args.domain == Domain::Sphere { "4 pi" } else { "2 pi" }
+            if args.matrix.cosine { " * max(cos(theta_i), 0)" } else { "" },
+            if args.matrix.domain == Domain::Sphere { "4 pi" } else { "2 pi" }
         ),
         total_energy: f.total_energy,
         singular_values: s.clone(),
@@ -219,14 +233,14 @@ pub fn run(args: Args) -> Result<Outcome> {
     eprintln!(
         "factor-brdf: {} on the {} at n = {} ({} method): K {}",
         brdf.spec(),
-        args.domain,
-        args.resolution,
+        args.matrix.domain,
+        args.matrix.resolution,
         f.method,
         summary.join(", ")
     );
     if args.json && output != Output::Stdout {
         let line = serde_json::json!({
-            "brdf": brdf.spec(), "domain": args.domain, "resolution": args.resolution,
+            "brdf": brdf.spec(), "domain": args.matrix.domain, "resolution": args.matrix.resolution,
             "method": f.method, "terms": term_counts, "output": output.display(),
         });
         println!("{line}");

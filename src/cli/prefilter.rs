@@ -202,8 +202,8 @@ pub fn run(args: Args) -> Result<Outcome> {
         (None, false) => Some(Output::Stdout),
         (None, true) => None,
     };
-    if args.json && output == Some(Output::Stdout) {
-        bail!("--json prints the summary on stdout: give the document a file with -o FILE");
+    if let Some(o) = &output {
+        super::common::check_json_output(o, args.json)?;
     }
     if let Some(o) = &output {
         o.check_writable()?;
@@ -271,7 +271,7 @@ pub fn run(args: Args) -> Result<Outcome> {
                 model.coefficients((2 * f_b).max(32), (p_b + 3).min(8)).residual(f_b, p_b)
             };
             light_order = result.lighting.order;
-            bound = if args.bound { Some(app_b_bound(&model, &result, env.as_ref())) } else { None };
+            bound = if args.bound { Some(app_b_bound(&result, env.as_ref())) } else { None };
             let mut t_json = serde_json::to_value(result.timings)?;
             t_json["maps_seconds"] = maps_seconds.into();
             t_json["total_seconds"] = start.elapsed().as_secs_f64().into();
@@ -326,15 +326,14 @@ pub fn run(args: Args) -> Result<Outcome> {
         write(path, image)?;
         entries.push(MapEntry { file: path.display().to_string(), view: view.map(|v| v.to_array()) });
     }
-    if let (Some(path), Some(map)) = (&args.irradiance, maps.first()) {
-        let albedo = model.brdf().reflection_lobe(1.0).unwrap_or(1.0 / std::f64::consts::PI) * std::f64::consts::PI;
-        let scale = (std::f64::consts::PI / albedo.max(1e-12)) as f32;
-        let mut e = map.2.clone();
-        e.pixels.iter_mut().for_each(|p| p.iter_mut().for_each(|c| *c *= scale));
-        write(path, &e)?;
-    } else if let Some(path) = &args.irradiance {
-        let shrm = shrm_out.as_ref().context("no map to derive the irradiance from")?;
-        let mut e = shrm::reflection_map(shrm, DVec3::Z);
+    if let Some(path) = &args.irradiance {
+        // Lambert's map is radiance (albedo/π)·E(N); the irradiance is that × π/albedo. Any
+        // written map will do (the model is view-independent), else the SHRM's one.
+        let mut e = match (maps.first(), &shrm_out) {
+            (Some(map), _) => map.2.clone(),
+            (None, Some(shrm)) => shrm::reflection_map(shrm, DVec3::Z),
+            (None, None) => bail!("no map to derive the irradiance from"),
+        };
         let albedo = model.brdf().reflection_lobe(1.0).unwrap_or(1.0 / std::f64::consts::PI) * std::f64::consts::PI;
         let scale = (std::f64::consts::PI / albedo.max(1e-12)) as f32;
         e.pixels.iter_mut().for_each(|p| p.iter_mut().for_each(|c| *c *= scale));
@@ -450,7 +449,7 @@ fn to_output_layout(image: &RgbImage, layout: Layout) -> Result<RgbImage> {
 }
 
 /// App. B: ε_B ≤ B_res/(Σ|B|² + B_res) with B_res = Λ_{F+1}(ε_L L_tot)(ε_ρ ρ_tot).
-fn app_b_bound(model: &Model, result: &pipeline::Frequency, env: Option<&EnvMap>) -> f64 {
+fn app_b_bound(result: &pipeline::Frequency, env: Option<&EnvMap>) -> f64 {
     let f = result.brdf.f;
     let brdf_res = result.brdf.residual(f, result.brdf.p) * result.brdf.total_energy;
     let light_total =
@@ -468,6 +467,5 @@ fn app_b_bound(model: &Model, result: &pipeline::Frequency, env: Option<&EnvMap>
             }
         }
     }
-    let _ = model;
     residual_bound(f, light_res, brdf_res, captured)
 }

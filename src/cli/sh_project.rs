@@ -76,9 +76,7 @@ pub struct Args {
 pub fn run(args: Args) -> Result<Outcome> {
     init_threads(args.threads)?;
     let output = Output::parse(&args.output);
-    if args.json && output == Output::Stdout {
-        bail!("--json prints the summary on stdout: give the document a file with -o FILE");
-    }
+    super::common::check_json_output(&output, args.json)?;
     output.check_writable()?;
     for path in args.reconstruct.iter().chain(&args.irradiance) {
         Output::File(path.clone()).check_writable()?;

@@ -21,7 +21,7 @@ impl EnvMap {
                 let n = self.layout.face_size(w, h);
                 let (x, y) = ((px.max(0.0) as usize).min(w - 1), (py.max(0.0) as usize).min(h - 1));
                 let (f, _, _) = cube::cross_to_face(self.layout, n, x, y)?;
-                let (cx0, cy0) = cube::face_to_cross(self.layout, n, f, 0, 0);
+                let (cx0, _) = cube::face_to_cross(self.layout, n, f, 0, 0);
                 let (cx1, _) = cube::face_to_cross(self.layout, n, f, n - 1, n - 1);
                 let rotated = cx1 < cx0;
                 let (mut fx, mut fy) = (px - (x / n * n) as f64, py - (y / n * n) as f64);
@@ -29,7 +29,6 @@ impl EnvMap {
                     fx = n as f64 - fx;
                     fy = n as f64 - fy;
                 }
-                let _ = cy0;
                 Some(cube::direction_at(f, n, fx, fy))
             }
         }

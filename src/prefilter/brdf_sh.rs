@@ -325,7 +325,7 @@ mod tests {
     fn parseval_for_a_band_limited_brdf() {
         // ρ̂ = Y_{2,1}(ω_i) Y_{1,1}(ω_o) + Y_{2,-1}(ω_i) Y_{1,-1}(ω_o) + 0.5 Y_00 Y_00, written
         // through its (θ_i, θ_o, φ) form: ρ̂_{2,1,1} = 1, ρ̂_{0,0,0} = 0.5, energy 2·1 + 0.25.
-        use crate::sh::basis::{direction, eval_basis};
+        use crate::sh::basis::eval_basis;
         let table = LegendreTable::new(2);
         let rho = |ci: f64, co: f64, phi: f64| {
             let (mut yi, mut yo) = (vec![0.0; 9], vec![0.0; 9]);
@@ -335,7 +335,6 @@ mod tests {
                 yi[index(2, 1)] * yo[index(1, 1)] + yi[index(2, -1isize)] * yo[index(1, -1isize)] + 0.5 * yi[0] * yo[0];
             [v, 0.0, 0.0]
         };
-        let _ = direction;
         let b = from_isotropic(rho, 4, 3, BrdfGrid { theta_i: 16, theta_o: 16, phi: 12 });
         assert!((b.get(2, 1, 1)[0] - 1.0).abs() < 1e-12);
         assert!((b.get(0, 0, 0)[0] - 0.5).abs() < 1e-12);

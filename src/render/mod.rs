@@ -7,7 +7,7 @@
 //!   T_k = V g_k (n·ω_i) (Mahajan et al. 2008, eq. 3–4);
 //! - [`reference`]: direct integration of environment × BRDF × cosine over every env texel.
 //!
-//! [`metrics`] compares renders, [`panel`] lays them out with labels. `docs/render.md` is the
+//! [`crate::metrics`] compares renders, [`panel`] lays them out with labels. `docs/render.md` is the
 //! user guide.
 
 pub mod camera;
@@ -16,7 +16,6 @@ pub mod font;
 pub mod frame;
 pub mod irradiance;
 pub mod mesh;
-pub mod metrics;
 pub mod panel;
 pub mod reference;
 pub mod reflection;
