@@ -1,7 +1,9 @@
 //! Atomic output: write to a temporary file in the destination directory, then rename.
 //!
 //! A failed or interrupted run never leaves a half-written file that `make` would treat as up to
-//! date. `-` means standard output.
+//! date. `-` means standard output. A destination that exists and is not a regular file (a
+//! device such as `/dev/null`, a FIFO, `/dev/stdout`, a shell's `>(…)`) is written in place:
+//! renaming over it would replace the device node with a file, or fail outright.
 
 use super::IoError;
 use std::io::Write;
@@ -76,6 +78,10 @@ fn parent_dir(path: &Path) -> &Path {
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+    if is_special(path) {
+        let mut file = std::fs::OpenOptions::new().write(true).open(path).map_err(|e| IoError::os(path, e))?;
+        return file.write_all(bytes).and_then(|_| file.flush()).map_err(|e| IoError::os(path, e));
+    }
     let dir = parent_dir(path);
     let mut tmp = tempfile::Builder::new()
         .prefix(".prtkit-")
@@ -94,6 +100,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
     }
     tmp.persist(path).map_err(|e| IoError::os(path, e.error))?;
     Ok(())
+}
+
+/// True when `path` (after symlinks) exists and is neither a regular file nor a directory.
+fn is_special(path: &Path) -> bool {
+    std::fs::metadata(path).map(|m| !m.is_file() && !m.is_dir()).unwrap_or(false)
 }
 
 #[cfg(test)]
@@ -121,5 +132,25 @@ mod tests {
         let out = Output::parse("/nonexistent-dir-prtkit/x.json");
         let err = out.check_writable().unwrap_err().to_string();
         assert!(err.contains("/nonexistent-dir-prtkit"), "{err}");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_destination_is_written_in_place_not_replaced() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("pipe");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if !matches!(made, Ok(s) if s.success()) {
+            eprintln!("skipping: mkfifo is not available");
+            return;
+        }
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read(fifo).unwrap())
+        };
+        write_atomic(&fifo, b"through the pipe").unwrap();
+        assert_eq!(reader.join().unwrap(), b"through the pipe");
+        assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo(), "the FIFO must survive");
     }
 }
