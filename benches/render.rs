@@ -65,7 +65,7 @@ fn main() {
         f.grid.len(),
         t.elapsed().as_secs_f64() * 1e3
     );
-    let mut shader = Factored::new(&f, 75, transport, &env, 1);
+    let mut shader = Factored::new(&f, 75, true, transport, &env, 1);
     let other = sky(256, 128, -0.5);
     let frames = 5;
     let t = Instant::now();

@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 res="${1:-160}"
-cargo build --release --quiet --bin render --bin sample-shader
+cargo build --release --quiet --bin render --bin sample-shader --bin factor-brdf
 bin=target/release
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
@@ -19,8 +19,11 @@ if [ ! -f "$env" ]; then
 fi
 common=(--brdf phong:s=30 --res "${res}x${res}" --eye 0,-4,0.8 --fov 30 -q)
 "$bin/render" "$env" "${common[@]}" --shading reference -o "$tmp/ref.exr"
-# 64x64 (cos θ, φ) cells per hemisphere, 3x3 lighting samples per cell.
-fac=(--shading factored --factor-resolution 64 --cell-samples 3 --compare "$tmp/ref.exr" --json)
+# factor-brdf: 64x64 (cos θ, φ) cells per hemisphere, cosine folded in, the leading 75 factors
+# stored for render; 3x3 lighting samples per cell.
+"$bin/factor-brdf" phong:s=30 --resolution 64 --cosine --terms 75 --factors "$tmp/p30.exr" \
+    -o "$tmp/p30.json" -q
+fac=(--shading factored --factors "$tmp/p30.json" --cell-samples 3 --compare "$tmp/ref.exr" --json)
 lines=()
 for k in 4 12; do
     line="$("$bin/render" "$env" "${common[@]}" "${fac[@]}" -K "$k" -o "$tmp/k$k.exr")"
@@ -38,8 +41,9 @@ mkdir -p docs/results
 {
     echo "## Factored relighting (Mahajan et al. 2008, Fig. 6)"
     echo
-    echo "Phong s = 30 sphere under \`$(basename "$env")\`, ${res}x${res} pixels; in-out factorization on"
-    echo "the hemisphere (64x64 cells in cos θ, φ; cosine folded into g_k), lighting projected onto the"
+    echo "Phong s = 30 sphere under \`$(basename "$env")\`, ${res}x${res} pixels; in-out factorization by"
+    echo "\`factor-brdf --factors\` on the hemisphere (64x64 cells in cos θ, φ; cosine folded into g_k),"
+    echo "read by \`render --factors\`, lighting projected onto the"
     echo "factors with 3x3 samples per cell; error over the sphere's pixels against the reference (sum"
     echo "over every probe texel of L ρ cos θ_i). Regenerate: \`scripts/reproduce-fig6.sh\`."
     echo

@@ -265,3 +265,108 @@ fn render_bad_input_exits_2_without_output() {
     bin("render").arg(&env).args(["--res", "16x16", "--compare"]).arg(&small).arg("-o").arg(&out).assert().code(2);
     assert!(!out.exists(), "a failed run left {}", out.display());
 }
+
+/// Runs factor-brdf for `brdf` at resolution 32, storing `terms` factors; returns the document.
+fn factor_file(dir: &Path, name: &str, brdf: &str, cosine: bool, terms: usize) -> PathBuf {
+    let doc = dir.join(format!("{name}.json"));
+    let mut cmd = bin("factor-brdf");
+    cmd.arg(brdf).args(["--resolution", "32", "--terms", &terms.to_string(), "-q", "--factors"]);
+    cmd.arg(dir.join(format!("{name}.exr"))).arg("-o").arg(&doc);
+    if cosine {
+        cmd.arg("--cosine");
+    }
+    cmd.assert().success();
+    doc
+}
+
+#[test]
+fn render_factored_reads_factor_brdf_files_with_or_without_the_cosine_folded_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = write_env(dir.path(), "sky.exr", 128, 64, smooth);
+    let reference = dir.path().join("ref.exr");
+    bin("render")
+        .arg(&env)
+        .args(["--brdf", "phong:s=8", "--res", "24x24", "-q", "-o"])
+        .arg(&reference)
+        .assert()
+        .success();
+    let factored = |extra: &[&str]| -> f64 {
+        let out = bin("render")
+            .arg(&env)
+            .args(["--shading", "factored", "--brdf", "phong:s=8", "--res", "24x24", "--normal-table", "64x32"])
+            .args(["-q", "--json", "--compare"])
+            .arg(&reference)
+            .args(extra)
+            .assert()
+            .success()
+            .get_output()
+            .stdout
+            .clone();
+        json_field(&out, "rel_error")
+    };
+    // The stored factors (f32) give the render of the in-process factorization (f64).
+    let folded = factor_file(dir.path(), "folded", "phong:s=8", true, 20);
+    let from_file = factored(&["-K", "20", "--factors", folded.to_str().unwrap()]);
+    let in_process = factored(&["-K", "20", "--factor-resolution", "32"]);
+    assert!((from_file - in_process).abs() < 1e-6, "file {from_file} vs in-process {in_process}");
+    // The paper's factorization of ρ alone, with the cosine in the transport (eq. 3), converges
+    // to the reference too.
+    let plain = factor_file(dir.path(), "plain", "phong:s=8", false, 40);
+    let errors: Vec<f64> =
+        [3, 10, 40].iter().map(|k| factored(&["-K", &k.to_string(), "--factors", plain.to_str().unwrap()])).collect();
+    assert!(errors.windows(2).all(|w| w[1] < w[0]), "{errors:?}");
+    assert!(errors[2] < 0.05, "K = 40 without the folded cosine: {errors:?}");
+    // Lambert is rank one: ρ = albedo/π, so one term in a white furnace gives the albedo.
+    let white = write_env(dir.path(), "white.exr", 64, 32, |_| 1.0);
+    let lambert = factor_file(dir.path(), "lambert", "lambert:albedo=0.5", false, 1);
+    let out = dir.path().join("l.exr");
+    bin("render")
+        .arg(&white)
+        .args(["--shading", "factored", "--brdf", "lambert:albedo=0.5", "-K", "1", "--res", "24x24", "-q"])
+        .arg("--factors")
+        .arg(&lambert)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success();
+    let c = centre(&read_image(&out).unwrap(), 6);
+    assert!((c[0] - 0.5).abs() < 5e-3, "lambert furnace from a factor file: {c:?}");
+}
+
+#[test]
+fn render_factored_rejects_a_factorization_that_does_not_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = write_env(dir.path(), "white.exr", 32, 16, |_| 1.0);
+    let doc = factor_file(dir.path(), "p", "phong:s=8", true, 4);
+    let out = dir.path().join("never.exr");
+    let run = |brdf: &str, extra: &[&str], doc: &Path, needle: &str| {
+        bin("render")
+            .arg(&env)
+            .args(["--shading", "factored", "--brdf", brdf, "--res", "8x8", "-q", "--factors"])
+            .arg(doc)
+            .args(extra)
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .code(2)
+            .stderr(contains(needle));
+        assert!(!out.exists(), "no output after {needle}");
+    };
+    run("phong:s=30", &["-K", "4"], &doc, "phong:s=8");
+    run("phong:s=8", &["-K", "5"], &doc, "holds 4 terms");
+    run("phong:s=8", &["-K", "4", "--factor-resolution", "64"], &doc, "another resolution");
+    // The document's EXR replaced by a factorization of another resolution.
+    let coarse = dir.path().join("coarse.json");
+    bin("factor-brdf")
+        .args(["phong:s=8", "--resolution", "16", "--terms", "4", "-q", "--cosine", "--factors"])
+        .arg(dir.path().join("p.exr"))
+        .arg("-o")
+        .arg(&coarse)
+        .assert()
+        .success();
+    run("phong:s=8", &["-K", "4"], &doc, "another resolution");
+    // A document without a factor file.
+    let bare = dir.path().join("bare.json");
+    bin("factor-brdf").args(["phong:s=8", "--resolution", "8", "-q", "-o"]).arg(&bare).assert().success();
+    run("phong:s=8", &["-K", "1"], &bare, "--factors FILE.exr");
+}

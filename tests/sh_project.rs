@@ -121,6 +121,7 @@ fn bad_inputs_exit_2_and_leave_no_output() {
         assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
         assert!(stderr.contains(needle), "{args:?}: stderr lacks {needle:?}: {stderr}");
         assert!(!out.exists(), "{args:?} left an output file");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: one line, no repeated cause: {stderr}");
     }
     // Negative pixels are accepted when asked to clamp.
     sh_project().arg(&neg).args(["--negative", "clamp", "-o"]).arg(&out).assert().success();

@@ -3,6 +3,7 @@
 
 use super::common::{Bar, Outcome};
 use crate::brdf::BrdfSpec;
+use crate::factor::document::{self, FactorBody, Reconstruction};
 use crate::factor::{energy, maps, svd, Channel, Domain, Method, Sampling};
 use crate::io::{self, Document, Output, Provenance};
 use anyhow::{Context, Result};
@@ -26,7 +27,12 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub maps: Option<PathBuf>,
 
-    /// Number of leading terms drawn by --maps.
+    /// Write the leading factors g_k, h_k sampled on the grid to this EXR (the document names
+    /// it), for `render --shading factored --factors DOC.json` (docs/formats/factor.md).
+    #[arg(long, value_name = "FILE.exr")]
+    pub factors: Option<PathBuf>,
+
+    /// Number of leading terms drawn by --maps and stored by --factors.
     #[arg(long, default_value_t = 16, value_name = "N")]
     pub terms: usize,
 
@@ -62,54 +68,6 @@ pub fn parse_memory(s: &str) -> Result<u128, String> {
         return Err(format!("memory size must be positive, got {s:?}"));
     }
     Ok((v * mult as f64) as u128)
-}
-
-/// The body of a `prtkit.factor` document.
-#[derive(Debug, serde::Serialize, serde::Deserialize)]
-pub struct FactorBody {
-    /// Canonical BRDF spec.
-    pub brdf: String,
-    /// sphere / hemisphere.
-    pub domain: Domain,
-    /// Grid resolution n.
-    pub resolution: usize,
-    /// n².
-    pub directions_per_side: usize,
-    /// cos θ_i folded in.
-    pub cosine: bool,
-    /// Channel factored.
-    pub channel: Channel,
-    /// fft or dense.
-    pub method: Method,
-    /// How the matrix is built.
-    pub matrix: String,
-    /// Σ σ².
-    pub total_energy: f64,
-    /// σ_k descending (the leading ones only for the randomized method).
-    pub singular_values: Vec<f64>,
-    /// Entry k: energy fraction of the first k+1 terms.
-    pub cumulative_energy: Vec<f64>,
-    /// K reaching 90 %, 95 %, 99 %, 99.9 % of the energy.
-    pub terms: BTreeMap<String, usize>,
-    /// Relative Frobenius error of K-term reconstructions.
-    pub reconstruction: Vec<Reconstruction>,
-    /// Azimuthal frequency m of each singular value (fft method only).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub azimuthal_frequency: Vec<usize>,
-    /// Where the maps went, if written.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub maps: Option<String>,
-}
-
-/// Error of a K-term reconstruction.
-#[derive(Debug, serde::Serialize, serde::Deserialize)]
-pub struct Reconstruction {
-    /// K.
-    pub terms: usize,
-    /// Energy fraction of those terms.
-    pub energy: f64,
-    /// ‖M − M_K‖_F / ‖M‖_F = √(1 − energy) (Eckart–Young).
-    pub relative_frobenius_error: f64,
 }
 
 /// Percent label of an energy fraction: 0.999 → "99.9%".
@@ -161,9 +119,13 @@ pub fn run(args: Args) -> Result<Outcome> {
     let output = Output::parse(&args.output);
     output.check_writable()?;
     let sampling = args.matrix.sampling();
-    let terms = if args.maps.is_some() { args.terms.min(sampling.grid().len()) } else { 0 };
-    if args.maps.is_some() && terms == 0 {
-        anyhow::bail!("--terms must be at least 1 with --maps");
+    let wants_factors = args.maps.is_some() || args.factors.is_some();
+    let terms = if wants_factors { args.terms.min(sampling.grid().len()) } else { 0 };
+    if wants_factors && terms == 0 {
+        anyhow::bail!("--terms must be at least 1 with --maps or --factors");
+    }
+    if let Some(p) = &args.factors {
+        Output::File(p.clone()).check_writable()?;
     }
     let brdf = spec.load()?;
     let method = svd::resolve_method(&brdf, args.matrix.method)?;
@@ -202,6 +164,10 @@ pub fn run(args: Args) -> Result<Outcome> {
     } else {
         None
     };
+    let factors = match &args.factors {
+        Some(p) => Some(document::write_factors(p, &f, terms)?),
+        None => None,
+    };
     let body = FactorBody {
         brdf: brdf.spec(),
         domain: args.matrix.domain,
@@ -222,12 +188,13 @@ pub fn run(args: Args) -> Result<Outcome> {
         reconstruction,
         azimuthal_frequency: f.azimuthal_frequency.clone(),
         maps: maps_dir,
+        factors,
     };
     let inputs = match &spec {
         BrdfSpec::Merl(p) => vec![p.display().to_string()],
         _ => vec![],
     };
-    let doc = Document::new("prtkit.factor", 1, Provenance::current("factor-brdf", inputs), body);
+    let doc = Document::new(document::FORMAT, document::VERSION, Provenance::current("factor-brdf", inputs), body);
     output.write(doc.to_json().as_bytes())?;
     let summary: Vec<String> = term_counts.iter().map(|(k, v)| format!("{k}: {v}")).collect();
     eprintln!(

@@ -96,9 +96,15 @@ pub struct Args {
     #[arg(short = 'K', long, default_value_t = 12)]
     pub terms: usize,
 
-    /// factored: bins n of the BRDF matrix's (cos θ, φ) hemisphere grid (n² directions).
-    #[arg(long, default_value_t = 64)]
-    pub factor_resolution: usize,
+    /// factored: a prtkit.factor document written by `factor-brdf --factors FILE.exr` (names
+    /// the EXR). Without it the BRDF is factored here, on the hemisphere with the cosine folded in.
+    #[arg(long, value_name = "FACTOR.json")]
+    pub factors: Option<PathBuf>,
+
+    /// factored: bins n of the BRDF matrix's (cos θ, φ) hemisphere grid (n² directions);
+    /// default 64. With --factors it must equal the document's resolution.
+    #[arg(long)]
+    pub factor_resolution: Option<usize>,
 
     /// factored: lighting samples per grid cell along each axis (averaged: a box prefilter).
     #[arg(long, default_value_t = 2)]
@@ -287,23 +293,47 @@ pub fn run(args: Args) -> Result<Outcome> {
             if !(1..=8).contains(&args.cell_samples) {
                 bail!("--cell-samples {} must be in 1..=8", args.cell_samples);
             }
-            if !(2..=256).contains(&args.factor_resolution) {
-                bail!("--factor-resolution {} must be in 2..=256", args.factor_resolution);
-            }
-            let sampling = Sampling {
-                resolution: args.factor_resolution,
-                domain: Domain::Hemisphere,
-                cosine: true,
-                channel: Channel::Mean,
+            let (f, cosine_in_factors) = match &args.factors {
+                Some(doc) => {
+                    let (body, f) = crate::factor::document::load(doc)?;
+                    if body.brdf != brdf.spec() {
+                        bail!("{}: the factorization is of {}, --brdf says {}", doc.display(), body.brdf, brdf.spec());
+                    }
+                    if let Some(n) = args.factor_resolution.filter(|&n| n != body.resolution) {
+                        bail!(
+                            "{}: a factorization of another resolution: n = {}, --factor-resolution asks for {n}",
+                            doc.display(),
+                            body.resolution
+                        );
+                    }
+                    if f.g.len() < args.terms {
+                        bail!(
+                            "{}: the factor file holds {} terms, --terms asks for {} (factor-brdf --terms {})",
+                            doc.display(),
+                            f.g.len(),
+                            args.terms,
+                            args.terms
+                        );
+                    }
+                    (f, body.cosine)
+                }
+                None => {
+                    let resolution = args.factor_resolution.unwrap_or(64);
+                    if !(2..=256).contains(&resolution) {
+                        bail!("--factor-resolution {resolution} must be in 2..=256");
+                    }
+                    let sampling =
+                        Sampling { resolution, domain: Domain::Hemisphere, cosine: true, channel: Channel::Mean };
+                    (crate::factor::factor(&brdf, &sampling, Method::Auto, args.terms, &bar)?, true)
+                }
             };
-            let f = crate::factor::factor(&brdf, &sampling, Method::Auto, args.terms, &bar)?;
             let transport = match &scene {
                 Scene::Sphere { .. } => Transport::sphere(args.normal_table.0, args.normal_table.1),
                 Scene::Mesh(_) => Transport::mesh(&scene, &f.grid, &bar),
             };
             extra.insert("k".into(), args.terms.into());
             extra.insert("energy".into(), f.cumulative_energy().get(args.terms - 1).copied().unwrap_or(1.0).into());
-            let shader = Factored::new(&f, args.terms, transport, &env, args.cell_samples);
+            let shader = Factored::new(&f, args.terms, cosine_in_factors, transport, &env, args.cell_samples);
             label = format!("K={}", shader.terms());
             render(&scene, &camera, &env, &shader, &bar)
         }

@@ -6,10 +6,12 @@
 //! - [`energy`]: energy curves, K at an energy fraction, reconstruction error;
 //! - [`predict`]: the paper's closed-form predictions of K, from 1-D transforms;
 //! - [`count`]: predicted versus measured K for a list of materials, and the CI check;
+//! - [`document`]: the `prtkit.factor` document and the factor file render reads;
 //! - [`maps`], [`plot`]: pictures of the factors and of the counts.
 
 pub mod channel;
 pub mod count;
+pub mod document;
 pub mod energy;
 pub mod grid;
 pub mod manifest;

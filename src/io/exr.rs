@@ -1,5 +1,5 @@
 //! OpenEXR reading (half/float/uint, RGB/RGBA/Y, scanline or tiled, any compression — via the
-//! `exr` crate) and float writing with several named RGB layers in one file.
+//! `exr` crate) and float writing with several named RGB (or grey) layers in one file.
 //!
 //! Layers follow the usual EXR naming: channels `R`, `G`, `B` form the unnamed layer, channels
 //! `name.R`, `name.G`, `name.B` the layer `name`; in multi-part files the part name is a prefix.
@@ -106,19 +106,38 @@ pub fn encode_layers(layers: &[(&str, &RgbImage)]) -> Result<Vec<u8>, String> {
             return Err(format!("layer {name:?} is {}x{}, expected {width}x{height}", image.width, image.height));
         }
         for (c, letter) in ["R", "G", "B"].iter().enumerate() {
-            let samples: Vec<f32> = image.pixels.iter().map(|p| p[c]).collect();
-            let channel_name = if name.is_empty() { letter.to_string() } else { format!("{name}.{letter}") };
-            let text = exr::prelude::Text::new_or_none(&channel_name)
-                .ok_or_else(|| format!("layer name {name:?} cannot be stored in EXR"))?;
-            channels.push(AnyChannel::new(text, FlatSamples::F32(samples)));
+            channels.push(channel(name, letter, image.pixels.iter().map(|p| p[c]).collect())?);
         }
     }
-    let layer = Layer::new(
-        (width, height),
-        LayerAttributes::default(),
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(channels.into()),
-    );
+    encode_channels((width, height), channels)
+}
+
+/// Encodes float grey layers (channel `name.Y`, or `Y` for `""`) of `width`×`height` samples
+/// each, row-major, into one EXR. They read back through [`decode_layers`] as grey images.
+pub fn encode_grey_layers(width: usize, height: usize, layers: &[(&str, &[f32])]) -> Result<Vec<u8>, String> {
+    if layers.is_empty() {
+        return Err("no layers to write".into());
+    }
+    let mut channels = Vec::with_capacity(layers.len());
+    for (name, samples) in layers {
+        if samples.len() != width * height {
+            return Err(format!("layer {name:?} has {} samples, expected {width}x{height}", samples.len()));
+        }
+        channels.push(channel(name, "Y", samples.to_vec())?);
+    }
+    encode_channels((width, height), channels)
+}
+
+fn channel(layer: &str, letter: &str, samples: Vec<f32>) -> Result<AnyChannel<FlatSamples>, String> {
+    let channel_name = if layer.is_empty() { letter.to_string() } else { format!("{layer}.{letter}") };
+    let text = exr::prelude::Text::new_or_none(&channel_name)
+        .ok_or_else(|| format!("layer name {layer:?} cannot be stored in EXR"))?;
+    Ok(AnyChannel::new(text, FlatSamples::F32(samples)))
+}
+
+fn encode_channels(size: (usize, usize), channels: Vec<AnyChannel<FlatSamples>>) -> Result<Vec<u8>, String> {
+    let layer =
+        Layer::new(size, LayerAttributes::default(), Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels.into()));
     let image = Image::from_layer(layer);
     let mut bytes = Vec::new();
     image.write().non_parallel().to_buffered(Cursor::new(&mut bytes)).map_err(|e| e.to_string())?;
@@ -128,6 +147,12 @@ pub fn encode_layers(layers: &[(&str, &RgbImage)]) -> Result<Vec<u8>, String> {
 /// Writes one float RGB image as EXR, atomically.
 pub fn write_rgb(path: &Path, image: &RgbImage) -> Result<(), IoError> {
     write_layers(path, &[("", image)])
+}
+
+/// Writes several named grey layers as one EXR, atomically (see [`encode_grey_layers`]).
+pub fn write_grey_layers(path: &Path, width: usize, height: usize, layers: &[(&str, &[f32])]) -> Result<(), IoError> {
+    let bytes = encode_grey_layers(width, height, layers).map_err(|e| IoError::invalid(path, FORMAT, e))?;
+    super::write_atomic(path, &bytes)
 }
 
 /// Writes several named RGB layers as one EXR, atomically.
@@ -151,6 +176,21 @@ mod tests {
         assert_eq!(find(""), &a);
         assert_eq!(find("coef.7"), &b);
         assert_eq!(decode(Path::new("t.exr"), &bytes).unwrap(), a);
+    }
+
+    #[test]
+    fn grey_layers_round_trip_bit_exactly() {
+        let g: Vec<f32> = (0..12).map(|i| i as f32 * -0.37 + 1e-6).collect();
+        let h: Vec<f32> = (0..12).map(|i| (i * i) as f32).collect();
+        let bytes = encode_grey_layers(4, 3, &[("g", &g), ("h", &h)]).unwrap();
+        let layers = decode_layers(Path::new("t.exr"), &bytes).unwrap();
+        for (name, want) in [("g", &g), ("h", &h)] {
+            let img = &layers.iter().find(|(n, _)| n == name).unwrap().1;
+            assert_eq!((img.width, img.height), (4, 3));
+            let got: Vec<f32> = img.pixels.iter().map(|p| p[0]).collect();
+            assert_eq!(&got, want);
+        }
+        assert!(encode_grey_layers(4, 4, &[("g", &g)]).is_err(), "a size mismatch is an error");
     }
 
     #[test]

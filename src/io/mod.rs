@@ -19,13 +19,13 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum IoError {
     /// The operating system refused (missing file, permissions, disk full…).
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Os {
         /// The file involved.
         path: PathBuf,
-        /// The underlying error.
-        #[source]
-        source: std::io::Error,
+        /// The underlying error. Shown in the message and deliberately not a `source()`: the
+        /// CLI prints the cause chain, which would repeat it.
+        error: std::io::Error,
     },
     /// The bytes are not a valid file of the expected format (truncated, garbled).
     #[error("{path}: invalid {format} file: {reason}")]
@@ -59,7 +59,7 @@ pub enum IoError {
 
 impl IoError {
     pub(crate) fn os(path: &Path, source: std::io::Error) -> Self {
-        IoError::Os { path: path.to_path_buf(), source }
+        IoError::Os { path: path.to_path_buf(), error: source }
     }
     pub(crate) fn invalid(path: &Path, format: &'static str, reason: impl Into<String>) -> Self {
         IoError::Invalid { path: path.to_path_buf(), format, reason: reason.into() }

@@ -1,7 +1,9 @@
 //! View-dependent relighting with the in-out factorization (Mahajan, Tseng & Ramamoorthi 2008,
-//! eq. 3–4). `factor` gives ρ(ω_i, ω_o) max(cos θ_i, 0) ≈ Σ_k σ_k h_k(ω_o) g_k(ω_i) on its
-//! equal-solid-angle hemisphere grid (g_k, h_k L²-orthonormal). With the transport
-//! T_k(x, ω_i) = V(x, ω_i) g_k(ω_i) (the cosine is folded into g_k), the radiance is
+//! eq. 3–4). `factor` gives ρ(ω_i, ω_o) ≈ Σ_k σ_k h_k(ω_o) g_k(ω_i) on its equal-solid-angle
+//! grid (g_k, h_k L²-orthonormal), or ρ·max(cos θ_i, 0) when the cosine was folded into the
+//! matrix (`factor-brdf --cosine`). With the transport of eq. 3,
+//! T_k(x, ω_i) = V(x, ω_i) g_k(ω_i) max(cos θ_i, 0) — without the cosine when g_k holds it —
+//! the radiance is
 //!
 //!   B(x, ω_o) = Σ_k σ_k h_k(ω_o) c_k(x),   c_k(x) = Σ_cells T_k(x, ω_c) L(ω_c) ΔΩ      (eq. 4)
 //!
@@ -109,23 +111,34 @@ pub struct Factored {
     h: Vec<Vec<f64>>,
     grid: Grid,
     transport: Transport,
+    /// Whether the transport applies max(cos θ_i, 0) (false when the factors already hold it).
+    cosine: bool,
     /// c_k per point: `coeffs[(point * K + k)]` RGB.
     coeffs: Vec<[f64; 3]>,
 }
 
 impl Factored {
     /// Keeps the first `terms` terms of `f` and projects `env` onto them at every point.
-    /// `sub`×`sub` lighting samples per grid cell.
-    pub fn new(f: &Factorization, terms: usize, transport: Transport, env: &EnvMap, sub: usize) -> Self {
+    /// `cosine_in_factors`: the factorization was of ρ·max(cos θ_i, 0) (else the transport
+    /// applies the cosine). `sub`×`sub` lighting samples per grid cell.
+    pub fn new(
+        f: &Factorization,
+        terms: usize,
+        cosine_in_factors: bool,
+        transport: Transport,
+        env: &EnvMap,
+        sub: usize,
+    ) -> Self {
         let k = terms.min(f.g.len());
         let mut s = Factored {
             sigma: f.singular_values[..k].to_vec(),
             h: f.h[..k].to_vec(),
             grid: f.grid,
             transport,
+            cosine: !cosine_in_factors,
             coeffs: Vec::new(),
         };
-        s.coeffs = project(&f.g[..k], &f.grid, &s.transport, env, sub.max(1));
+        s.relight(&f.g, env, sub);
         s
     }
 
@@ -136,7 +149,7 @@ impl Factored {
 
     /// Re-projects a new environment onto the factors (the per-frame relighting step).
     pub fn relight(&mut self, g: &[Vec<f64>], env: &EnvMap, sub: usize) {
-        self.coeffs = project(&g[..self.terms()], &self.grid, &self.transport, env, sub.max(1));
+        self.coeffs = project(&g[..self.terms()], &self.grid, &self.transport, self.cosine, env, sub.max(1));
     }
 
     /// h_k(ω) bilinearly on the hemisphere grid (cos θ bins from the pole, φ wraps).
@@ -165,9 +178,16 @@ impl Factored {
     }
 }
 
-/// c_k = Σ_cells V g_k L ΔΩ at every point: per point the lighting of each cell is looked up
-/// once, then K dot products over the cells.
-fn project(g: &[Vec<f64>], grid: &Grid, transport: &Transport, env: &EnvMap, sub: usize) -> Vec<[f64; 3]> {
+/// c_k = Σ_cells V g_k [max(cos θ, 0)] L ΔΩ at every point: per point the lighting of each
+/// cell is looked up once, then K dot products over the cells.
+fn project(
+    g: &[Vec<f64>],
+    grid: &Grid,
+    transport: &Transport,
+    cosine: bool,
+    env: &EnvMap,
+    sub: usize,
+) -> Vec<[f64; 3]> {
     let cells = grid.len();
     // Each cell's lighting is the mean of sub×sub samples uniform in (cos θ, φ) inside it (equal
     // solid angles), a box prefilter of the environment: point samples alias bright sources.
@@ -203,8 +223,9 @@ fn project(g: &[Vec<f64>], grid: &Grid, transport: &Transport, env: &EnvMap, sub
                 let mut l = [0.0f64; 3];
                 for d in &dirs[c * sub * sub..(c + 1) * sub * sub] {
                     let v = env.lookup(frame * *d);
+                    let w = if cosine { d.z.max(0.0) } else { 1.0 };
                     for ch in 0..3 {
-                        l[ch] += v[ch] as f64;
+                        l[ch] += w * v[ch] as f64;
                     }
                 }
                 for ch in 0..3 {
