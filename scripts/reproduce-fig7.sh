@@ -19,9 +19,10 @@ if [ ! -f "$env" ]; then
     env="$tmp/sky.exr"
 fi
 brdf=torrance-sparrow:sigma=0.2
-# Two views of the same sphere (a distant viewer per image, the global SHRM's case): from the
-# side, a little above the horizon, and from high above.
-views=("side=0,-4,0.8" "top=0,-1.2,3.8")
+# Two views, each with one view direction for the whole image as in the paper (its (θ̄_o, φ̄_o)):
+# a distant camera with a narrow field, so the global SHRM's single reflection map per view
+# (eq. 12) is the right model. From the side, 11° above the horizon, and from 17° off the top.
+views=("side=0,-40,8" "top=0,-12,38")
 for p in 0 1 2 3; do
     "$bin/prefilter" "$env" --brdf "$brdf" --order "30,$p" --global --shrm "$tmp/p$p.shrm.exr" \
         -o "$tmp/p$p.shrm.json" -q
@@ -30,13 +31,14 @@ lines=()
 for v in "${views[@]}"; do
     name="${v%%=*}"
     eye="${v#*=}"
-    common=(--brdf "$brdf" --res "${res}x${res}" --eye "$eye" --fov 30 -q)
+    common=(--brdf "$brdf" --res "${res}x${res}" --eye "$eye" --fov 3.2 -q)
     "$bin/render" "$env" "${common[@]}" --shading reference -o "$tmp/$name-ref.exr"
     items=()
     for p in 0 1 2 3; do
         extra=()
         if [ "$p" = 3 ]; then
-            extra=(--panel "docs/render-fig7-$name.png" "${items[@]}" --panel-item "exact=$tmp/$name-ref.exr")
+            extra=(--panel "docs/render-fig7-$name.png" --exposure 2 "${items[@]}" --panel-item "P=3=-"
+                --panel-item "exact=$tmp/$name-ref.exr")
         fi
         line="$("$bin/render" "$env" "${common[@]}" --shading shrm --shrm "$tmp/p$p.shrm.json" \
             --compare "$tmp/$name-ref.exr" --json -o "$tmp/$name-p$p.exr" --label "P=$p" "${extra[@]}")"
@@ -54,7 +56,8 @@ mkdir -p docs/results
     echo
     echo "Simplified microfacet BRDF (eq. 11) with σ = 0.2, cosine folded into ρ̂, global SHRMs with"
     echo "F_B = 30 and P = 0…3 from \`prefilter --order 30,P --global\`, rendered on a sphere under"
-    echo "\`$(basename "$env")\` at ${res}x${res} for two views; the exact image sums L ρ cos θ_i over every"
+    echo "\`$(basename "$env")\` at ${res}x${res} for two distant views (camera 40 units away, 3.2° field: one"
+    echo "view direction per image, as the paper's); the exact image sums L ρ cos θ_i over every"
     echo "probe texel at each pixel. \"BRDF energy\" is 1 − ε, the fraction of ρ̂'s energy the P"
     echo "terms keep (the paper's percentages, its conservative accuracy estimate). Regenerate:"
     echo "\`scripts/reproduce-fig7.sh\`."

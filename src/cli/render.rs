@@ -143,11 +143,13 @@ pub struct Args {
     #[arg(long, value_name = "FILE.json")]
     pub metrics: Option<PathBuf>,
 
-    /// Write a labelled panel PNG: the --panel-item images in order, then this render.
+    /// Write a labelled panel PNG: the --panel-item images in order, then this render (unless an
+    /// item placed it).
     #[arg(long, value_name = "FILE.png")]
     pub panel: Option<PathBuf>,
 
     /// A panel cell `LABEL=FILE.exr` (repeatable; with --compare its error is added to the label).
+    /// `LABEL=-` places this render there, under that label.
     #[arg(long, value_name = "LABEL=FILE.exr")]
     pub panel_item: Vec<String>,
 
@@ -239,8 +241,14 @@ pub fn run(args: Args) -> Result<Outcome> {
             );
         }
     }
-    let panel_images: Vec<(String, RgbImage)> =
-        items.iter().map(|(l, p)| Ok((l.clone(), io::image::read_image(p)?))).collect::<Result<_>>()?;
+    // `None` marks the cell of this render (`LABEL=-`).
+    let panel_images: Vec<(String, Option<RgbImage>)> = items
+        .iter()
+        .map(|(l, p)| Ok((l.clone(), if p.as_os_str() == "-" { None } else { Some(io::image::read_image(p)?) })))
+        .collect::<Result<_>>()?;
+    if panel_images.iter().filter(|(_, i)| i.is_none()).count() > 1 {
+        bail!("--panel-item LABEL=- (this render) may be given once");
+    }
 
     let bar = Bar::new(args.quiet);
     let start = Instant::now();
@@ -382,23 +390,27 @@ pub fn run(args: Args) -> Result<Outcome> {
         write_image(p, &frame.image, args.exposure)?;
     }
     if let Some(p) = &args.panel {
+        let with_error = |mut lines: Vec<String>, m: Option<Metrics>| {
+            if let Some(m) = m.filter(|m| m.rel_error > 0.0) {
+                lines.push(format!("{:.2}%", 100.0 * m.rel_error));
+            }
+            lines
+        };
+        let split = |l: &str| -> Vec<String> { l.split('|').map(str::to_string).collect() };
+        let own = |l: &str| Cell { image: frame.image.clone(), label: with_error(split(l), metrics) };
         let mut cells = Vec::new();
         for (l, img) in panel_images {
-            let mut lines: Vec<String> = l.split('|').map(str::to_string).collect();
-            if let Some(r) = &reference {
-                if let Ok((m, _)) = compare(&img, r, &frame.mask) {
-                    if m.rel_error > 0.0 {
-                        lines.push(format!("{:.2}%", 100.0 * m.rel_error));
-                    }
+            cells.push(match img {
+                Some(image) => {
+                    let m = reference.as_ref().and_then(|r| compare(&image, r, &frame.mask).ok()).map(|(m, _)| m);
+                    Cell { label: with_error(split(&l), m), image }
                 }
-            }
-            cells.push(Cell { image: img, label: lines });
+                None => own(&l),
+            });
         }
-        let mut lines: Vec<String> = label.split('|').map(str::to_string).collect();
-        if let Some(m) = &metrics {
-            lines.push(format!("{:.2}%", 100.0 * m.rel_error));
+        if !items.iter().any(|(_, p)| p.as_os_str() == "-") {
+            cells.push(own(&label));
         }
-        cells.push(Cell { image: frame.image.clone(), label: lines });
         let img = layout(&cells, args.exposure);
         let bytes = io::png::encode_png(&img, args.exposure).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
         io::write_atomic(p, &bytes)?;
