@@ -370,3 +370,46 @@ fn render_factored_rejects_a_factorization_that_does_not_fit() {
     bin("factor-brdf").args(["phong:s=8", "--resolution", "8", "-q", "-o"]).arg(&bare).assert().success();
     run("phong:s=8", &["-K", "1"], &bare, "--factors FILE.exr");
 }
+
+#[test]
+fn render_panel_places_this_render_where_an_item_says_dash() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = write_env(dir.path(), "white.exr", 32, 16, |_| 1.0);
+    let black = dir.path().join("black.exr");
+    write_image(&black, &RgbImage::new(16, 16), 0.0).unwrap();
+    // Brightness at the centre of cell `i` of two: cells of equal width (the widest of image
+    // and label) between 8-pixel gutters, images centred in them, 8 pixels from the top.
+    let cell_centre = |png: &Path, i: u32| -> u8 {
+        let img = image::open(png).unwrap().to_rgb8();
+        let cell_w = (img.width() - 8) / 2 - 8;
+        img.get_pixel(8 + i * (cell_w + 8) + cell_w / 2, 8 + 8)[0]
+    };
+    let panel = |items: &[&str]| -> PathBuf {
+        let png = dir.path().join("panel.png");
+        let mut cmd = bin("render");
+        cmd.arg(&env).args(["--brdf", "lambert", "--shading", "irradiance", "--res", "16x16", "-q", "--panel"]);
+        cmd.arg(&png);
+        for item in items {
+            cmd.arg("--panel-item").arg(item);
+        }
+        cmd.assert().success();
+        png
+    };
+    // Default: the items, then this render (a white furnace sphere: 1.0).
+    let png = panel(&[&format!("black={}", black.display())]);
+    assert!(cell_centre(&png, 0) < 10 && cell_centre(&png, 1) > 200);
+    let width = image::open(&png).unwrap().width();
+    // `LABEL=-` puts this render first (under its default label here); it is not repeated at the
+    // end: the panel has the same two cells.
+    let png = panel(&["irradiance F=2=-", &format!("black={}", black.display())]);
+    assert!(cell_centre(&png, 0) > 200 && cell_centre(&png, 1) < 10);
+    assert_eq!(image::open(&png).unwrap().width(), width, "two cells, not three");
+    bin("render")
+        .arg(&env)
+        .args(["--res", "16x16", "-q", "--panel"])
+        .arg(dir.path().join("p.png"))
+        .args(["--panel-item", "a=-", "--panel-item", "b=-"])
+        .assert()
+        .code(2)
+        .stderr(contains("once"));
+}
