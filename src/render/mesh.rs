@@ -39,6 +39,8 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// True when the file had no normals and they were computed (area-weighted face normals).
     pub normals_computed: bool,
+    /// Length of the bounding box diagonal, computed once: shadow rays offset by a fraction of it.
+    extent: f64,
     bvh: Bvh,
 }
 
@@ -112,7 +114,10 @@ impl Mesh {
             None => (computed, true),
         };
         let bvh = Bvh::build(&positions, &triangles);
-        Ok(Mesh { positions, normals, triangles, normals_computed, bvh })
+        let (lo, hi) =
+            positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
+        let extent = if positions.is_empty() { 0.0 } else { (hi - lo).length() };
+        Ok(Mesh { positions, normals, triangles, normals_computed, extent, bvh })
     }
 
     /// The closest hit of the ray o + t d with t in (t_min, t_max).
@@ -136,9 +141,7 @@ impl Mesh {
 
     /// Length of the bounding box diagonal (scale for ray offsets).
     pub fn extent(&self) -> f64 {
-        let (lo, hi) =
-            self.positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
-        (hi - lo).length()
+        self.extent
     }
 }
 
