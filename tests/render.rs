@@ -259,6 +259,25 @@ fn render_bad_input_exits_2_without_output() {
         .assert()
         .code(2)
         .stderr(contains("does not match"));
+    // An SHRM of another layout (a horizontal cross): render reads lat-long SHRMs.
+    let cross = dir.path().join("cross.shrm.json");
+    bin("prefilter")
+        .arg(&env)
+        .args(["--brdf", "phong:s=8", "--order", "8,0", "-q", "--output-layout", "cross-horizontal", "--shrm"])
+        .arg(dir.path().join("cross.shrm.exr"))
+        .arg("-o")
+        .arg(&cross)
+        .assert()
+        .success();
+    bin("render")
+        .arg(&env)
+        .args(["--shading", "shrm", "--brdf", "phong:s=8", "--shrm"])
+        .arg(&cross)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(contains("cross.shrm.json").and(contains("layout")));
     // A reference of another size.
     let small = dir.path().join("small.exr");
     write_image(&small, &RgbImage::new(8, 8), 0.0).unwrap();
