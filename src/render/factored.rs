@@ -110,6 +110,8 @@ impl Transport {
 /// The factored shader: σ_k, h_k and the projected lighting c_k per point.
 pub struct Factored {
     sigma: Vec<f64>,
+    /// h_k on the grid's n² cells, then two entries: the mean of the first ring of cells (the
+    /// value at the pole θ = 0) and of the last ring (θ = π on the sphere).
     h: Vec<Vec<f64>>,
     grid: Grid,
     transport: Transport,
@@ -134,7 +136,7 @@ impl Factored {
         let k = terms.min(f.g.len());
         let mut s = Factored {
             sigma: f.singular_values[..k].to_vec(),
-            h: f.h[..k].to_vec(),
+            h: f.h[..k].iter().map(|h| with_pole_values(h, f.grid.n)).collect(),
             grid: f.grid,
             transport,
             cosine: !cosine_in_factors,
@@ -154,34 +156,60 @@ impl Factored {
         self.coeffs = project(&g[..self.terms()], &self.grid, &self.transport, self.cosine, env, sub.max(1));
     }
 
-    /// Bilinear taps (grid index, weight) of ω on the factor grid (cos θ bins from the pole,
-    /// clamped; φ wraps): h_k(ω) = Σ w h_k[index], the same taps for every k.
-    fn h_taps(&self, wo: DVec3) -> [(usize, f64); 4] {
-        let n = self.grid.n;
-        let span = match self.grid.domain {
-            crate::factor::Domain::Sphere => 2.0,
-            crate::factor::Domain::Hemisphere => 1.0,
-        };
-        let z = wo.z.clamp(-1.0, 1.0).max(1.0 - span);
-        let fj = ((1.0 - z) / span * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
-        let mut phi = wo.y.atan2(wo.x);
-        if phi < 0.0 {
-            phi += 2.0 * PI;
-        }
-        let fk = phi / (2.0 * PI) * n as f64 - 0.5;
-        let k0f = fk.floor();
-        let (tk, tj) = (fk - k0f, fj - fj.floor());
-        let k0 = (k0f as isize).rem_euclid(n as isize) as usize;
-        let k1 = (k0 + 1) % n;
-        let j0 = fj.floor() as usize;
-        let j1 = (j0 + 1).min(n - 1);
-        [
-            (j0 * n + k0, (1.0 - tj) * (1.0 - tk)),
-            (j0 * n + k1, (1.0 - tj) * tk),
-            (j1 * n + k0, tj * (1.0 - tk)),
-            (j1 * n + k1, tj * tk),
-        ]
+    /// Taps (index into `h`, weight) of ω on the factor grid, the same for every k: bilinear
+    /// between cell centres in (cos θ, φ), φ wrapping. Between the pole and the first ring of
+    /// centres the ring's value blends into the pole value, the ring's mean: φ means nothing at
+    /// the pole, and a bilinear lookup there would take h along whatever φ rounding gives (a
+    /// dark dot where the view meets the normal). The hemisphere's horizon side clamps.
+    fn h_taps(&self, wo: DVec3) -> [(usize, f64); 5] {
+        h_taps(&self.grid, wo)
     }
+}
+
+/// See [`Factored::h_taps`].
+fn h_taps(grid: &Grid, wo: DVec3) -> [(usize, f64); 5] {
+    let n = grid.n;
+    let span = match grid.domain {
+        crate::factor::Domain::Sphere => 2.0,
+        crate::factor::Domain::Hemisphere => 1.0,
+    };
+    let z = wo.z.clamp(-1.0, 1.0).max(1.0 - span);
+    let raw = (1.0 - z) / span * n as f64 - 0.5;
+    let fj = raw.clamp(0.0, (n - 1) as f64);
+    // Weight of the pole value: 1 at the pole, 0 at the ring of centres half a bin away.
+    let pole = match grid.domain {
+        _ if raw < 0.0 => (n * n, -2.0 * raw),
+        crate::factor::Domain::Sphere if raw > (n - 1) as f64 => (n * n + 1, 2.0 * (raw - (n - 1) as f64)),
+        _ => (n * n, 0.0),
+    };
+    let ring = 1.0 - pole.1;
+    let mut phi = wo.y.atan2(wo.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let fk = phi / (2.0 * PI) * n as f64 - 0.5;
+    let k0f = fk.floor();
+    let (tk, tj) = (fk - k0f, fj - fj.floor());
+    let k0 = (k0f as isize).rem_euclid(n as isize) as usize;
+    let k1 = (k0 + 1) % n;
+    let j0 = fj.floor() as usize;
+    let j1 = (j0 + 1).min(n - 1);
+    [
+        (j0 * n + k0, ring * (1.0 - tj) * (1.0 - tk)),
+        (j0 * n + k1, ring * (1.0 - tj) * tk),
+        (j1 * n + k0, ring * tj * (1.0 - tk)),
+        (j1 * n + k1, ring * tj * tk),
+        pole,
+    ]
+}
+
+/// h on the n² cells followed by the means of its first and last rings of n cells.
+fn with_pole_values(h: &[f64], n: usize) -> Vec<f64> {
+    let mean = |ring: &[f64]| ring.iter().sum::<f64>() / n as f64;
+    let mut out = h.to_vec();
+    out.push(mean(&h[..n]));
+    out.push(mean(&h[h.len() - n..]));
+    out
 }
 
 /// Points per block of the projection: the block's lighting matrix (cells × 3·BLOCK) stays
@@ -289,5 +317,48 @@ impl Shade for Factored {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::factor::Domain;
+
+    /// h_k through the taps, as `shade` evaluates it.
+    fn eval(grid: &Grid, h: &[f64], wo: DVec3) -> f64 {
+        let h = with_pole_values(h, grid.n);
+        h_taps(grid, wo.normalize()).iter().map(|&(i, w)| w * h[i]).sum()
+    }
+
+    #[test]
+    fn h_is_continuous_at_the_poles_and_exact_at_cell_centres() {
+        for domain in [Domain::Hemisphere, Domain::Sphere] {
+            let grid = Grid { n: 16, domain };
+            // An m = 1 factor, cos φ · sin θ, sampled at the cell centres, and an m = 0 one.
+            let m1: Vec<f64> = (0..grid.len()).map(|c| grid.direction(c).x).collect();
+            let m0: Vec<f64> = (0..grid.len()).map(|c| grid.direction(c).z).collect();
+            // At a cell centre the taps return the sample.
+            for c in [0, 17, 100, grid.len() - 1] {
+                assert!((eval(&grid, &m1, grid.direction(c)) - m1[c]).abs() < 1e-12, "{domain:?} cell {c}");
+            }
+            // Approaching the pole from any φ, the m = 1 factor goes to 0 (its mean over the
+            // ring) and the m = 0 factor to its ring value: no dependence on φ at the pole.
+            for phi in [0.1, 1.7, 3.0, 5.9] {
+                let near = DVec3::new(1e-9 * f64::cos(phi), 1e-9 * f64::sin(phi), 1.0);
+                assert!(eval(&grid, &m1, near).abs() < 1e-6, "{domain:?} φ {phi}");
+                assert!((eval(&grid, &m0, near) - m0[0]).abs() < 1e-12);
+            }
+            // Half-way between the pole and the first ring of centres: half of each.
+            let theta0 = grid.cos_theta(0).acos();
+            let z = 0.5 * (1.0 + grid.cos_theta(0));
+            let wo = DVec3::new((1.0 - z * z).sqrt(), 0.0, z);
+            let ring = eval(&grid, &m1, DVec3::new(theta0.sin(), 0.0, theta0.cos()));
+            assert!((eval(&grid, &m1, wo) - 0.5 * ring).abs() < 1e-9, "{domain:?}");
+        }
+        // On the sphere the south pole works the same way.
+        let grid = Grid { n: 16, domain: Domain::Sphere };
+        let m1: Vec<f64> = (0..grid.len()).map(|c| grid.direction(c).y).collect();
+        assert!(eval(&grid, &m1, DVec3::new(1e-9, 2e-9, -1.0)).abs() < 1e-6);
     }
 }
