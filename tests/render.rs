@@ -432,3 +432,28 @@ fn render_panel_places_this_render_where_an_item_says_dash() {
         .code(2)
         .stderr(contains("once"));
 }
+
+#[test]
+fn shipped_meshes_load_and_only_the_concave_ones_shadow_themselves() {
+    use prtkit::factor::{Domain, Grid};
+    use prtkit::progress::NoProgress;
+    use prtkit::render::factored::Transport;
+    use prtkit::render::mesh::Mesh;
+    use prtkit::render::Scene;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes");
+    let grid = Grid { n: 12, domain: Domain::Hemisphere };
+    let mut fractions = Vec::new();
+    for name in ["sphere.obj", "bowl.obj", "torus-knot.obj"] {
+        let mesh = Mesh::load(&dir.join(name)).unwrap();
+        // Stored normals point the way the faces wind: within 10° of the area-weighted normals.
+        let computed = Mesh::new(mesh.positions.clone(), None, mesh.triangles.clone()).unwrap();
+        let worst = mesh.normals.iter().zip(&computed.normals).map(|(a, b)| a.dot(*b)).fold(1.0, f64::min);
+        assert!(worst > 10f64.to_radians().cos(), "{name}: normals disagree with the winding ({worst})");
+        let transport = Transport::mesh(&Scene::Mesh(Box::new(mesh)), &grid, &NoProgress);
+        fractions.push(transport.visible_fraction(grid.len()));
+    }
+    // A convex polytope lies below every vertex's tangent plane: nothing in the upper hemisphere
+    // is blocked. The bowl's inner wall and the knot's loops block part of it.
+    assert_eq!(fractions[0], 1.0, "{fractions:?}");
+    assert!(fractions[1] < 0.9 && fractions[2] < 0.95, "{fractions:?}");
+}
