@@ -99,13 +99,35 @@ pub fn parse_size(s: &str) -> Result<(usize, usize), String> {
     Ok((w, h))
 }
 
-/// Sets the size of rayon's global pool (`--threads`); results never depend on it.
+/// The options every stage shares for how it runs (flattened into each stage's `Args`).
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct Execution {
+    /// Worker threads (default or 0: all cores). Results do not depend on it.
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+
+    /// Do not draw progress bars (they are drawn only on a terminal anyway).
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+impl Execution {
+    /// Sizes the thread pool and returns the progress bar for the stage.
+    pub fn start(&self) -> anyhow::Result<Bar> {
+        init_threads(self.threads)?;
+        Ok(Bar::new(self.quiet))
+    }
+}
+
+/// Sets the size of rayon's global pool (`--threads`; 0 or none: all cores); results never
+/// depend on it. A pool that already exists (a test calling `run` twice) is kept.
 pub fn init_threads(threads: Option<usize>) -> anyhow::Result<()> {
-    if let Some(n) = threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
-            .build_global()
-            .map_err(|e| anyhow::anyhow!("cannot start {n} threads: {e}"))?;
+    if let Some(n) = threads.filter(|&n| n > 0) {
+        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n).build_global() {
+            if rayon::current_num_threads() != n {
+                anyhow::bail!("cannot start {n} threads: {e}");
+            }
+        }
     }
     Ok(())
 }

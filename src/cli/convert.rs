@@ -2,7 +2,7 @@
 //! lat-long), or write it in another format.
 
 use super::common::parse_size;
-use super::common::Outcome;
+use super::common::{Execution, Outcome};
 use super::envinput::EnvInput;
 use crate::envmap::{self, Layout};
 use crate::io;
@@ -43,9 +43,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
 
-    /// Do not draw progress bars.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub run: Execution,
 }
 
 /// Runs `convert`.

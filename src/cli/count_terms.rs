@@ -1,7 +1,7 @@
 //! `count-terms`: how many in-out BRDF terms each material needs — predicted by the closed forms
 //! of Mahajan, Tseng & Ramamoorthi 2008 and measured by SVD — with a `--check` mode for CI.
 
-use super::common::{Bar, Outcome};
+use super::common::{Execution, Outcome};
 use super::factor_brdf::parse_memory;
 use crate::brdf::BrdfSpec;
 use crate::factor::count::{self, CountConfig, Material, Row};
@@ -64,9 +64,8 @@ pub struct Args {
     #[arg(long, default_value = "4G", value_parser = parse_memory)]
     pub max_memory: u128,
 
-    /// Do not draw progress bars.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub run: Execution,
 }
 
 /// Parses `25%` or `0.25`.
@@ -139,7 +138,7 @@ pub fn run(args: Args) -> Result<Outcome> {
         method: args.matrix.method,
         tolerance: args.tolerance,
     };
-    let bar = Bar::new(args.quiet);
+    let bar = args.run.start()?;
     let mut rows: Vec<Row> = Vec::new();
     let mut spectra = Vec::new();
     for m in &materials {

@@ -2,7 +2,7 @@
 //! report the exact error against the closed-form bounds, decode codes back, emit shader
 //! decoders, and reproduce Table 1 (`--table`).
 
-use super::common::{Bar, Outcome};
+use super::common::{init_threads, Bar, Execution, Outcome};
 use crate::io::{Document, Output, Provenance};
 use crate::normals::metrics::{self, ErrorStats, Histogram};
 use crate::normals::shader::{self, Language};
@@ -77,12 +77,8 @@ pub struct Args {
     /// Histogram bins in the report (over [0, max(bound, max error)]).
     #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub bins: u32,
-    /// Worker threads (0 = all cores); results do not depend on it.
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    /// No progress bar.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub run: Execution,
 }
 
 fn parse_scheme(s: &str) -> Result<Scheme, String> {
@@ -167,10 +163,7 @@ pub struct Replaced {
 
 /// Runs `encode-normals`.
 pub fn run(args: Args) -> Result<Outcome> {
-    if args.threads > 0 {
-        // Only fails if a global pool exists already (tests calling run twice); harmless then.
-        let _ = rayon::ThreadPoolBuilder::new().num_threads(args.threads).build_global();
-    }
+    init_threads(args.run.threads)?;
     let codec = Codec::new(args.scheme, args.bits.unwrap_or(32))?;
     if let Some(lang) = args.emit_decoder {
         Output::Stdout.write(shader::decoder(&codec, lang).as_bytes())?;
@@ -354,7 +347,7 @@ fn paper_48(scheme: &str) -> Option<f64> {
 }
 
 fn run_table(args: &Args) -> Result<Outcome> {
-    let bar = Bar::new(args.quiet);
+    let bar = Bar::new(args.run.quiet);
     let bits = args.bits.unwrap_or(48);
     let rows = table::table(TableConfig { bits, samples: args.samples, seed: args.seed }, &bar)?;
     if args.json {

@@ -1,7 +1,7 @@
 //! `factor-brdf`: the in-out SVD of one BRDF (Mahajan, Tseng & Ramamoorthi 2008): singular
 //! values, energy curve, K at 90/95/99/99.9 %, reconstruction error, factor maps.
 
-use super::common::{Bar, Outcome};
+use super::common::{Execution, Outcome};
 use crate::brdf::BrdfSpec;
 use crate::factor::document::{self, FactorBody, Reconstruction};
 use crate::factor::{energy, maps, svd, Channel, Domain, Method, Sampling};
@@ -48,9 +48,8 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
-    /// Do not draw progress bars.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub run: Execution,
 }
 
 /// Parses a memory size with an optional K/M/G/T suffix (powers of 1024).
@@ -130,7 +129,7 @@ pub fn run(args: Args) -> Result<Outcome> {
     let brdf = spec.load()?;
     let method = svd::resolve_method(&brdf, args.matrix.method)?;
     svd::check_budget(&sampling, method, terms, args.max_memory)?;
-    let bar = Bar::new(args.quiet);
+    let bar = args.run.start()?;
     let f = svd::factor(&brdf, &sampling, method, terms, &bar)?;
     let s = &f.singular_values;
     let cumulative = f.cumulative_energy();

@@ -1,7 +1,7 @@
 //! `prefilter`: frequency-space prefiltering and spherical harmonic reflection maps
 //! (Ramamoorthi & Hanrahan 2002), or the angular reference with `--method angular`.
 
-use super::common::{init_threads, parse_size, Bar, Outcome};
+use super::common::{parse_size, Execution, Outcome};
 use super::envinput::EnvInput;
 use crate::brdf::Brdf;
 use crate::envmap::{self, EnvMap, Layout};
@@ -139,13 +139,8 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
-    /// Worker threads (results do not depend on it).
-    #[arg(long)]
-    pub threads: Option<usize>,
-
-    /// No progress bars.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub run: Execution,
 }
 
 fn parse_orders(s: &str) -> Result<(usize, usize), String> {
@@ -179,8 +174,7 @@ fn parse_vec3(s: &str) -> Result<DVec3, String> {
 
 /// Runs `prefilter`.
 pub fn run(args: Args) -> Result<Outcome> {
-    init_threads(args.threads)?;
-    let bar = Bar::new(args.quiet);
+    let bar = args.run.start()?;
     if !(args.epsilon > 0.0 && args.epsilon < 1.0) {
         bail!("--epsilon must be in (0, 1), got {}", args.epsilon);
     }

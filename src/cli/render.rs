@@ -1,7 +1,7 @@
 //! `render`: images of each bake next to ground truth — SH irradiance, SHRMs, K-term factored
 //! relighting and a reference integrator — with error images, metrics and labelled panels.
 
-use super::common::{init_threads, parse_size, Bar, Outcome};
+use super::common::{parse_size, Execution, Outcome};
 use super::envinput::EnvInput;
 use crate::brdf::Brdf;
 use crate::factor::{Channel, Domain, Method, Sampling};
@@ -161,13 +161,8 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
-    /// Worker threads (default: all cores). Results do not depend on it.
-    #[arg(long)]
-    pub threads: Option<usize>,
-
-    /// Do not draw progress bars.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub run: Execution,
 }
 
 fn parse_point(s: &str) -> Result<DVec3, String> {
@@ -193,7 +188,7 @@ fn write_image(path: &Path, image: &RgbImage, exposure: f32) -> Result<()> {
 
 /// Runs `render`.
 pub fn run(args: Args) -> Result<Outcome> {
-    init_threads(args.threads)?;
+    let bar = args.run.start()?;
     let outputs: Vec<&PathBuf> =
         [&args.output, &args.png, &args.error_image, &args.metrics, &args.panel].into_iter().flatten().collect();
     if outputs.is_empty() && !args.json {
@@ -250,7 +245,6 @@ pub fn run(args: Args) -> Result<Outcome> {
         bail!("--panel-item LABEL=- (this render) may be given once");
     }
 
-    let bar = Bar::new(args.quiet);
     let start = Instant::now();
     let mut extra = serde_json::Map::new();
     let label;

@@ -1,7 +1,7 @@
 //! `sh-project`: project an environment map onto spherical harmonics (Ramamoorthi & Hanrahan
 //! 2002, §6.1, App. C step 1), choosing the order from a tolerance (§5.1) if asked.
 
-use super::common::{init_threads, parse_size, Bar, Outcome};
+use super::common::{parse_size, Execution, Outcome};
 use super::envinput::EnvInput;
 use crate::envmap::{EnvMap, Layout};
 use crate::io::document::{to_json_pretty, Document, Provenance};
@@ -63,18 +63,13 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
-    /// Worker threads (default: all cores). Results do not depend on it.
-    #[arg(long)]
-    pub threads: Option<usize>,
-
-    /// Do not draw progress bars.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub run: Execution,
 }
 
 /// Runs `sh-project`.
 pub fn run(args: Args) -> Result<Outcome> {
-    init_threads(args.threads)?;
+    let bar = args.run.start()?;
     let output = Output::parse(&args.output);
     super::common::check_json_output(&output, args.json)?;
     output.check_writable()?;
@@ -91,7 +86,6 @@ pub fn run(args: Args) -> Result<Outcome> {
     let start = std::time::Instant::now();
     let map = args.input.load()?;
     let read_seconds = start.elapsed().as_secs_f64();
-    let bar = Bar::new(args.quiet);
     let t = std::time::Instant::now();
     let projection = project_choosing_order(&map, choice, &bar)
         .with_context(|| format!("{}: cannot project", args.input.path.display()))?;
