@@ -45,50 +45,48 @@ fn torus_knot(segments: usize, sides: usize, radius: f64) -> (Vec<DVec3>, Vec<DV
     (pos, nrm, tri)
 }
 
+/// An OBJ file: a comment line, `v` lines with `decimals` digits, `vn` lines when normals are
+/// given, and 1-based faces (`f a//a …` with normals, `f a …` without).
+fn obj(header: &str, positions: &[DVec3], normals: Option<&[DVec3]>, faces: &[[usize; 3]], decimals: usize) -> String {
+    let mut s = format!("# {header}\n");
+    for (tag, vs) in [("v", Some(positions)), ("vn", normals)] {
+        for v in vs.unwrap_or_default() {
+            let _ = writeln!(s, "{tag} {:.*} {:.*} {:.*}", decimals, v.x, decimals, v.y, decimals, v.z);
+        }
+    }
+    for f in faces {
+        let [a, b, c] = f.map(|i| i + 1);
+        let _ = match normals {
+            Some(_) => writeln!(s, "f {a}//{a} {b}//{b} {c}//{c}"),
+            None => writeln!(s, "f {a} {b} {c}"),
+        };
+    }
+    s
+}
+
 fn main() -> std::io::Result<()> {
     let (p, t) = prtkit::render::mesh::uv_sphere(16, 32);
-    let mut s = String::from("# UV sphere, 16 rings x 32 segments, unit radius, exact normals\n");
-    for v in &p {
-        let _ = writeln!(s, "v {:.6} {:.6} {:.6}", v.x, v.y, v.z);
-    }
-    for v in &p {
-        let _ = writeln!(s, "vn {:.6} {:.6} {:.6}", v.x, v.y, v.z);
-    }
-    for f in &t {
-        let _ = writeln!(s, "f {0}//{0} {1}//{1} {2}//{2}", f[0] + 1, f[1] + 1, f[2] + 1);
-    }
-    std::fs::write("testdata/meshes/sphere.obj", s)?;
+    let t: Vec<[usize; 3]> = t.iter().map(|f| f.map(|i| i as usize)).collect();
+    let header = "UV sphere, 16 rings x 32 segments, unit radius, exact normals";
+    std::fs::write("testdata/meshes/sphere.obj", obj(header, &p, Some(&p), &t, 6))?;
     // Bowl: the lower half of the sphere (a cup opening towards +Z), no normals: concave inside,
     // so the inner wall shadows itself.
-    let mut b = String::from("# lower hemisphere shell (a bowl opening to +Z), no normals\n");
-    let keep: Vec<bool> = p.iter().map(|v| v.z <= 1e-9).collect();
-    let mut map = vec![0usize; p.len()];
-    let mut k = 0;
-    for (i, v) in p.iter().enumerate() {
-        if keep[i] {
-            k += 1;
-            map[i] = k;
-            let _ = writeln!(b, "v {:.6} {:.6} {:.6}", v.x, v.y, v.z);
-        }
+    let keep: Vec<usize> = (0..p.len()).filter(|&i| p[i].z <= 1e-9).collect();
+    let mut map = vec![usize::MAX; p.len()];
+    for (new, &old) in keep.iter().enumerate() {
+        map[old] = new;
     }
-    for f in &t {
-        if f.iter().all(|&i| keep[i as usize]) {
-            // Reversed winding: the computed normals point into the bowl (its concave, lit side).
-            let _ = writeln!(b, "f {} {} {}", map[f[0] as usize], map[f[2] as usize], map[f[1] as usize]);
-        }
-    }
-    std::fs::write("testdata/meshes/bowl.obj", b)?;
+    let bowl: Vec<DVec3> = keep.iter().map(|&i| p[i]).collect();
+    // Reversed winding: the computed normals point into the bowl (its concave, lit side).
+    let faces: Vec<[usize; 3]> = t
+        .iter()
+        .filter(|f| f.iter().all(|&i| map[i] != usize::MAX))
+        .map(|f| [map[f[0]], map[f[2]], map[f[1]]])
+        .collect();
+    let header = "lower hemisphere shell (a bowl opening to +Z), no normals";
+    std::fs::write("testdata/meshes/bowl.obj", obj(header, &bowl, None, &faces, 6))?;
     let (p, n, t) = torus_knot(160, 12, 0.11);
-    let mut k = String::from("# (2,3) torus knot tube, 160 x 12 vertices, exact normals\n");
-    for v in &p {
-        let _ = writeln!(k, "v {:.5} {:.5} {:.5}", v.x, v.y, v.z);
-    }
-    for v in &n {
-        let _ = writeln!(k, "vn {:.5} {:.5} {:.5}", v.x, v.y, v.z);
-    }
-    for f in &t {
-        let _ = writeln!(k, "f {0}//{0} {1}//{1} {2}//{2}", f[0] + 1, f[1] + 1, f[2] + 1);
-    }
-    std::fs::write("testdata/meshes/torus-knot.obj", k)?;
+    let header = "(2,3) torus knot tube, 160 x 12 vertices, exact normals";
+    std::fs::write("testdata/meshes/torus-knot.obj", obj(header, &p, Some(&n), &t, 5))?;
     Ok(())
 }

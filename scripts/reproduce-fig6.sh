@@ -11,12 +11,7 @@ cargo build --release --quiet --bin render --bin sample-shader --bin factor-brdf
 bin=target/release
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-env=../shared/testdata/envmaps/grace_probe_250.pfm
-if [ ! -f "$env" ]; then
-    echo "reproduce-fig6: $env absent; using the procedural sky" >&2
-    "$bin/sample-shader" testdata/shaders/sky.sl --latlong 512x256 --tolerance 0.05 -o "$tmp/sky.exr" -q
-    env="$tmp/sky.exr"
-fi
+. scripts/light-probe.sh
 common=(--brdf phong:s=30 --res "${res}x${res}" --eye 0,-4,0.8 --fov 30 -q)
 "$bin/render" "$env" "${common[@]}" --shading reference -o "$tmp/ref.exr"
 # factor-brdf: 64x64 (cos θ, φ) cells per hemisphere, cosine folded in, the leading 75 factors

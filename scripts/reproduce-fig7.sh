@@ -12,12 +12,7 @@ cargo build --release --quiet --bin render --bin prefilter --bin sample-shader
 bin=target/release
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-env=../shared/testdata/envmaps/grace_probe_250.pfm
-if [ ! -f "$env" ]; then
-    echo "reproduce-fig7: $env absent; using the procedural sky" >&2
-    "$bin/sample-shader" testdata/shaders/sky.sl --latlong 512x256 --tolerance 0.05 -o "$tmp/sky.exr" -q
-    env="$tmp/sky.exr"
-fi
+. scripts/light-probe.sh
 brdf=torrance-sparrow:sigma=0.2
 # Two views, each with one view direction for the whole image as in the paper (its (θ̄_o, φ̄_o)):
 # a distant camera with a narrow field, so the global SHRM's single reflection map per view

@@ -8,9 +8,10 @@
 //! the L²-normalized factors (Σ g² ΔΩ = 1) as 32-bit floats; σ_k stay in the JSON.
 
 use super::{Channel, Domain, Factorization, Grid, Method};
+use crate::io::document::{named_file, read_document, BundleError};
 use crate::io::{self, IoError};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Document kind.
 pub const FORMAT: &str = "prtkit.factor";
@@ -82,31 +83,8 @@ pub struct FactorsFile {
 /// The layout sentence recorded in documents.
 pub const LAYOUT: &str = "grey layers g and h, n wide and K*n high: term k is rows k*n..k*n+n-1, row j = cos(theta) bin from the pole, column = phi bin; L2-normalized factors";
 
-/// Errors of reading a factorization back.
-#[derive(Debug, thiserror::Error)]
-pub enum FactorLoadError {
-    /// I/O or EXR decoding.
-    #[error(transparent)]
-    Io(#[from] IoError),
-    /// The JSON document is not a valid `prtkit.factor`, or lacks what was asked of it.
-    #[error("{path}: {reason}")]
-    Document {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong.
-        reason: String,
-    },
-    /// The EXR does not match its document.
-    #[error("{exr}: does not match {doc}: {reason}")]
-    Mismatch {
-        /// The EXR.
-        exr: PathBuf,
-        /// The JSON.
-        doc: PathBuf,
-        /// What differs.
-        reason: String,
-    },
-}
+/// Errors of reading a factorization back: the document/EXR pair's errors.
+pub type FactorLoadError = BundleError;
 
 /// The first `terms` factors of `f` as the two layers of the factor file: (width, height, g, h).
 pub fn factor_layers(f: &Factorization, terms: usize) -> (usize, usize, Vec<f32>, Vec<f32>) {
@@ -128,8 +106,7 @@ pub fn write_factors(path: &Path, f: &Factorization, terms: usize) -> Result<Fac
 /// the document's resolution. The factors come back as f64 (they were stored as f32).
 pub fn load(doc_path: &Path) -> Result<(FactorBody, Factorization), FactorLoadError> {
     let bad = |reason: String| FactorLoadError::Document { path: doc_path.into(), reason };
-    let text = String::from_utf8(io::read_bytes(doc_path)?).map_err(|_| bad("not UTF-8 text".into()))?;
-    let body = io::document::parse_document::<FactorBody>(&text, FORMAT, VERSION).map_err(bad)?.body;
+    let body = read_document::<FactorBody>(doc_path, FORMAT, VERSION)?.body;
     let entry = body.factors.clone().ok_or_else(|| {
         bad("the document names no factor file; run factor-brdf with --factors FILE.exr --terms K".into())
     })?;
@@ -137,10 +114,7 @@ pub fn load(doc_path: &Path) -> Result<(FactorBody, Factorization), FactorLoadEr
     if n < 2 || body.directions_per_side != n * n {
         return Err(bad(format!("resolution {n} and directions_per_side {} disagree", body.directions_per_side)));
     }
-    let mut exr = PathBuf::from(&entry.file);
-    if exr.is_relative() && !exr.exists() {
-        exr = doc_path.parent().unwrap_or(Path::new(".")).join(Path::new(&entry.file).file_name().unwrap_or_default());
-    }
+    let exr = named_file(doc_path, &entry.file);
     let layers = io::exr::decode_layers(&exr, &io::read_bytes(&exr)?)?;
     let mismatch = |reason: String| FactorLoadError::Mismatch { exr: exr.clone(), doc: doc_path.into(), reason };
     let mut tiles = Vec::with_capacity(2);

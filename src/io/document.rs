@@ -105,3 +105,52 @@ pub fn parse_document<T: for<'de> Deserialize<'de>>(
     }
     serde_json::from_value(head).map_err(|e| format!("invalid {expected_format} document: {e}"))
 }
+
+/// Errors of reading a document together with the EXR it names (an SHRM, a factor file).
+#[derive(Debug, thiserror::Error)]
+pub enum BundleError {
+    /// I/O or EXR decoding.
+    #[error(transparent)]
+    Io(#[from] super::IoError),
+    /// The JSON document is not valid, or lacks what was asked of it.
+    #[error("{path}: {reason}")]
+    Document {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The EXR does not match its document.
+    #[error("{exr}: does not match {doc}: {reason}")]
+    Mismatch {
+        /// The EXR.
+        exr: std::path::PathBuf,
+        /// The JSON.
+        doc: std::path::PathBuf,
+        /// What differs.
+        reason: String,
+    },
+}
+
+/// Reads the document at `path` as `format` (versions up to `max_version`), naming the file in
+/// every error.
+pub fn read_document<T: for<'de> Deserialize<'de>>(
+    path: &std::path::Path,
+    format: &str,
+    max_version: u32,
+) -> Result<Document<T>, BundleError> {
+    let bad = |reason: String| BundleError::Document { path: path.into(), reason };
+    let text = String::from_utf8(super::read_bytes(path)?).map_err(|_| bad("not UTF-8 text".into()))?;
+    parse_document(&text, format, max_version).map_err(bad)
+}
+
+/// The file a document names: as written when that exists (or is absolute), else the file of
+/// that name beside the document — so a document and its EXR can be moved together.
+pub fn named_file(doc: &std::path::Path, file: &str) -> std::path::PathBuf {
+    let as_written = std::path::PathBuf::from(file);
+    if as_written.is_absolute() || as_written.exists() {
+        return as_written;
+    }
+    let dir = doc.parent().unwrap_or(std::path::Path::new("."));
+    dir.join(std::path::Path::new(file).file_name().unwrap_or_default())
+}

@@ -8,6 +8,7 @@
 //! - Lambert SHRMs (`parameterization: normal`) are indexed by n and view-independent.
 
 use super::{Hit, Shade};
+use crate::io::document::{named_file, read_document, BundleError};
 use crate::io::RgbImage;
 use crate::prefilter::document::{layer_name, ShrmBody, FORMAT, VERSION};
 use crate::prefilter::shrm::{reflection_map, Shrm};
@@ -16,42 +17,15 @@ use crate::sh::legendre::LegendreTable;
 use crate::sh::{count, index};
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// Errors of reading an SHRM.
-#[derive(Debug, thiserror::Error)]
-pub enum ShrmLoadError {
-    /// I/O or EXR decoding.
-    #[error(transparent)]
-    Io(#[from] crate::io::IoError),
-    /// The JSON document is not a valid `prtkit.shrm`.
-    #[error("{path}: {reason}")]
-    Document {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong.
-        reason: String,
-    },
-    /// The EXR does not match its document.
-    #[error("{exr}: does not match {doc}: {reason}")]
-    Mismatch {
-        /// The EXR.
-        exr: PathBuf,
-        /// The JSON.
-        doc: PathBuf,
-        /// What differs.
-        reason: String,
-    },
-}
+/// Errors of reading an SHRM: the document/EXR pair's errors.
+pub type ShrmLoadError = BundleError;
 
 /// Reads a `prtkit.shrm` document and the SHRM EXR it names (relative to the document's
 /// directory when not absolute), checking layout, layer names and grid size.
 pub fn load(doc_path: &Path) -> Result<(Shrm, ShrmBody), ShrmLoadError> {
-    let text = String::from_utf8(crate::io::read_bytes(doc_path)?)
-        .map_err(|_| ShrmLoadError::Document { path: doc_path.into(), reason: "not UTF-8 text".into() })?;
-    let doc = crate::io::document::parse_document::<ShrmBody>(&text, FORMAT, VERSION)
-        .map_err(|reason| ShrmLoadError::Document { path: doc_path.into(), reason })?;
-    let body = doc.body;
+    let body = read_document::<ShrmBody>(doc_path, FORMAT, VERSION)?.body;
     let bad = |reason: String| ShrmLoadError::Document { path: doc_path.into(), reason };
     if body.layout != "latlong" {
         return Err(bad(format!(
@@ -63,10 +37,7 @@ pub fn load(doc_path: &Path) -> Result<(Shrm, ShrmBody), ShrmLoadError> {
         return Err(bad(format!("unknown parameterization {:?}", body.parameterization)));
     }
     let file = body.shrm_file.clone().ok_or_else(|| bad("the document names no shrm_file".into()))?;
-    let mut exr = PathBuf::from(&file);
-    if exr.is_relative() && !exr.exists() {
-        exr = doc_path.parent().unwrap_or(Path::new(".")).join(Path::new(&file).file_name().unwrap_or_default());
-    }
+    let exr = named_file(doc_path, &file);
     let layers = crate::io::exr::decode_layers(&exr, &crate::io::read_bytes(&exr)?)?;
     let mismatch = |reason: String| ShrmLoadError::Mismatch { exr: exr.clone(), doc: doc_path.into(), reason };
     let n = count(body.p_b);
