@@ -1,15 +1,17 @@
 //! Cost of one area sample relative to one point sample (Heidrich, Slusallek & Seidel 1998,
 //! Table 1: 1:5.4 to 1:10.4), per shader of `testdata/shaders`, single-threaded.
 //!
-//! Every node of one quadtree level (`SHADER_COST_DEPTH`, default 7: 128×128 nodes) is evaluated
-//! once per arithmetic through the same interpreter and the same `evaluate_node` the sampler
-//! uses; point mode takes 8 random points per node. The arithmetics alternate for
-//! `SHADER_COST_ROUNDS` rounds (default 5) and the fastest round of each counts, so that load
-//! from other processes on a shared machine distorts the ratio less than one sequential run.
+//! The full quadtree down to `SHADER_COST_DEPTH` (default 8: 87381 nodes, as in the equal-depth
+//! table of `scripts/reproduce-shader-table.sh`) is sampled once per arithmetic by the sampler
+//! itself on one thread; point mode takes 8 random points per node. The arithmetics alternate
+//! for `SHADER_COST_ROUNDS` rounds (default 3) and the fastest round of each counts, so that
+//! load from other processes on a shared machine distorts the ratio less than one sequential
+//! run.
 //!
 //! Run: `cargo bench --bench shader_cost`.
 
-use prtkit::shader::sampler::{evaluate_node, Arith, Domain, SampleConfig};
+use prtkit::progress::NoProgress;
+use prtkit::shader::sampler::{sample, Arith, Domain, SampleConfig};
 use prtkit::shader::Shader;
 use std::time::Instant;
 
@@ -20,8 +22,8 @@ fn env_or(name: &str, default: u32) -> u32 {
     std::env::var(name).ok().and_then(|s| s.parse().ok()).unwrap_or(default)
 }
 
-/// Seconds to evaluate every node of `depth` once in `arith`.
-fn time_level(shader: &Shader, arith: Arith, depth: u32) -> f64 {
+/// Seconds to sample the full tree down to `depth` in `arith`, and the evaluations made.
+fn time_tree(shader: &Shader, arith: Arith, depth: u32) -> (f64, u64) {
     let cfg = SampleConfig {
         tolerance: 0.0,
         max_depth: depth,
@@ -30,27 +32,17 @@ fn time_level(shader: &Shader, arith: Arith, depth: u32) -> f64 {
         points_per_node: POINTS_PER_NODE,
         seed: 1,
     };
-    let n = 1u32 << depth;
     let start = Instant::now();
-    for iy in 0..n {
-        for ix in 0..n {
-            match evaluate_node(shader, &cfg, depth, ix, iy) {
-                Ok(node) => {
-                    std::hint::black_box(node);
-                }
-                Err(e) => panic!("{e}"),
-            }
-        }
-    }
-    start.elapsed().as_secs_f64()
+    let sampled = sample(shader, &cfg, &NoProgress).unwrap_or_else(|e| panic!("{e}"));
+    (start.elapsed().as_secs_f64(), sampled.evaluations)
 }
 
 fn main() {
-    let depth = env_or("SHADER_COST_DEPTH", 7);
-    let rounds = env_or("SHADER_COST_ROUNDS", 5).max(1);
+    let depth = env_or("SHADER_COST_DEPTH", 8);
+    let rounds = env_or("SHADER_COST_ROUNDS", 3).max(1);
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/testdata/shaders");
-    let nodes = (1u64 << depth) * (1u64 << depth);
-    println!("shader_cost: depth {depth} ({nodes} nodes), {rounds} rounds, fastest round of each arithmetic");
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap_or_else(|e| panic!("{e}"));
+    println!("shader_cost: full tree to depth {depth}, one thread, {rounds} rounds, fastest round of each arithmetic");
     println!(
         "| shader | affine µs/sample | interval µs/sample | point µs/sample | affine : point | interval : point |"
     );
@@ -62,14 +54,11 @@ fn main() {
         let mut best = [f64::INFINITY; 3];
         for _ in 0..rounds {
             for (k, arith) in [Arith::Affine, Arith::Interval, Arith::Point].into_iter().enumerate() {
-                best[k] = best[k].min(time_level(&shader, arith, depth));
+                let (seconds, evaluations) = pool.install(|| time_tree(&shader, arith, depth));
+                best[k] = best[k].min(seconds / evaluations as f64 * 1e6);
             }
         }
-        let per = |k: usize| {
-            let samples = if k == 2 { nodes * POINTS_PER_NODE as u64 } else { nodes };
-            best[k] / samples as f64 * 1e6
-        };
-        let (a, i, p) = (per(0), per(1), per(2));
+        let (a, i, p) = (best[0], best[1], best[2]);
         println!("| {name} | {a:.2} | {i:.2} | {p:.3} | 1:{:.2} | 1:{:.2} |", a / p, i / p);
     }
 }

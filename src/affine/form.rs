@@ -416,6 +416,47 @@ impl Affine {
         z
     }
 
+    /// A first-order Taylor extension (§3's recipe for univariate functions — an affine
+    /// approximation plus a new symbol for its error — applied to a multivariate one): the form
+    /// `value + Σ gₖ·(x̂ₖ − cₖ) + delta·ε_new` for `(x̂ₖ, cₖ, gₖ)` in `xs`. The caller guarantees
+    /// |f(x) − value − Σ gₖ·(xₖ − cₖ)| ≤ `delta` over the forms' joint range, including the
+    /// rounding of its point evaluation; the rounding of this form's own coefficients and centre
+    /// is added here. `iv` is a valid enclosure of f over the range.
+    pub fn taylor(xs: &[(&Affine, f64, f64)], value: f64, delta: f64, iv: Interval) -> Affine {
+        if xs.iter().any(|(x, _, _)| x.is_unbounded()) || !(value.is_finite() && delta.is_finite()) {
+            return Affine::from_interval(iv);
+        }
+        let (mut centre, mut centre_mags) = (value, value.abs());
+        let (mut terms, mut mags, mut sum, mut carried) = (Terms::new(), 0.0, 0.0, 0.0);
+        for &(x, c, g) in xs {
+            let d = x.centre - c;
+            centre += g * d;
+            centre_mags += d.abs() * (1.0 + g.abs()) + centre.abs();
+            carried = up(carried + up(g.abs() * x.err));
+            if x.terms.is_empty() {
+                continue;
+            }
+            let mut out = Terms::with_capacity(terms.len() + x.terms.len() + 1);
+            let (m, s) = Affine::merge(&terms, 1.0, &x.terms, g, &mut out);
+            mags += m;
+            sum = s;
+            terms = out;
+        }
+        // Each coefficient and the centre take a few roundings (products, sums): bounded like
+        // `linear`'s, with the magnitudes of every partial result.
+        let own = rounding(4.0 * (mags + centre_mags), terms.len() + 2 * xs.len() + 1);
+        let err = up(carried + own);
+        let rad = sum_bound(sum, terms.len());
+        let mut z = Affine { centre, terms, rad, err, iv }.finish();
+        if z.is_unbounded() {
+            return z;
+        }
+        if delta > 0.0 {
+            z.push_fresh(delta);
+        }
+        z.finish()
+    }
+
     /// Join of two values (both branches of a condition over a range): ½(x + y) + M·ε_new with
     /// M ≥ max |½(x − y)|, so both x and y are values of the result and shared symbols survive.
     pub fn join(&self, o: &Affine) -> Affine {

@@ -83,6 +83,20 @@ pub trait Real: Clone + PartialEq + std::fmt::Debug + Send + Sync + 'static {
     fn fade(&self) -> Self;
     /// A value that may be `self` or `o` (both branches of a condition over a range).
     fn join(&self, o: &Self) -> Self;
+    /// The central value and the guaranteed range of a value that depends to first order on
+    /// the inputs (an affine form); `None` for points and intervals. Multivariate primitives
+    /// (gradient noise) then use a first-order Taylor extension ([`Real::taylor`]) instead of
+    /// evaluating their formula operation by operation.
+    fn first_order(&self) -> Option<(f64, Interval)> {
+        None
+    }
+    /// f(x₁, …, xₙ) ∈ `value` + Σ gₖ·(xₖ − cₖ) ± `delta` for `(xₖ, cₖ, gₖ)` in `xs`: the caller
+    /// has bounded the remainder of the expansion at c by `delta` over the whole range of the
+    /// xₖ; the result lies in `iv`. Only called when every xₖ has [`Real::first_order`].
+    fn taylor(xs: &[(&Self, f64, f64)], value: f64, delta: f64, iv: Interval) -> Self {
+        let _ = (xs, value, delta);
+        Self::from_interval(iv)
+    }
     /// The sign over the whole range.
     fn sign(&self) -> Sign {
         let b = self.bounds();
@@ -514,5 +528,11 @@ impl Real for Affine {
     }
     fn join(&self, o: &Self) -> Self {
         Affine::join(self, o)
+    }
+    fn first_order(&self) -> Option<(f64, Interval)> {
+        (!self.is_unbounded()).then(|| (self.centre(), self.range()))
+    }
+    fn taylor(xs: &[(&Self, f64, f64)], value: f64, delta: f64, iv: Interval) -> Self {
+        Affine::taylor(xs, value, delta, iv)
     }
 }
