@@ -416,6 +416,20 @@ impl Affine {
         z
     }
 
+    /// Whether the two forms have a noise symbol in common (a merge of the sorted id lists).
+    pub fn shares_symbols(&self, o: &Affine) -> bool {
+        let (x, y) = (&self.terms, &o.terms);
+        let (mut i, mut j) = (0, 0);
+        while i < x.len() && j < y.len() {
+            match x[i].0.cmp(&y[j].0) {
+                std::cmp::Ordering::Less => i += 1,
+                std::cmp::Ordering::Greater => j += 1,
+                std::cmp::Ordering::Equal => return true,
+            }
+        }
+        false
+    }
+
     /// A first-order Taylor extension (§3's recipe for univariate functions — an affine
     /// approximation plus a new symbol for its error — applied to a multivariate one): the form
     /// `value + Σ gₖ·(x̂ₖ − cₖ) + delta·ε_new` for `(x̂ₖ, cₖ, gₖ)` in `xs`. The caller guarantees

@@ -90,6 +90,11 @@ pub trait Real: Clone + PartialEq + std::fmt::Debug + Send + Sync + 'static {
     fn first_order(&self) -> Option<(f64, Interval)> {
         None
     }
+    /// Whether two first-order values depend on a common noise symbol (are correlated).
+    fn shares_symbols(&self, o: &Self) -> bool {
+        let _ = o;
+        false
+    }
     /// f(x₁, …, xₙ) ∈ `value` + Σ gₖ·(xₖ − cₖ) ± `delta` for `(xₖ, cₖ, gₖ)` in `xs`: the caller
     /// has bounded the remainder of the expansion at c by `delta` over the whole range of the
     /// xₖ; the result lies in `iv`. Only called when every xₖ has [`Real::first_order`].
@@ -531,6 +536,9 @@ impl Real for Affine {
     }
     fn first_order(&self) -> Option<(f64, Interval)> {
         (!self.is_unbounded()).then(|| (self.centre(), self.range()))
+    }
+    fn shares_symbols(&self, o: &Self) -> bool {
+        Affine::shares_symbols(self, o)
     }
     fn taylor(xs: &[(&Self, f64, f64)], value: f64, delta: f64, iv: Interval) -> Self {
         Affine::taylor(xs, value, delta, iv)

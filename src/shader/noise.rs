@@ -20,6 +20,9 @@ use std::sync::OnceLock;
 /// Most lattice cells evaluated one by one for a range.
 pub const MAX_CELLS: i64 = 64;
 
+/// Ranges over at most this many cells get the tightest bound of each cell (see [`snoise`]).
+const FEW_CELLS: i64 = 4;
+
 /// Rigorous bound on |snoise| by dimension (module docs), with room for rounding.
 pub fn bound(dim: usize) -> f64 {
     if dim == 1 {
@@ -228,10 +231,14 @@ fn cell_gradient(dim: usize, t: &[f64; 3], e: &[[f64; 3]; 8], g: &[[f64; 3]; 8],
 const HESSIAN_SLACK: f64 = 1e-9;
 
 /// Width of the sub-boxes over which the second derivatives are bounded (see [`hessian_hull`]).
-const HESSIAN_PIECE: f64 = 0.0625;
+const HESSIAN_PIECE: f64 = 0.07;
 
-/// Most sub-boxes per axis.
-const HESSIAN_PIECES: usize = 2;
+/// Most sub-boxes per axis for a range inside one cell.
+const HESSIAN_PIECES: usize = 4;
+
+/// Most sub-boxes per axis for each cell of a range that straddles several (many cells at
+/// coarse levels; only the hull of their bounds is kept).
+const MULTI_CELL_PIECES: usize = 2;
 
 /// An interval of plain `f64` arithmetic (rounding is covered by [`HESSIAN_SLACK`]).
 #[derive(Clone, Copy, Debug)]
@@ -380,12 +387,12 @@ fn hessian_ranges(m: usize, bx: &[Iv; 3], lin: &[Lin; 8]) -> ([Iv; 3], [[f64; 3]
 }
 
 /// Second-derivative ranges over the box, as the hull of the ranges over sub-boxes at most
-/// [`HESSIAN_PIECE`] wide (up to [`HESSIAN_PIECES`] per axis): interval evaluation overestimates
+/// [`HESSIAN_PIECE`] wide (up to `most` per axis): interval evaluation overestimates
 /// in proportion to the width, the Lagrange remainder only needs a valid range.
-fn hessian_hull(m: usize, bx: &[Iv; 3], lin: &[Lin; 8]) -> ([Iv; 3], [[f64; 3]; 3]) {
+fn hessian_hull(m: usize, bx: &[Iv; 3], lin: &[Lin; 8], most: usize) -> ([Iv; 3], [[f64; 3]; 3]) {
     let mut pieces = [1usize; 3];
     for k in 0..m {
-        pieces[k] = (((bx[k].1 - bx[k].0) / HESSIAN_PIECE).ceil() as usize).clamp(1, HESSIAN_PIECES);
+        pieces[k] = (((bx[k].1 - bx[k].0) / HESSIAN_PIECE).ceil() as usize).clamp(1, most.max(1));
     }
     if pieces == [1; 3] {
         return hessian_ranges(m, bx, lin);
@@ -424,7 +431,7 @@ fn hessian_hull(m: usize, bx: &[Iv; 3], lin: &[Lin; 8]) -> ([Iv; 3], [[f64; 3]; 
 /// operations and 10 new symbols of the formula. Axes whose t is exactly known (rᵢ = 0) drop
 /// out of R; their corners are folded beforehand. Returns the form and the largest rᵢ;
 /// `None` for arithmetics without first-order terms.
-fn taylor_cell<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3]) -> Option<(N, f64)> {
+fn taylor_cell<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3], pieces: usize) -> Option<(N, f64)> {
     let (mut c, mut r) = ([0.0; 3], [0.0; 3]);
     let mut bx = [Iv::point(0.0); 3];
     let mut active = 0usize;
@@ -468,7 +475,7 @@ fn taylor_cell<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3]) -> Option<(N, f6
         let f = full[fc];
         lin[rc] = Lin(std::array::from_fn(|a| if a < m { f.0[axes[a]] } else { 0.0 }), f.1);
     }
-    let (diag, off) = hessian_hull(m, &rbx, &lin);
+    let (diag, off) = hessian_hull(m, &rbx, &lin, pieces);
     let (mut rlo, mut rhi, mut rounding) = (0.0, 0.0, VALUE_ROUNDING);
     for i in 0..m {
         let r2 = 0.5 * rr[i] * rr[i];
@@ -492,17 +499,23 @@ fn taylor_cell<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3]) -> Option<(N, f6
     Some((N::taylor(&xs, centre, delta, Interval::new(-bound(dim), bound(dim))), rmax))
 }
 
-/// Largest half-width of a t range for which the Taylor extension alone is used. The
-/// remainder grows with r², the formula's error terms more slowly on wide ranges: averaged
-/// over random cells the Taylor form is the narrower one up to r ≈ 0.08 (2-D ranges in 3-D
-/// noise), so beyond this both are computed and the narrower kept.
-const TAYLOR_ONLY_RADIUS: f64 = 0.08;
+/// Largest half-width of the t ranges for which the Taylor extension alone is used. Its
+/// remainder grows with r² (less so with more sub-boxes), the formula's error terms more slowly
+/// on wide ranges: averaged over random cells with independent inputs the Taylor form is the
+/// narrower one up to r ≈ 0.15 (2-D and 3-D noise, up to 4 sub-boxes per axis); beyond, both
+/// are computed and the narrower kept.
+const TAYLOR_ONLY_RADIUS: f64 = 0.15;
+
+/// The same for inputs that share noise symbols (e.g. the direction in lat-long mode): the
+/// remainder is bounded over the whole box of t, which correlated inputs do not fill, and the
+/// formula keeps the correlation; from r ≈ 0.03 on it is the narrower one on average.
+const TAYLOR_ONLY_RADIUS_CORRELATED: f64 = 0.02;
 
 /// Noise in one cell: the Taylor extension where the arithmetic has one (and the formula as
 /// well on wide ranges, keeping the narrower), else the formula.
-fn cell_value<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3]) -> N {
-    match taylor_cell(dim, cell, t) {
-        Some((v, r)) if r <= TAYLOR_ONLY_RADIUS => v,
+fn cell_value<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3], pieces: usize) -> N {
+    match taylor_cell(dim, cell, t, pieces) {
+        Some((v, r)) if r <= TAYLOR_ONLY_RADIUS_CORRELATED || r <= TAYLOR_ONLY_RADIUS && !correlated(dim, t) => v,
         Some((v, _)) => {
             let f = cell_eval(dim, cell, t);
             if f.bounds().width() < v.bounds().width() {
@@ -513,6 +526,11 @@ fn cell_value<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3]) -> N {
         }
         None => cell_eval(dim, cell, t),
     }
+}
+
+/// Whether two of the first `dim` coordinates share a noise symbol.
+fn correlated<N: Real>(dim: usize, t: &[N; 3]) -> bool {
+    (0..dim).any(|i| (i + 1..dim).any(|j| t[i].shares_symbols(&t[j])))
 }
 
 /// Signed gradient noise of `p` (the first `dim` coordinates are used).
@@ -530,13 +548,16 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
         let cell = [lo[0], lo[1], lo[2]];
         let t: [N; 3] =
             std::array::from_fn(|k| if k < dim { p[k].sub(&N::constant(cell[k] as f64)) } else { N::constant(0.0) });
-        return cell_value(dim, cell, &t);
+        return cell_value(dim, cell, &t, HESSIAN_PIECES);
     }
     if counts.iter().product::<i64>() > MAX_CELLS {
         return global();
     }
     // Each touched cell on its part of the box, in the caller's arithmetic with fresh inputs
-    // (affine stays tighter than interval inside a cell); the hull of the cells' bounds.
+    // (affine stays tighter than interval inside a cell); the hull of the cells' bounds. A range
+    // over many cells (coarse quadtree levels, far wider than any tolerance) takes the cheap
+    // Taylor bound of each cell alone.
+    let few = counts.iter().product::<i64>() <= FEW_CELLS;
     let mut hull: Option<Interval> = None;
     for cx in lo[0]..=hi[0] {
         for cy in lo[1]..=hi[1] {
@@ -552,10 +573,13 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
                         N::constant(0.0)
                     }
                 });
-                // Only bounds are kept: the Taylor extension alone (cheap) where available.
-                let v = match taylor_cell(dim, cell, &t) {
-                    Some((v, _)) => v.bounds(),
-                    None => cell_eval::<N>(dim, cell, &t).bounds(),
+                let v = if few {
+                    cell_value::<N>(dim, cell, &t, MULTI_CELL_PIECES).bounds()
+                } else {
+                    match taylor_cell(dim, cell, &t, 1) {
+                        Some((v, _)) => v.bounds(),
+                        None => cell_eval::<N>(dim, cell, &t).bounds(),
+                    }
                 };
                 hull = Some(hull.map_or(v, |h| h.hull(v)));
             }
@@ -653,7 +677,7 @@ mod cmp_tmp {
                     let cell = [b[0].lo.floor() as i64, b[1].lo.floor() as i64, b[2].lo.floor() as i64];
                     let t: [Affine; 3] = std::array::from_fn(|k| p[k].sub(&Affine::constant(cell[k] as f64)));
                     let chain = cell_eval(3, cell, &t).range().width();
-                    let tay = taylor_cell(3, cell, &t).unwrap().0.range().width();
+                    let tay = taylor_cell(3, cell, &t, HESSIAN_PIECES).unwrap().0.range().width();
                     wc += chain;
                     wt += tay;
                     cnt += 1;
