@@ -163,11 +163,8 @@ impl Affine {
 
     /// Guaranteed bounds: the affine range [x₀ − r, x₀ + r] intersected with the interval.
     pub fn range(&self) -> Interval {
-        if self.is_unbounded() {
-            return self.iv;
-        }
-        let r = self.radius();
-        Interval::new(super::interval::down(self.centre - r), up(self.centre + r)).intersect(self.iv)
+        // Every form keeps its interval inside its affine range (see `finish`).
+        self.iv
     }
 
     /// An exact constant (no noise terms, no error).
@@ -200,6 +197,11 @@ impl Affine {
         if self.terms.len() > MAX_TERMS {
             self.condense();
         }
+        // The carried interval becomes the intersection with the affine range, so that the
+        // range is known without summing the terms again (and later interval operands are
+        // no wider than the form's own bounds).
+        let r = up(self.rad + self.err);
+        self.iv = Interval::new(super::interval::down(self.centre - r), up(self.centre + r)).intersect(self.iv);
         self
     }
 
@@ -267,6 +269,12 @@ impl Affine {
     /// a·x + b·y + k for constants a, b, k (every affine operation), with its rounding error.
     /// Constant operands fold to the `f64` value the point evaluation computes.
     fn linear(x: &Affine, a: f64, y: &Affine, b: f64, k: f64, iv: Interval) -> Affine {
+        Affine::linear_raw(x, a, y, b, k, iv).finish()
+    }
+
+    /// [`Affine::linear`] before `finish`, for operations that add terms or error afterwards
+    /// (the interval must not be clipped to the range before they are in).
+    fn linear_raw(x: &Affine, a: f64, y: &Affine, b: f64, k: f64, iv: Interval) -> Affine {
         if x.is_unbounded() || y.is_unbounded() {
             return Affine::from_interval(iv);
         }
@@ -285,7 +293,7 @@ impl Affine {
         let carried = up(up(a.abs() * x.err) + up(b.abs() * y.err));
         let err = up(carried + own);
         let rad = sum_bound(sum, terms.len());
-        Affine { centre, terms, rad, err, iv }.finish()
+        Affine { centre, terms, rad, err, iv }
     }
 
     /// Sum.
@@ -323,7 +331,7 @@ impl Affine {
             return Affine::from_interval(iv);
         }
         let zero = Affine::constant(0.0);
-        let mut z = Affine::linear(self, ap.alpha, &zero, 0.0, ap.zeta, iv);
+        let mut z = Affine::linear_raw(self, ap.alpha, &zero, 0.0, ap.zeta, iv);
         if z.is_unbounded() {
             return z;
         }
@@ -396,7 +404,7 @@ impl Affine {
         if let Some(k) = o.as_constant() {
             // Divide each coefficient: the same rounding as the point evaluation's x/k.
             let zero = Affine::constant(0.0);
-            let mut z = Affine::linear(self, 1.0 / k, &zero, 0.0, 0.0, iv);
+            let mut z = Affine::linear_raw(self, 1.0 / k, &zero, 0.0, 0.0, iv);
             if !z.is_unbounded() {
                 // 1/k is itself rounded: |x|·|fl(1/k) − 1/k| ≤ |x|·u/|k|.
                 let xmax = self.range().lo.abs().max(self.range().hi.abs());
@@ -461,10 +469,7 @@ impl Affine {
         let own = rounding(4.0 * (mags + centre_mags), terms.len() + 2 * xs.len() + 1);
         let err = up(carried + own);
         let rad = sum_bound(sum, terms.len());
-        let mut z = Affine { centre, terms, rad, err, iv }.finish();
-        if z.is_unbounded() {
-            return z;
-        }
+        let mut z = Affine { centre, terms, rad, err, iv };
         if delta > 0.0 {
             z.push_fresh(delta);
         }
@@ -481,7 +486,7 @@ impl Affine {
         if self.is_unbounded() || o.is_unbounded() {
             return Affine::from_interval(iv);
         }
-        let mid = Affine::linear(self, 0.5, o, 0.5, 0.0, iv);
+        let mid = Affine::linear_raw(self, 0.5, o, 0.5, 0.0, iv);
         let half = Affine::linear(self, 0.5, o, -0.5, 0.0, Interval::ENTIRE);
         let m = half.range();
         let mut z = mid;
