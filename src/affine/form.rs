@@ -188,6 +188,7 @@ impl Affine {
     }
 
     /// Checks finiteness and condenses; a non-finite form falls back to its interval.
+    #[inline(always)]
     fn finish(mut self) -> Affine {
         // `rad` bounds Σ|xᵢ|: it is finite exactly when every coefficient is (short of an
         // overflow of the sum, which the interval fallback covers as well).

@@ -442,12 +442,15 @@ fn hessian_hull(m: usize, bx: &[Iv; 3], lin: &[Lin; 8], most: usize) -> ([Iv; 3]
 /// operations and 10 new symbols of the formula. Axes whose t is exactly known (rᵢ = 0) drop
 /// out of R; their corners are folded beforehand. Returns the form and the largest rᵢ;
 /// `None` for arithmetics without first-order terms.
-fn taylor_cell<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3], pieces: usize) -> Option<(N, f64)> {
+fn taylor_cell<N: Real>(dim: usize, cell: [i64; 3], x: &[N; 3], origin: [f64; 3], pieces: usize) -> Option<(N, f64)> {
     let (mut c, mut r) = ([0.0; 3], [0.0; 3]);
     let mut bx = [Iv::point(0.0); 3];
     let mut active = 0usize;
     for k in 0..dim {
-        let (_, range) = t[k].first_order()?;
+        // The t the point evaluation computes, fl(x − origin), lies in the outward-rounded
+        // difference of the ranges.
+        let (_, range) = x[k].first_order()?;
+        let range = if origin[k] == 0.0 { range } else { range.sub(Interval::point(origin[k])) };
         let (lo, hi) = (range.lo.max(0.0), range.hi.min(1.0));
         if !(lo <= hi) {
             return None;
@@ -505,7 +508,11 @@ fn taylor_cell<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3], pieces: usize) -
     let centre = value + mid;
     rounding += 8.0 * UNIT_ROUNDOFF * (value.abs() + mid.abs());
     let delta = up(up(rhi - mid).max(up(mid - rlo)) + up(rounding * (1.0 + 32.0 * UNIT_ROUNDOFF)));
-    let xs: Vec<(&N, f64, f64)> = axes.iter().map(|&k| (&t[k], c[k], grad[k])).collect();
+    // In terms of x: t − c = x − (origin + c), up to the rounding of the point evaluation's
+    // t = fl(x − origin) (≤ u·|t| ≤ u) and of the expansion point origin + c (≤ u·|origin + c|).
+    let xs: Vec<(&N, f64, f64)> = axes.iter().map(|&k| (&x[k], origin[k] + c[k], grad[k])).collect();
+    let shift: f64 = axes.iter().map(|&k| grad[k].abs() * (1.0 + (origin[k] + c[k]).abs())).sum();
+    let delta = up(delta + 4.0 * UNIT_ROUNDOFF * shift);
     let rmax = r[0].max(r[1]).max(r[2]);
     Some((N::taylor(&xs, centre, delta, Interval::new(-bound(dim), bound(dim))), rmax))
 }
@@ -524,18 +531,31 @@ const TAYLOR_ONLY_RADIUS_CORRELATED: f64 = 0.02;
 
 /// Noise in one cell: the Taylor extension where the arithmetic has one (and the formula as
 /// well on wide ranges, keeping the narrower), else the formula.
-fn cell_value<N: Real>(dim: usize, cell: [i64; 3], t: &[N; 3], pieces: usize) -> N {
-    match taylor_cell(dim, cell, t, pieces) {
-        Some((v, r)) if r <= TAYLOR_ONLY_RADIUS_CORRELATED || r <= TAYLOR_ONLY_RADIUS && !correlated(dim, t) => v,
+/// `x` are the coordinates, `origin` the cell's corner (0 for coordinates already relative to
+/// it): t = x − origin; the formula needs t as values, the Taylor extension does not.
+fn cell_value<N: Real>(dim: usize, cell: [i64; 3], x: &[N; 3], origin: [f64; 3], pieces: usize) -> N {
+    let t = || -> [N; 3] {
+        std::array::from_fn(|k| {
+            if k >= dim {
+                N::constant(0.0)
+            } else if origin[k] == 0.0 {
+                x[k].clone()
+            } else {
+                x[k].sub(&N::constant(origin[k]))
+            }
+        })
+    };
+    match taylor_cell(dim, cell, x, origin, pieces) {
+        Some((v, r)) if r <= TAYLOR_ONLY_RADIUS_CORRELATED || r <= TAYLOR_ONLY_RADIUS && !correlated(dim, x) => v,
         Some((v, _)) => {
-            let f = cell_eval(dim, cell, t);
+            let f = cell_eval(dim, cell, &t());
             if f.bounds().width() < v.bounds().width() {
                 f
             } else {
                 v
             }
         }
-        None => cell_eval(dim, cell, t),
+        None => cell_eval(dim, cell, &t()),
     }
 }
 
@@ -557,9 +577,7 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
     if counts.iter().all(|&c| c == 1) {
         // One cell (always the case for points): the polynomial in the caller's arithmetic.
         let cell = [lo[0], lo[1], lo[2]];
-        let t: [N; 3] =
-            std::array::from_fn(|k| if k < dim { p[k].sub(&N::constant(cell[k] as f64)) } else { N::constant(0.0) });
-        return cell_value(dim, cell, &t, HESSIAN_PIECES);
+        return cell_value(dim, cell, p, cell.map(|c| c as f64), HESSIAN_PIECES);
     }
     if counts.iter().product::<i64>() > MAX_CELLS {
         return global();
@@ -585,9 +603,9 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
                     }
                 });
                 let v = if few {
-                    cell_value::<N>(dim, cell, &t, MULTI_CELL_PIECES).bounds()
+                    cell_value::<N>(dim, cell, &t, [0.0; 3], MULTI_CELL_PIECES).bounds()
                 } else {
-                    match taylor_cell(dim, cell, &t, 1) {
+                    match taylor_cell(dim, cell, &t, [0.0; 3], 1) {
                         Some((v, _)) => v.bounds(),
                         None => cell_eval::<N>(dim, cell, &t).bounds(),
                     }
@@ -679,7 +697,7 @@ mod taylor_tests {
             }
             let cell: [i64; 3] = std::array::from_fn(|k| b[k].lo.floor() as i64);
             let t: [Affine; 3] = std::array::from_fn(|k| p[k].sub(&Affine::constant(cell[k] as f64)));
-            let Some((taylor, _)) = taylor_cell(3, cell, &t, HESSIAN_PIECES) else {
+            let Some((taylor, _)) = taylor_cell(3, cell, &t, [0.0; 3], HESSIAN_PIECES) else {
                 panic!("affine forms have a Taylor extension")
             };
             wf += cell_eval(3, cell, &t).range().width();
@@ -717,7 +735,7 @@ mod taylor_tests {
             let cell: [i64; 3] = std::array::from_fn(|k| b[k].lo.floor() as i64);
             let t: [Affine; 3] = std::array::from_fn(|k| p[k].sub(&Affine::constant(cell[k] as f64)));
             assert!(correlated(3, &t));
-            let chosen = cell_value(3, cell, &t, HESSIAN_PIECES).range().width();
+            let chosen = cell_value(3, cell, &p, cell.map(|c| c as f64), HESSIAN_PIECES).range().width();
             assert!(chosen <= cell_eval(3, cell, &t).range().width());
         }
     }
