@@ -442,14 +442,22 @@ fn hessian_hull(m: usize, bx: &[Iv; 3], lin: &[Lin; 8], most: usize) -> ([Iv; 3]
 /// operations and 10 new symbols of the formula. Axes whose t is exactly known (rᵢ = 0) drop
 /// out of R; their corners are folded beforehand. Returns the form and the largest rᵢ;
 /// `None` for arithmetics without first-order terms.
-fn taylor_cell<N: Real>(dim: usize, cell: [i64; 3], x: &[N; 3], origin: [f64; 3], pieces: usize) -> Option<(N, f64)> {
+fn taylor_cell<N: Real>(
+    dim: usize,
+    cell: [i64; 3],
+    x: &[N; 3],
+    scale: f64,
+    origin: [f64; 3],
+    pieces: usize,
+) -> Option<(N, f64)> {
     let (mut c, mut r) = ([0.0; 3], [0.0; 3]);
     let mut bx = [Iv::point(0.0); 3];
     let mut active = 0usize;
     for k in 0..dim {
-        // The t the point evaluation computes, fl(x − origin), lies in the outward-rounded
-        // difference of the ranges.
+        // The t the point evaluation computes, fl(fl(x·scale) − origin), lies in the
+        // outward-rounded interval of the same operations.
         let (_, range) = x[k].first_order()?;
+        let range = if scale == 1.0 { range } else { range.scale(scale) };
         let range = if origin[k] == 0.0 { range } else { range.sub(Interval::point(origin[k])) };
         let (lo, hi) = (range.lo.max(0.0), range.hi.min(1.0));
         if !(lo <= hi) {
@@ -508,11 +516,13 @@ fn taylor_cell<N: Real>(dim: usize, cell: [i64; 3], x: &[N; 3], origin: [f64; 3]
     let centre = value + mid;
     rounding += 8.0 * UNIT_ROUNDOFF * (value.abs() + mid.abs());
     let delta = up(up(rhi - mid).max(up(mid - rlo)) + up(rounding * (1.0 + 32.0 * UNIT_ROUNDOFF)));
-    // In terms of x: t − c = x − (origin + c), up to the rounding of the point evaluation's
-    // t = fl(x − origin) (≤ u·|t| ≤ u) and of the expansion point origin + c (≤ u·|origin + c|).
-    let xs: Vec<(&N, f64, f64)> = axes.iter().map(|&k| (&x[k], origin[k] + c[k], grad[k])).collect();
-    let shift: f64 = axes.iter().map(|&k| grad[k].abs() * (1.0 + (origin[k] + c[k]).abs())).sum();
-    let delta = up(delta + 4.0 * UNIT_ROUNDOFF * shift);
+    // In terms of x: t − c = scale·(x − (origin + c)/scale), up to the rounding of the point
+    // evaluation's t = fl(fl(x·scale) − origin) (≤ u·|x·scale| + u·|t|, |x·scale| ≤ |origin| + 2)
+    // and of the expansion point (origin + c)/scale and of the slope ∇n·scale (≤ 2u relative
+    // each, on |origin + c| + 1).
+    let xs: Vec<(&N, f64, f64)> = axes.iter().map(|&k| (&x[k], (origin[k] + c[k]) / scale, grad[k] * scale)).collect();
+    let shift: f64 = axes.iter().map(|&k| grad[k].abs() * (3.0 + origin[k].abs() + c[k])).sum();
+    let delta = up(delta + 8.0 * UNIT_ROUNDOFF * shift);
     let rmax = r[0].max(r[1]).max(r[2]);
     Some((N::taylor(&xs, centre, delta, Interval::new(-bound(dim), bound(dim))), rmax))
 }
@@ -545,7 +555,7 @@ fn cell_value<N: Real>(dim: usize, cell: [i64; 3], x: &[N; 3], origin: [f64; 3],
             }
         })
     };
-    match taylor_cell(dim, cell, x, origin, pieces) {
+    match taylor_cell(dim, cell, x, 1.0, origin, pieces) {
         Some((v, r)) if r <= TAYLOR_ONLY_RADIUS_CORRELATED || r <= TAYLOR_ONLY_RADIUS && !correlated(dim, x) => v,
         Some((v, _)) => {
             let f = cell_eval(dim, cell, &t());
@@ -605,7 +615,7 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
                 let v = if few {
                     cell_value::<N>(dim, cell, &t, [0.0; 3], MULTI_CELL_PIECES).bounds()
                 } else {
-                    match taylor_cell(dim, cell, &t, [0.0; 3], 1) {
+                    match taylor_cell(dim, cell, &t, 1.0, [0.0; 3], 1) {
                         Some((v, _)) => v.bounds(),
                         None => cell_eval::<N>(dim, cell, &t).bounds(),
                     }
@@ -618,14 +628,35 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
     N::from_interval(hull.map_or(g, |h| h.intersect(g)))
 }
 
+/// snoise(3, p·scale) for a constant scale: for arithmetics with first-order terms whose
+/// scaled range lies in one cell, the Taylor extension is applied to p directly (the scaled
+/// coordinates are never formed); otherwise p·scale is computed as in the formula.
+fn snoise_scaled<N: Real>(p: &[N; 3], scale: f64) -> N {
+    if scale.is_finite() && scale != 0.0 && p[0].first_order().is_some() {
+        let b: [Interval; 3] = std::array::from_fn(|k| p[k].bounds().scale(scale));
+        if b.iter().all(|iv| iv.is_finite() && iv.lo.floor() == iv.hi.floor()) {
+            let cell: [i64; 3] = std::array::from_fn(|k| b[k].lo.floor() as i64);
+            if let Some((v, r)) = taylor_cell(3, cell, p, scale, cell.map(|c| c as f64), HESSIAN_PIECES) {
+                if r <= TAYLOR_ONLY_RADIUS_CORRELATED || r <= TAYLOR_ONLY_RADIUS && !correlated(3, p) {
+                    return v;
+                }
+            }
+        }
+    }
+    let f = N::constant(scale);
+    snoise(3, &std::array::from_fn(|k| p[k].mul(&f)))
+}
+
 /// Fractional Brownian motion: Σᵢ gainⁱ·snoise(p·lacunarityⁱ), i < octaves (3-D).
 pub fn fbm<N: Real>(p: &[N; 3], octaves: usize, lacunarity: &N, gain: &N, turbulence: bool) -> N {
     let mut sum = N::constant(0.0);
     let mut freq = N::constant(1.0);
     let mut amp = N::constant(1.0);
     for _ in 0..octaves {
-        let q: [N; 3] = std::array::from_fn(|k| p[k].mul(&freq));
-        let mut n = snoise(3, &q);
+        let mut n = match freq.as_constant() {
+            Some(f) => snoise_scaled(p, f),
+            None => snoise(3, &std::array::from_fn(|k| p[k].mul(&freq))),
+        };
         if turbulence {
             n = n.abs();
         }
@@ -697,7 +728,7 @@ mod taylor_tests {
             }
             let cell: [i64; 3] = std::array::from_fn(|k| b[k].lo.floor() as i64);
             let t: [Affine; 3] = std::array::from_fn(|k| p[k].sub(&Affine::constant(cell[k] as f64)));
-            let Some((taylor, _)) = taylor_cell(3, cell, &t, [0.0; 3], HESSIAN_PIECES) else {
+            let Some((taylor, _)) = taylor_cell(3, cell, &t, 1.0, [0.0; 3], HESSIAN_PIECES) else {
                 panic!("affine forms have a Taylor extension")
             };
             wf += cell_eval(3, cell, &t).range().width();
