@@ -495,6 +495,14 @@ impl Real for Affine {
         if let (Some(a), Some(b)) = (self.as_constant(), o.as_constant()) {
             return Affine::constant(a.min(b));
         }
+        // One operand below the other over the whole range: min is that operand, exactly.
+        let (rx, ro) = (self.range(), o.range());
+        if rx.hi <= ro.lo {
+            return self.clone();
+        }
+        if ro.hi <= rx.lo {
+            return o.clone();
+        }
         // min(x, y) = x − max⁰(x − y).
         let mut z = self.sub(&self.sub(o).max0());
         z = z.with_interval(self.range().min(o.range()));
@@ -503,6 +511,13 @@ impl Real for Affine {
     fn max(&self, o: &Self) -> Self {
         if let (Some(a), Some(b)) = (self.as_constant(), o.as_constant()) {
             return Affine::constant(a.max(b));
+        }
+        let (rx, ro) = (self.range(), o.range());
+        if rx.lo >= ro.hi {
+            return self.clone();
+        }
+        if ro.lo >= rx.hi {
+            return o.clone();
         }
         // max(x, y) = y + max⁰(x − y) (§3).
         let z = o.add(&self.sub(o).max0());
