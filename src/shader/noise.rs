@@ -244,7 +244,7 @@ const HESSIAN_PIECES: usize = 4;
 
 /// Most sub-boxes per axis for each cell of a range that straddles several (many cells at
 /// coarse levels; only the hull of their bounds is kept).
-const MULTI_CELL_PIECES: usize = 2;
+const MULTI_CELL_PIECES: usize = 3;
 
 /// An interval of plain `f64` arithmetic (rounding is covered by [`HESSIAN_SLACK`]).
 #[derive(Clone, Copy, Debug)]
@@ -598,9 +598,10 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
         return global();
     }
     // Each touched cell on its part of the box, in the caller's arithmetic with fresh inputs
-    // (affine stays tighter than interval inside a cell); the hull of the cells' bounds. A range
-    // over many cells (coarse quadtree levels, far wider than any tolerance) takes the cheap
-    // Taylor bound of each cell alone.
+    // (affine stays tighter than interval inside a cell); the hull of the cells' bounds. Only
+    // bounds are kept, so affine inputs take the Taylor bound alone (the parts of a cell that a
+    // leaf-sized range covers are small); a range over many cells (coarse quadtree levels, far
+    // wider than any tolerance) without sub-boxes.
     let few = counts.iter().product::<i64>() <= FEW_CELLS;
     let mut hull: Option<Interval> = None;
     for cx in lo[0]..=hi[0] {
@@ -617,13 +618,10 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
                         N::constant(0.0)
                     }
                 });
-                let v = if few {
-                    cell_value::<N>(dim, cell, &t, [0.0; 3], MULTI_CELL_PIECES).bounds()
-                } else {
-                    match taylor_cell(dim, cell, &t, 1.0, [0.0; 3], 1) {
-                        Some((v, _)) => v.bounds(),
-                        None => cell_eval::<N>(dim, cell, &t).bounds(),
-                    }
+                let pieces = if few { MULTI_CELL_PIECES } else { 1 };
+                let v = match taylor_cell(dim, cell, &t, 1.0, [0.0; 3], pieces) {
+                    Some((v, _)) => v.bounds(),
+                    None => cell_eval::<N>(dim, cell, &t).bounds(),
                 };
                 hull = Some(hull.map_or(v, |h| h.hull(v)));
             }
