@@ -18,18 +18,16 @@ pub const LIBM_ULPS: u32 = 2;
 /// and `up(0)` is frequent (rounding errors of exact operations).
 #[inline]
 pub fn up(x: f64) -> f64 {
-    if x >= f64::MIN_POSITIVE || x < -f64::MIN_POSITIVE {
-        if x.is_finite() {
-            x.next_up()
+    if (-f64::MIN_POSITIVE..f64::MIN_POSITIVE).contains(&x) {
+        if x < 0.0 {
+            0.0
         } else {
-            x
+            f64::MIN_POSITIVE
         }
-    } else if x < 0.0 {
-        0.0
-    } else if x.is_nan() {
-        x
+    } else if x.is_finite() {
+        x.next_up()
     } else {
-        f64::MIN_POSITIVE
+        x
     }
 }
 

@@ -465,7 +465,7 @@ fn taylor_cell<N: Real>(
         let range = if scale == 1.0 { range } else { range.scale(scale) };
         let range = if origin[k] == 0.0 { range } else { range.sub(Interval::point(origin[k])) };
         let (lo, hi) = (range.lo.max(0.0), range.hi.min(1.0));
-        if !(lo <= hi) {
+        if lo.is_nan() || hi.is_nan() || lo > hi {
             return None;
         }
         bx[k] = Iv(lo, hi);
