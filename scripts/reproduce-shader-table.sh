@@ -3,12 +3,14 @@
 # shaders in testdata/shaders and writes docs/results/shader.md. The tables are printed by
 # `sample-shader --compare`; this script only runs it and concatenates the output.
 #   DEPTH=8 (equal-depth comparison, 256x256 leaves)  TOL=0.05 (adaptive comparison)
+#   REPEAT=3 (each sampling is timed REPEAT times, the arithmetics alternating; fastest counts)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DEPTH=${DEPTH:-8}
 TOL=${TOL:-0.05}
 ADAPTIVE_DEPTH=${ADAPTIVE_DEPTH:-8}
 VERIFY=${VERIFY:-100000}
+REPEAT=${REPEAT:-3}
 SHADERS=(screen wood marble bumpmap eroded)
 cargo build --release --bins -q
 BIN=target/release/sample-shader
@@ -21,10 +23,10 @@ table() { # runs --compare for every shader; prints one header, then all rows
   local first=1
   for s in "${SHADERS[@]}"; do
     if [ $first = 1 ]; then
-      "$BIN" "testdata/shaders/$s.sl" "$@" --compare -q --threads 1
+      "$BIN" "testdata/shaders/$s.sl" "$@" --compare -q --threads 1 --repeat "$REPEAT"
       first=0
     else
-      "$BIN" "testdata/shaders/$s.sl" "$@" --compare -q --threads 1 | tail -n +3
+      "$BIN" "testdata/shaders/$s.sl" "$@" --compare -q --threads 1 --repeat "$REPEAT" | tail -n +3
     fi
   done
 }
@@ -37,7 +39,8 @@ table() { # runs --compare for every shader; prints one header, then all rows
   echo "holding the pixel). Point sampling takes 8 random samples per node, about the cost of one affine"
   echo "area sample in the paper (Table 1), and its widths are estimates that can miss detail, not bounds."
   echo "\"cost per evaluation\" is the time of one evaluation relative to one point sample of the same"
-  echo "shader (the paper's Table 1 ratio, 1:5.4 to 1:10.4 on a 1998 R4000)."
+  echo "shader (the paper's Table 1 ratio, 1:5.4 to 1:10.4 on a 1998 R4000); each sampling is timed"
+  echo "$REPEAT times, the arithmetics alternating, and the fastest time of each counts."
   echo
   echo "### Equal depth: every node subdivided to depth $DEPTH (${RES}x${RES} leaves, tolerance 0)"
   echo

@@ -11,24 +11,30 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 /// Ulps by which results of libm functions (exp, ln, sin, cos, powf) are widened.
 pub const LIBM_ULPS: u32 = 2;
 
-/// One ulp towards −∞ (infinities are kept: they already bound everything).
+/// A bound ≥ `x` one ulp above it (infinities and NaN are kept). Results never fall in the
+/// subnormal range: near 0 the bound is 0 or the smallest normal number instead (a computed
+/// result in [−MIN_POSITIVE, 0) comes from an exact value < 0, one in [0, MIN_POSITIVE) from
+/// one < MIN_POSITIVE). Subnormal operands make the arithmetic that follows many times slower,
+/// and `up(0)` is frequent (rounding errors of exact operations).
 #[inline]
-pub fn down(x: f64) -> f64 {
-    if x.is_finite() {
-        x.next_down()
+pub fn up(x: f64) -> f64 {
+    if (-f64::MIN_POSITIVE..f64::MIN_POSITIVE).contains(&x) {
+        if x < 0.0 {
+            0.0
+        } else {
+            f64::MIN_POSITIVE
+        }
+    } else if x.is_finite() {
+        x.next_up()
     } else {
         x
     }
 }
 
-/// One ulp towards +∞.
+/// A bound ≤ `x` one ulp below it; the mirror image of [`up`].
 #[inline]
-pub fn up(x: f64) -> f64 {
-    if x.is_finite() {
-        x.next_up()
-    } else {
-        x
-    }
+pub fn down(x: f64) -> f64 {
+    -up(-x)
 }
 
 /// `n` ulps towards −∞.

@@ -83,6 +83,25 @@ pub trait Real: Clone + PartialEq + std::fmt::Debug + Send + Sync + 'static {
     fn fade(&self) -> Self;
     /// A value that may be `self` or `o` (both branches of a condition over a range).
     fn join(&self, o: &Self) -> Self;
+    /// The central value and the guaranteed range of a value that depends to first order on
+    /// the inputs (an affine form); `None` for points and intervals. Multivariate primitives
+    /// (gradient noise) then use a first-order Taylor extension ([`Real::taylor`]) instead of
+    /// evaluating their formula operation by operation.
+    fn first_order(&self) -> Option<(f64, Interval)> {
+        None
+    }
+    /// Whether two first-order values depend on a common noise symbol (are correlated).
+    fn shares_symbols(&self, o: &Self) -> bool {
+        let _ = o;
+        false
+    }
+    /// f(x₁, …, xₙ) ∈ `value` + Σ gₖ·(xₖ − cₖ) ± `delta` for `(xₖ, cₖ, gₖ)` in `xs`: the caller
+    /// has bounded the remainder of the expansion at c by `delta` over the whole range of the
+    /// xₖ; the result lies in `iv`. Only called when every xₖ has [`Real::first_order`].
+    fn taylor(xs: &[(&Self, f64, f64)], value: f64, delta: f64, iv: Interval) -> Self {
+        let _ = (xs, value, delta);
+        Self::from_interval(iv)
+    }
     /// The sign over the whole range.
     fn sign(&self) -> Sign {
         let b = self.bounds();
@@ -476,6 +495,14 @@ impl Real for Affine {
         if let (Some(a), Some(b)) = (self.as_constant(), o.as_constant()) {
             return Affine::constant(a.min(b));
         }
+        // One operand below the other over the whole range: min is that operand, exactly.
+        let (rx, ro) = (self.range(), o.range());
+        if rx.hi <= ro.lo {
+            return self.clone();
+        }
+        if ro.hi <= rx.lo {
+            return o.clone();
+        }
         // min(x, y) = x − max⁰(x − y).
         let mut z = self.sub(&self.sub(o).max0());
         z = z.with_interval(self.range().min(o.range()));
@@ -484,6 +511,13 @@ impl Real for Affine {
     fn max(&self, o: &Self) -> Self {
         if let (Some(a), Some(b)) = (self.as_constant(), o.as_constant()) {
             return Affine::constant(a.max(b));
+        }
+        let (rx, ro) = (self.range(), o.range());
+        if rx.lo >= ro.hi {
+            return self.clone();
+        }
+        if ro.lo >= rx.hi {
+            return o.clone();
         }
         // max(x, y) = y + max⁰(x − y) (§3).
         let z = o.add(&self.sub(o).max0());
@@ -514,5 +548,14 @@ impl Real for Affine {
     }
     fn join(&self, o: &Self) -> Self {
         Affine::join(self, o)
+    }
+    fn first_order(&self) -> Option<(f64, Interval)> {
+        (!self.is_unbounded()).then(|| (self.centre(), self.range()))
+    }
+    fn shares_symbols(&self, o: &Self) -> bool {
+        Affine::shares_symbols(self, o)
+    }
+    fn taylor(xs: &[(&Self, f64, f64)], value: f64, delta: f64, iv: Interval) -> Self {
+        Affine::taylor(xs, value, delta, iv)
     }
 }

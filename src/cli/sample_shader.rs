@@ -103,6 +103,12 @@ pub struct Args {
     #[arg(long, value_name = "N")]
     pub verify: Option<usize>,
 
+    /// Sample N times (with --compare, the arithmetics alternate) and report the fastest time
+    /// of each arithmetic: on a loaded machine one run can be slowed by other processes. The
+    /// results themselves are the same every time.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub repeat: usize,
+
     /// Worker threads (0 = all cores). Results do not depend on it.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -284,8 +290,15 @@ pub fn run(args: Args) -> Result<Outcome> {
     let arithmetics: Vec<Arith> =
         if args.compare { vec![Arith::Affine, Arith::Interval, Arith::Point] } else { vec![args.arith.into()] };
     let mut runs = Vec::new();
-    for a in arithmetics {
+    for &a in &arithmetics {
         runs.push(run_one(&shader, &cfg(a), &args, res, &bar)?);
+    }
+    for _ in 1..args.repeat {
+        for (run, &a) in runs.iter_mut().zip(&arithmetics) {
+            let start = Instant::now();
+            sampler::sample(&shader, &cfg(a), &bar)?;
+            run.stats.seconds = run.stats.seconds.min(start.elapsed().as_secs_f64());
+        }
     }
     let main = &runs[0];
     let (tex, wid, dep) = images(&main.raster);

@@ -156,8 +156,19 @@ pub fn modulo<N: Real>(a: &N, b: &N) -> N {
 /// first and last knots only shape the end tangents. A parameter range that straddles
 /// segments is split per segment (interval arithmetic) and the hull taken.
 pub fn spline<N: Real>(t: &N, knots: &[N]) -> N {
+    spline_at(&spline_parameter(t, knots.len()), knots)
+}
+
+/// The spline's segment coordinate clamp(t, 0, 1)·(count − 3) for `count` knots (shared by the
+/// channels of a color spline).
+pub fn spline_parameter<N: Real>(t: &N, count: usize) -> N {
+    let nseg = count - 3;
+    t.max(&N::constant(0.0)).min(&N::constant(1.0)).mul(&N::constant(nseg as f64))
+}
+
+/// The spline through `knots` at segment coordinate `x` (from [`spline_parameter`]).
+pub fn spline_at<N: Real>(x: &N, knots: &[N]) -> N {
     let nseg = knots.len() - 3;
-    let x = t.max(&N::constant(0.0)).min(&N::constant(1.0)).mul(&N::constant(nseg as f64));
     let seg_of = |v: f64| (v.floor().max(0.0) as usize).min(nseg - 1);
     let b = x.bounds();
     let (s0, s1) = (seg_of(b.lo), seg_of(b.hi));
@@ -425,9 +436,10 @@ impl<N: Real> Ctx<'_, N> {
                 match knots.first() {
                     Some(Value::T(_)) => {
                         let ks: Vec<[N; 3]> = knots.into_iter().map(|k| k.triple()).collect();
+                        let x = spline_parameter(&t, ks.len());
                         Value::T(std::array::from_fn(|ch| {
                             let kc: Vec<N> = ks.iter().map(|k| k[ch].clone()).collect();
-                            spline(&t, &kc)
+                            spline_at(&x, &kc)
                         }))
                     }
                     _ => {
