@@ -2,7 +2,7 @@
 //! guaranteed per-texel bounds (Heidrich, Slusallek & Seidel 1998, §3.1), or compare affine,
 //! interval and point sampling.
 
-use super::common::{parse_size, Bar, Outcome};
+use super::common::{parse_size, Bar, Execution, Outcome};
 use crate::io::{self, Document, Output, Provenance, RgbImage};
 use crate::shader::report::{self, Histogram, Verification, WidthStats};
 use crate::shader::sampler::{self, Arith, Domain, SampleConfig};
@@ -109,17 +109,12 @@ pub struct Args {
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub repeat: usize,
 
-    /// Worker threads (0 = all cores). Results do not depend on it.
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-
     /// Exposure in stops for PNG output.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub exposure: f32,
 
-    /// Do not draw progress bars.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub run: Execution,
 }
 
 fn parse_param(s: &str) -> Result<(String, String), String> {
@@ -274,11 +269,7 @@ pub fn run(args: Args) -> Result<Outcome> {
     if let Some(s) = &args.stats {
         Output::parse(s).check_writable()?;
     }
-    if args.threads > 0 {
-        // A second initialization (e.g. in tests) keeps the existing pool, which is harmless.
-        let _ = rayon::ThreadPoolBuilder::new().num_threads(args.threads).build_global();
-    }
-    let bar = Bar::new(args.quiet);
+    let bar = args.run.start()?;
     let cfg = |arith: Arith| SampleConfig {
         tolerance: args.tolerance,
         max_depth,
@@ -375,7 +366,7 @@ pub fn run(args: Args) -> Result<Outcome> {
     } else if args.json && args.stats.as_deref() != Some("-") {
         Output::Stdout.write(doc(&main.stats).as_bytes())?;
     }
-    if !args.quiet && !args.json {
+    if !args.run.quiet && !args.json {
         let s = &main.stats;
         eprintln!(
             "sample-shader: {} ({}): {} nodes, {} leaves, median width {:.4}, p95 {:.4}, max {:.4}, {:.2} s",
