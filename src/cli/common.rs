@@ -99,6 +99,19 @@ pub fn parse_size(s: &str) -> Result<(usize, usize), String> {
     Ok((w, h))
 }
 
+/// Parses `x,y,z` (three finite numbers) for points and directions on the command line.
+pub fn parse_xyz(s: &str) -> Result<glam::DVec3, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected x,y,z, got {s:?}"))?;
+    if v.len() != 3 || v.iter().any(|c| !c.is_finite()) {
+        return Err(format!("expected three finite numbers x,y,z, got {s:?}"));
+    }
+    Ok(glam::DVec3::new(v[0], v[1], v[2]))
+}
+
 /// The options every stage shares for how it runs (flattened into each stage's `Args`).
 #[derive(Clone, Debug, Default, clap::Args)]
 pub struct Execution {

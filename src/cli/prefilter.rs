@@ -1,7 +1,7 @@
 //! `prefilter`: frequency-space prefiltering and spherical harmonic reflection maps
 //! (Ramamoorthi & Hanrahan 2002), or the angular reference with `--method angular`.
 
-use super::common::{parse_size, Execution, Outcome};
+use super::common::{parse_size, parse_xyz, Execution, Outcome};
 use super::envinput::EnvInput;
 use crate::brdf::Brdf;
 use crate::envmap::{self, EnvMap, Layout};
@@ -92,7 +92,7 @@ pub struct Args {
     pub global: bool,
 
     /// View direction x,y,z (towards the viewer) for --reflection-map; repeatable, paired in order.
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    #[arg(long, value_parser = parse_direction, allow_hyphen_values = true)]
     pub view: Vec<DVec3>,
 
     /// Reflection map for the matching --view (eq. 12): .exr, .pfm or .png; repeatable.
@@ -156,16 +156,9 @@ fn parse_orders(s: &str) -> Result<(usize, usize), String> {
     Ok((f, p))
 }
 
-fn parse_vec3(s: &str) -> Result<DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("expected x,y,z, got {s:?}"))?;
-    if v.len() != 3 || v.iter().any(|c| !c.is_finite()) {
-        return Err(format!("expected three numbers x,y,z, got {s:?}"));
-    }
-    let d = DVec3::new(v[0], v[1], v[2]);
+/// A view direction: `x,y,z`, non-zero, normalized.
+fn parse_direction(s: &str) -> Result<DVec3, String> {
+    let d = parse_xyz(s)?;
     if d.length() < 1e-12 {
         return Err("the view direction must be non-zero".into());
     }

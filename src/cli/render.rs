@@ -1,7 +1,7 @@
 //! `render`: images of each bake next to ground truth — SH irradiance, SHRMs, K-term factored
 //! relighting and a reference integrator — with error images, metrics and labelled panels.
 
-use super::common::{parse_size, Execution, Outcome};
+use super::common::{parse_size, parse_xyz, Execution, Outcome};
 use super::envinput::EnvInput;
 use crate::brdf::Brdf;
 use crate::factor::{Channel, Domain, Method, Sampling};
@@ -65,11 +65,11 @@ pub struct Args {
     pub brdf: String,
 
     /// Camera position x,y,z (+Z up).
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, default_value = "0,-4,0")]
+    #[arg(long, value_parser = parse_xyz, allow_hyphen_values = true, default_value = "0,-4,0")]
     pub eye: DVec3,
 
     /// Point the camera looks at.
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, default_value = "0,0,0")]
+    #[arg(long, value_parser = parse_xyz, allow_hyphen_values = true, default_value = "0,0,0")]
     pub target: DVec3,
 
     /// Vertical field of view in degrees.
@@ -163,18 +163,6 @@ pub struct Args {
 
     #[command(flatten)]
     pub run: Execution,
-}
-
-fn parse_point(s: &str) -> Result<DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("expected x,y,z, got {s:?}"))?;
-    if v.len() != 3 || v.iter().any(|c| !c.is_finite()) {
-        return Err(format!("expected three finite numbers x,y,z, got {s:?}"));
-    }
-    Ok(DVec3::new(v[0], v[1], v[2]))
 }
 
 fn parse_item(s: &str) -> Result<(String, PathBuf)> {

@@ -155,18 +155,13 @@ impl Factored {
     pub fn relight(&mut self, g: &[Vec<f64>], env: &EnvMap, sub: usize) {
         self.coeffs = project(&g[..self.terms()], &self.grid, &self.transport, self.cosine, env, sub.max(1));
     }
-
-    /// Taps (index into `h`, weight) of ω on the factor grid, the same for every k: bilinear
-    /// between cell centres in (cos θ, φ), φ wrapping. Between the pole and the first ring of
-    /// centres the ring's value blends into the pole value, the ring's mean: φ means nothing at
-    /// the pole, and a bilinear lookup there would take h along whatever φ rounding gives (a
-    /// dark dot where the view meets the normal). The hemisphere's horizon side clamps.
-    fn h_taps(&self, wo: DVec3) -> [(usize, f64); 5] {
-        h_taps(&self.grid, wo)
-    }
 }
 
-/// See [`Factored::h_taps`].
+/// Taps (index into `h`, weight) of ω on the factor grid, the same for every k: bilinear
+/// between cell centres in (cos θ, φ), φ wrapping. Between the pole and the first ring of
+/// centres the ring's value blends into the pole value, the ring's mean: φ means nothing at
+/// the pole, and a bilinear lookup there would take h along whatever φ rounding gives (a
+/// dark dot where the view meets the normal). The hemisphere's horizon side clamps.
 fn h_taps(grid: &Grid, wo: DVec3) -> [(usize, f64); 5] {
     let n = grid.n;
     let span = match grid.domain {
@@ -304,11 +299,11 @@ impl Shade for Factored {
             _ => return [0.0; 3],
         };
         let wo_l = normal_frame(hit.n).transpose() * wo;
-        let h_taps = self.h_taps(wo_l);
+        let wo_taps = h_taps(&self.grid, wo_l);
         let mut out = [0.0; 3];
         for k in 0..kk {
             let h = &self.h[k];
-            let hk = self.sigma[k] * h_taps.iter().map(|&(i, w)| w * h[i]).sum::<f64>();
+            let hk = self.sigma[k] * wo_taps.iter().map(|&(i, w)| w * h[i]).sum::<f64>();
             for &(p, w) in &taps {
                 let c = self.coeffs[p * kk + k];
                 for ch in 0..3 {

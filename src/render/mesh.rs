@@ -122,12 +122,12 @@ impl Mesh {
 
     /// The closest hit of the ray o + t d with t in (t_min, t_max).
     pub fn intersect(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<MeshHit> {
-        self.bvh.closest(&self.positions, &self.triangles, o, d, t_min, t_max)
+        self.bvh.walk(&self.positions, &self.triangles, o, d, t_min, t_max, false)
     }
 
     /// Whether anything blocks the ray o + t d for t in (t_min, ∞).
     pub fn occluded(&self, o: DVec3, d: DVec3, t_min: f64) -> bool {
-        self.bvh.any(&self.positions, &self.triangles, o, d, t_min)
+        self.bvh.walk(&self.positions, &self.triangles, o, d, t_min, f64::INFINITY, true).is_some()
     }
 
     /// Position and interpolated unit normal of a hit.
@@ -256,7 +256,10 @@ impl Bvh {
         near <= far
     }
 
-    fn closest(
+    /// One traversal for both queries: the closest hit in (t_min, t_max), shrinking t_max at
+    /// every hit, or — with `first` — any hit, returned as soon as it is found (shadow rays).
+    #[allow(clippy::too_many_arguments)]
+    fn walk(
         &self,
         p: &[DVec3],
         tris: &[[u32; 3]],
@@ -264,6 +267,7 @@ impl Bvh {
         d: DVec3,
         t_min: f64,
         mut t_max: f64,
+        first: bool,
     ) -> Option<MeshHit> {
         let inv = d.recip();
         let mut best = None;
@@ -284,36 +288,14 @@ impl Bvh {
                     if tt > t_min && tt < t_max {
                         t_max = tt;
                         best = Some(MeshHit { t: tt, triangle: t as usize, u, v });
+                        if first {
+                            return best;
+                        }
                     }
                 }
             }
         }
         best
-    }
-
-    fn any(&self, p: &[DVec3], tris: &[[u32; 3]], o: DVec3, d: DVec3, t_min: f64) -> bool {
-        let inv = d.recip();
-        let mut stack = vec![0u32];
-        while let Some(n) = stack.pop() {
-            let node = &self.nodes[n as usize];
-            if !Self::slab(node, o, inv, t_min, f64::INFINITY) {
-                continue;
-            }
-            if node.count == 0 {
-                stack.push(node.start);
-                stack.push(node.start + 1);
-                continue;
-            }
-            for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
-                let [a, b, c] = tris[t as usize].map(|i| p[i as usize]);
-                if let Some((tt, _, _)) = ray_triangle(o, d, a, b, c) {
-                    if tt > t_min {
-                        return true;
-                    }
-                }
-            }
-        }
-        false
     }
 }
 
