@@ -6,7 +6,7 @@
 
 use glam::DVec3;
 use prtkit::brdf::Brdf;
-use prtkit::envmap::{latlong_texel, resample, EnvMap, Layout};
+use prtkit::envmap::{resample, EnvMap, Layout};
 use prtkit::io::image::read_image;
 use prtkit::io::RgbImage;
 use prtkit::prefilter::model::Model;
@@ -30,7 +30,7 @@ fn environment() -> (EnvMap, String) {
     eprintln!("../shared/testdata is absent: using a procedural sky");
     let sun = DVec3::new(0.4, 0.3, 0.6).normalize();
     let img = RgbImage::from_fn(S, S, |x, y| {
-        let (d, _) = latlong_texel(S, S, x, y);
+        let d = prtkit::sphere::LatLong::new(S, S).texel_direction(x, y);
         let v = (if d.z > 0.0 { 1.0 } else { 0.3 }) + 40.0 * d.dot(sun).max(0.0).powi(200);
         [v as f32, v as f32 * 0.9, v as f32 * 0.8]
     });

@@ -22,7 +22,7 @@ use std::time::Instant;
 
 fn sky(w: usize, h: usize, tilt: f64) -> EnvMap {
     let img = RgbImage::from_fn(w, h, |x, y| {
-        let (d, _) = prtkit::envmap::latlong_texel(w, h, x, y);
+        let d = prtkit::sphere::LatLong::new(w, h).texel_direction(x, y);
         let sun = (40.0 * (d.dot(DVec3::new(tilt, -0.4, 0.7).normalize()) - 1.0)).exp();
         let v = (0.3 + 0.5 * d.z.max(0.0) + 20.0 * sun) as f32;
         [v, 0.9 * v, 0.8 * v]

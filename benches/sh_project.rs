@@ -3,7 +3,7 @@
 //!
 //! `cargo bench --bench sh_project -- [--out FILE.md]` (scripts/bench-sh-project.sh)
 
-use prtkit::envmap::{latlong_texel, EnvMap};
+use prtkit::envmap::EnvMap;
 use prtkit::io::{exr, RgbImage};
 use prtkit::progress::NoProgress;
 use prtkit::sh::project::{project, project_naive};
@@ -19,7 +19,7 @@ fn main() {
     // A sky-like map with detail at every scale (sun, horizon, texture), so the EXR compresses
     // like a real probe rather than like a constant.
     let image = RgbImage::from_fn(w, h, |x, y| {
-        let (d, _) = latlong_texel(w, h, x, y);
+        let d = prtkit::sphere::LatLong::new(w, h).texel_direction(x, y);
         let sun = d.dot(glam::DVec3::new(0.5, 0.3, 0.81).normalize()).max(0.0).powi(400) * 500.0;
         let sky = 0.5 + d.z.max(0.0);
         let texture = 0.1 * (((x * 2654435761usize) ^ (y * 40503)) % 1000) as f64 / 1000.0;

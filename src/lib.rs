@@ -17,3 +17,4 @@ pub mod quadrature;
 pub mod render;
 pub mod sh;
 pub mod shader;
+pub mod sphere;

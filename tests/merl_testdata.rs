@@ -37,8 +37,8 @@ fn lookup_test_vectors_match_merls_convention() {
     let Brdf::Merl(table) = &brdf else { panic!("not a MERL BRDF") };
     assert_eq!(table.missing(), [0, 0, 0]);
     for tv in expected["test_vectors"].as_array().unwrap() {
-        let wi = prtkit::sh::basis::direction(f(&tv["theta_i"]), f(&tv["phi_i"]));
-        let wo = prtkit::sh::basis::direction(f(&tv["theta_o"]), f(&tv["phi_o"]));
+        let wi = prtkit::sphere::direction(f(&tv["theta_i"]), f(&tv["phi_i"]));
+        let wo = prtkit::sphere::direction(f(&tv["theta_o"]), f(&tv["phi_o"]));
         let hd = halfdiff::from_directions(wi, wo);
         let ill_conditioned = f(&tv["theta_h"]) < 1e-6;
         if !ill_conditioned {

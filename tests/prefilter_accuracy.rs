@@ -3,7 +3,7 @@
 
 use glam::{DMat3, DVec3};
 use prtkit::brdf::Brdf;
-use prtkit::envmap::{latlong_texel, EnvMap};
+use prtkit::envmap::EnvMap;
 use prtkit::io::RgbImage;
 use prtkit::prefilter::angular::{self, ConeIntegrator, CutoffTable};
 use prtkit::prefilter::model::Model;
@@ -17,7 +17,7 @@ use prtkit::sh::synth::synthesize_latlong;
 fn sky(w: usize, h: usize) -> EnvMap {
     let sun = DVec3::new(0.4, 0.3, 0.6).normalize();
     EnvMap::latlong(RgbImage::from_fn(w, h, |x, y| {
-        let (d, _) = latlong_texel(w, h, x, y);
+        let d = prtkit::sphere::LatLong::new(w, h).texel_direction(x, y);
         let s = 40.0 * d.dot(sun).max(0.0).powi(200);
         let sky = if d.z > 0.0 { 1.0 + 0.5 * (1.0 - d.z) } else { 0.3 + 0.1 * (3.0 * d.x).sin().abs() };
         [(sky + s) as f32, (sky * 0.9 + s) as f32, (sky * 0.8 + 0.9 * s) as f32]

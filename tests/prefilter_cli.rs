@@ -11,7 +11,7 @@ fn prefilter() -> Command {
 fn sky(dir: &Path) -> PathBuf {
     let (w, h) = (64, 32);
     let img = RgbImage::from_fn(w, h, |x, y| {
-        let (d, _) = prtkit::envmap::latlong_texel(w, h, x, y);
+        let d = prtkit::sphere::LatLong::new(w, h).texel_direction(x, y);
         let v = (0.3 + d.z.max(0.0) + 3.0 * d.dot(glam::DVec3::new(0.6, 0.0, 0.8)).max(0.0).powi(8)) as f32;
         [v, v, v]
     });

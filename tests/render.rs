@@ -15,7 +15,7 @@ fn bin(name: &str) -> Command {
 /// Writes a lat-long environment of `f(direction)`.
 fn write_env(dir: &Path, name: &str, w: usize, h: usize, f: impl Fn(DVec3) -> f32) -> PathBuf {
     let img = RgbImage::from_fn(w, h, |x, y| {
-        let (d, _) = prtkit::envmap::latlong_texel(w, h, x, y);
+        let d = prtkit::sphere::LatLong::new(w, h).texel_direction(x, y);
         let v = f(d);
         [v, 0.9 * v, 0.8 * v]
     });

@@ -67,7 +67,7 @@ fn a_single_basis_function_projects_to_a_unit_vector() {
     for (l, m) in [(0usize, 0isize), (1, -1), (1, 0), (1, 1), (2, -2), (3, 2), (5, -4), (8, 8), (12, -7), (12, 0)] {
         let img = RgbImage::from_fn(w, h, |x, row| {
             let mut y = vec![0.0; count(order)];
-            let (dir, _) = prtkit::envmap::latlong_texel(w, h, x, row);
+            let dir = prtkit::sphere::LatLong::new(w, h).texel_direction(x, row);
             eval_basis_dir(&table, dir, &mut y);
             let v = y[index(l, m)] as f32;
             [v, v, v]
@@ -156,7 +156,7 @@ fn every_layout_gives_the_same_coefficients() {
 fn rotating_the_map_about_z_rotates_the_coefficients() {
     let (w, h) = (256, 128);
     let original = RgbImage::from_fn(w, h, |x, y| {
-        let (d, _) = prtkit::envmap::latlong_texel(w, h, x, y);
+        let d = prtkit::sphere::LatLong::new(w, h).texel_direction(x, y);
         let v = (1.0 + d.x * 0.5 + d.y * d.z + (3.0 * d.x).sin() * 0.3).max(0.0) as f32;
         [v, v * 0.5, 1.0 - v * 0.2]
     });

@@ -16,7 +16,7 @@ fn write_pfm(dir: &Path, name: &str, image: &RgbImage) -> PathBuf {
 
 fn sky(w: usize, h: usize) -> RgbImage {
     RgbImage::from_fn(w, h, |x, y| {
-        let (d, _) = prtkit::envmap::latlong_texel(w, h, x, y);
+        let d = prtkit::sphere::LatLong::new(w, h).texel_direction(x, y);
         let v = (0.2 + d.z.max(0.0) * 2.0 + 5.0 * d.dot(glam::DVec3::new(0.6, 0.0, 0.8)).max(0.0).powi(20)) as f32;
         [v, v * 0.9, v * 0.8]
     })

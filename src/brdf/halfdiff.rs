@@ -44,9 +44,9 @@ pub fn from_directions(wi: DVec3, wo: DVec3) -> HalfDiff {
 
 /// The inverse map: (ω_i, ω_o) from half/difference angles. ω_o is the mirror of ω_i about h.
 pub fn to_directions(hd: &HalfDiff) -> (DVec3, DVec3) {
-    let d = crate::sh::basis::direction(hd.theta_d, hd.phi_d);
+    let d = crate::sphere::direction(hd.theta_d, hd.phi_d);
     let wi = rotate_about(rotate_about(d, DVec3::Y, hd.theta_h), DVec3::Z, hd.phi_h);
-    let h = crate::sh::basis::direction(hd.theta_h, hd.phi_h);
+    let h = crate::sphere::direction(hd.theta_h, hd.phi_h);
     let wo = h * (2.0 * h.dot(wi)) - wi;
     (wi, wo)
 }

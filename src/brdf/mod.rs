@@ -152,7 +152,7 @@ impl Brdf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sh::basis::direction;
+    use crate::sphere::direction;
 
     #[test]
     fn isotropic_models_depend_on_the_azimuth_difference_only() {

@@ -204,7 +204,7 @@ impl KajiyaKay {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sh::basis::direction;
+    use crate::sphere::direction;
 
     /// ∫ over the upper hemisphere of f(ω) dω by a midpoint rule in (cos θ, φ).
     fn hemisphere_integral(f: impl Fn(DVec3) -> f64, n: usize) -> f64 {

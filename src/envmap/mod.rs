@@ -13,8 +13,8 @@ pub use probe::WORLD_FROM_PROBE;
 pub use resample::resample;
 
 use crate::io::RgbImage;
+use crate::sphere::latlong::{bilinear_taps, LatLong};
 use glam::DVec3;
-use std::f64::consts::PI;
 
 /// Errors about environment-map geometry.
 #[derive(Debug, thiserror::Error)]
@@ -139,7 +139,10 @@ impl EnvMap {
         let img = &self.images[face];
         let (w, h) = (img.width, img.height);
         match self.layout {
-            Layout::LatLong => Some(latlong_texel(w, h, x, y)),
+            Layout::LatLong => {
+                let grid = LatLong::new(w, h);
+                Some((grid.texel_direction(x, y), grid.row_solid_angle(y)))
+            }
             Layout::Angular => probe::texel(w, x, y),
             Layout::CrossHorizontal | Layout::CrossVertical => {
                 let n = self.layout.face_size(w, h);
@@ -174,14 +177,8 @@ impl EnvMap {
         match self.layout {
             Layout::LatLong => {
                 let img = &self.images[0];
-                let theta = d.z.clamp(-1.0, 1.0).acos();
-                let mut phi = d.y.atan2(d.x);
-                if phi < 0.0 {
-                    phi += 2.0 * PI;
-                }
-                let fx = phi / (2.0 * PI) * img.width as f64 - 0.5;
-                let fy = theta / PI * img.height as f64 - 0.5;
-                bilinear(img, fx, fy, true)
+                let (px, py) = LatLong::new(img.width, img.height).position(d);
+                bilinear(img, px - 0.5, py - 0.5, true)
             }
             Layout::Angular => {
                 let img = &self.images[0];
@@ -213,21 +210,6 @@ impl EnvMap {
     }
 }
 
-/// Lat-long texel (x, y) of a W×H map: centre direction and exact solid angle
-/// (2π/W)(cos θ_top − cos θ_bottom).
-pub fn latlong_texel(width: usize, height: usize, x: usize, y: usize) -> (DVec3, f64) {
-    let theta = PI * (y as f64 + 0.5) / height as f64;
-    let phi = 2.0 * PI * (x as f64 + 0.5) / width as f64;
-    (crate::sh::basis::direction(theta, phi), latlong_row_solid_angle(width, height, y))
-}
-
-/// Solid angle of one texel in row `y` of a W×H lat-long map.
-pub fn latlong_row_solid_angle(width: usize, height: usize, y: usize) -> f64 {
-    let t0 = PI * y as f64 / height as f64;
-    let t1 = PI * (y + 1) as f64 / height as f64;
-    2.0 * PI / width as f64 * (t0.cos() - t1.cos())
-}
-
 fn bilinear(img: &RgbImage, fx: f64, fy: f64, wrap_x: bool) -> [f32; 3] {
     bilinear_with(img.width, img.height, fx, fy, wrap_x, |x, y| img.get(x, y))
 }
@@ -240,26 +222,12 @@ fn bilinear_with(
     wrap_x: bool,
     sample: impl Fn(usize, usize) -> [f32; 3],
 ) -> [f32; 3] {
-    let fy = fy.clamp(0.0, height as f64 - 1.0);
-    let y0 = fy.floor() as usize;
-    let y1 = (y0 + 1).min(height - 1);
-    let ty = (fy - y0 as f64) as f32;
-    let (x0, x1, tx) = if wrap_x {
-        let fl = fx.floor();
-        let tx = (fx - fl) as f32;
-        let x0 = (fl as isize).rem_euclid(width as isize) as usize;
-        (x0, (x0 + 1) % width, tx)
-    } else {
-        let fx = fx.clamp(0.0, width as f64 - 1.0);
-        let x0 = fx.floor() as usize;
-        (x0, (x0 + 1).min(width - 1), (fx - x0 as f64) as f32)
-    };
-    let (a, b, c, d) = (sample(x0, y0), sample(x1, y0), sample(x0, y1), sample(x1, y1));
-    let mut out = [0.0; 3];
-    for k in 0..3 {
-        let top = a[k] + (b[k] - a[k]) * tx;
-        let bottom = c[k] + (d[k] - c[k]) * tx;
-        out[k] = top + (bottom - top) * ty;
+    let mut out = [0.0f32; 3];
+    for (i, w) in bilinear_taps(width, height, fx, fy, wrap_x) {
+        let v = sample(i % width, i / width);
+        for k in 0..3 {
+            out[k] += w as f32 * v[k];
+        }
     }
     out
 }
@@ -267,6 +235,7 @@ fn bilinear_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     fn total_solid_angle(map: &EnvMap) -> f64 {
         let mut s = 0.0;

@@ -5,7 +5,6 @@ use super::{cube, probe, EnvMap, EnvMapError, Layout, FACES};
 use crate::io::RgbImage;
 use glam::DVec3;
 use rayon::prelude::*;
-use std::f64::consts::PI;
 
 impl EnvMap {
     /// Direction at continuous position (px, py) of image `face` (pixel x spans [x, x+1]), or
@@ -14,7 +13,7 @@ impl EnvMap {
         let img = &self.images[face];
         let (w, h) = (img.width, img.height);
         match self.layout {
-            Layout::LatLong => Some(crate::sh::basis::direction(PI * py / h as f64, 2.0 * PI * px / w as f64)),
+            Layout::LatLong => Some(crate::sphere::LatLong::new(w, h).direction_at(px, py)),
             Layout::Angular => probe::direction_at(w, px, py),
             Layout::Faces => Some(cube::direction_at(FACES[face], w, px, py)),
             Layout::CrossHorizontal | Layout::CrossVertical => {

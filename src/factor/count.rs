@@ -7,6 +7,18 @@ use super::Channel;
 use crate::brdf::Brdf;
 use crate::progress::Progress;
 
+/// The singular-value curves of one material, for the left panel.
+#[derive(Clone, Debug, Default)]
+pub struct Spectrum {
+    /// Legend label.
+    pub label: String,
+    /// Measured singular values, descending.
+    pub measured: Vec<f64>,
+    /// Predicted singular values (F_l repeated 2l+1 times on the sphere, l+1 on the hemisphere),
+    /// empty when there is no prediction of σ itself.
+    pub predicted: Vec<f64>,
+}
+
 /// One material to count.
 #[derive(Clone, Debug)]
 pub struct Material {
@@ -80,7 +92,7 @@ pub fn count(
     material: &Material,
     config: &CountConfig,
     progress: &dyn Progress,
-) -> Result<(Row, super::plot::Spectrum), FactorError> {
+) -> Result<(Row, Spectrum), FactorError> {
     let sampling = Sampling { channel: material.channel, ..config.sampling };
     let prediction: Option<Prediction> =
         predict::predict(&material.brdf, sampling.domain, sampling.cosine, material.channel, config.energy);
@@ -96,7 +108,7 @@ pub fn count(
         let k = f.terms_for(config.energy);
         (f.singular_values, Some(k))
     };
-    let spectrum = super::plot::Spectrum {
+    let spectrum = Spectrum {
         label: material.name.clone(),
         measured: singular_values,
         predicted: prediction.as_ref().map_or(vec![], |p| predicted_singular_values(p, sampling.domain)),

@@ -1,20 +1,8 @@
 //! SVG plots of term counts (plotters, SVG backend): singular values against the predicted F_l
 //! (Mahajan et al. 2008, Fig. 2 right and Fig. 5) and K against (l*)² (Fig. 3A, 7C).
 
-use super::count::Row;
+use super::count::{Row, Spectrum};
 use plotters::prelude::*;
-
-/// The singular-value curves of one material, for the left panel.
-#[derive(Clone, Debug, Default)]
-pub struct Spectrum {
-    /// Legend label.
-    pub label: String,
-    /// Measured singular values, descending.
-    pub measured: Vec<f64>,
-    /// Predicted singular values (F_l repeated 2l+1 times on the sphere, l+1 on the hemisphere),
-    /// empty when there is no prediction of σ itself.
-    pub predicted: Vec<f64>,
-}
 
 const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),

@@ -7,10 +7,11 @@
 //! touched. θ* is chosen so that the lobe outside it holds at most ε of ∫ ρ̂ dω_i (App. D:
 //! cos θ* = ε^{1/(s+1)} for Phong), per view angle θ_o for 3-D BRDFs.
 
-use crate::envmap::{latlong_row_solid_angle, latlong_texel, EnvMap, Layout};
+use crate::envmap::{EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::Progress;
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
+use crate::sphere::{self, LatLong};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -44,12 +45,12 @@ impl ConeIntegrator {
         let mut radiance = Vec::with_capacity(width * height);
         for y in 0..height {
             for x in 0..width {
-                dirs.push(latlong_texel(width, height, x, y).0);
+                dirs.push(LatLong::new(width, height).texel_direction(x, y));
                 let v = img.get(x, y);
                 radiance.push([v[0] as f64, v[1] as f64, v[2] as f64]);
             }
         }
-        let row_omega = (0..height).map(|y| latlong_row_solid_angle(width, height, y)).collect();
+        let row_omega = (0..height).map(|y| LatLong::new(width, height).row_solid_angle(y)).collect();
         Ok(ConeIntegrator { width, height, dirs, radiance, row_omega })
     }
 
@@ -57,12 +58,8 @@ impl ConeIntegrator {
     pub fn integrate(&self, axis: DVec3, theta_star: f64, mut weight: impl FnMut(DVec3) -> [f64; 3]) -> [f64; 3] {
         let (w, h) = (self.width, self.height);
         let cos_star = theta_star.min(PI).cos();
-        let theta_r = axis.z.clamp(-1.0, 1.0).acos();
+        let (theta_r, phi_r) = sphere::angles(axis);
         let (st_r, ct_r) = theta_r.sin_cos();
-        let mut phi_r = axis.y.atan2(axis.x);
-        if phi_r < 0.0 {
-            phi_r += 2.0 * PI;
-        }
         let dtheta = PI / h as f64;
         let dphi = 2.0 * PI / w as f64;
         let y0 = (((theta_r - theta_star) / dtheta - 0.5).floor().max(0.0)) as usize;
@@ -148,7 +145,7 @@ impl CutoffTable {
             .into_par_iter()
             .map(|b| {
                 let theta_o = PI * b as f64 / (bins - 1).max(1) as f64;
-                let wo = crate::sh::basis::direction(theta_o.min(PI - 1e-6), 0.0);
+                let wo = crate::sphere::direction(theta_o.min(PI - 1e-6), 0.0);
                 // Mass per θ_i band (midpoint rule in θ_i, uniform φ_i).
                 let mass: Vec<f64> = (0..n_theta)
                     .map(|i| {
@@ -156,7 +153,7 @@ impl CutoffTable {
                         let s: f64 = (0..n_phi)
                             .map(|k| {
                                 rho_hat(
-                                    crate::sh::basis::direction(theta_i, 2.0 * PI * (k as f64 + 0.5) / n_phi as f64),
+                                    crate::sphere::direction(theta_i, 2.0 * PI * (k as f64 + 0.5) / n_phi as f64),
                                     wo,
                                 )
                             })
@@ -209,7 +206,7 @@ pub fn radial_map(
     let mut image = RgbImage::new(width, height);
     image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
         for (x, px) in row.iter_mut().enumerate() {
-            let (r, _) = latlong_texel(width, height, x, y);
+            let r = crate::sphere::LatLong::new(width, height).texel_direction(x, y);
             let v = env.integrate(r, theta_star, |l| u(r.dot(l)));
             *px = [v[0] as f32, v[1] as f32, v[2] as f32];
         }
@@ -234,7 +231,7 @@ pub fn view_map(
     let mut image = RgbImage::new(width, height);
     image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
         for (x, px) in row.iter_mut().enumerate() {
-            let (r, _) = latlong_texel(width, height, x, y);
+            let r = crate::sphere::LatLong::new(width, height).texel_direction(x, y);
             let Some(prepared) = model.prepare_view(r, view) else { continue };
             let theta_star = cutoff.at(r.dot(view).clamp(-1.0, 1.0).acos());
             let v = env.integrate(r, theta_star, |l| model.rho_hat_prepared(&prepared, l));

@@ -246,7 +246,7 @@ pub fn albedo(model: &Model, wo: DVec3, n: usize) -> f64 {
         let theta = PI * (i as f64 + 0.5) / n as f64;
         for k in 0..2 * n {
             let phi = PI * (k as f64 + 0.5) / n as f64;
-            let wi = crate::sh::basis::direction(theta, phi);
+            let wi = crate::sphere::direction(theta, phi);
             sum += model.rho_hat_grey(wi, wo) * theta.sin();
         }
     }
@@ -296,7 +296,7 @@ mod tests {
         // And ρ̂ in the tangent frame is the paper's cos^s(θ_i − θ_o) up to the model's scale:
         // peak where the angles to T are supplementary (the reflection cone).
         let (ti, to) = (0.6f64, std::f64::consts::PI - 0.6);
-        let v = model.rho_hat(crate::sh::basis::direction(ti, 0.0), crate::sh::basis::direction(to, 1.0))[0];
+        let v = model.rho_hat(crate::sphere::direction(ti, 0.0), crate::sphere::direction(to, 1.0))[0];
         assert!((v - 9.0 / (2.0 * PI)).abs() < 1e-12, "{v}");
     }
 }

@@ -78,11 +78,11 @@ impl Shrm {
     }
 }
 
-/// The reflection vector and local frame of lat-long texel (x, y): R_{α,β} = R_z(β)·R_y(α).
+/// The local frame of lat-long texel (x, y): R_{α,β} = R_z(β)·R_y(α) with (α, β) the spherical
+/// angles of its reflection vector (R&H 2002, §3).
 pub fn texel_frame(width: usize, height: usize, x: usize, y: usize) -> DMat3 {
-    let alpha = PI * (y as f64 + 0.5) / height as f64;
-    let beta = 2.0 * PI * (x as f64 + 0.5) / width as f64;
-    DMat3::from_rotation_z(beta) * DMat3::from_rotation_y(alpha)
+    let grid = crate::sphere::LatLong::new(width, height);
+    crate::sphere::frame(grid.row_theta(y), grid.column_phi(x))
 }
 
 /// Synthesizes the local SHRM B_pq(α, β) on a `width`×`height` lat-long grid.
@@ -323,7 +323,7 @@ pub fn view_grid(t: usize) -> Vec<DVec3> {
         for i in 0..t {
             let theta = PI * (j as f64 + 0.5) / t as f64;
             let phi = 2.0 * PI * (i as f64 + 0.5) / t as f64;
-            v.push(crate::sh::basis::direction(theta, phi));
+            v.push(crate::sphere::direction(theta, phi));
         }
     }
     v

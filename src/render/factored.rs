@@ -11,13 +11,14 @@
 //! (no visibility) c_k depends on the normal only and is tabulated on a lat-long grid of
 //! normals; for meshes it is computed per vertex with visibility by ray casting (the
 //! visibility bits are kept, so relighting under a new environment only redoes the sums) and
-//! interpolated across triangles. ω_i, ω_o are expressed in the frame of [`super::normal_frame`].
+//! interpolated across triangles. ω_i, ω_o are expressed in the frame of [`sphere::frame_of`].
 
-use super::reflection::latlong_taps;
-use super::{normal_frame, Hit, Scene, Shade};
+use super::{Hit, Scene, Shade};
 use crate::envmap::EnvMap;
 use crate::factor::{Factorization, Grid};
+use crate::prefilter::shrm::texel_frame;
 use crate::progress::Progress;
+use crate::sphere::{self, LatLong};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 use glam::{DMat3, DVec3};
@@ -47,9 +48,7 @@ pub struct Transport {
 impl Transport {
     /// The sphere: a `width`×`height` lat-long table of normals, no visibility.
     pub fn sphere(width: usize, height: usize) -> Self {
-        let frames = (0..height)
-            .flat_map(|y| (0..width).map(move |x| crate::prefilter::shrm::texel_frame(width, height, x, y)))
-            .collect();
+        let frames = (0..height).flat_map(|y| (0..width).map(move |x| texel_frame(width, height, x, y))).collect();
         Transport {
             support: Support::NormalTable { width, height },
             frames,
@@ -66,7 +65,7 @@ impl Transport {
         };
         let cells = grid.len();
         let words = cells.div_ceil(64);
-        let frames: Vec<DMat3> = mesh.normals.iter().map(|n| normal_frame(*n)).collect();
+        let frames: Vec<DMat3> = mesh.normals.iter().map(|n| sphere::frame_of(*n)).collect();
         progress.start("visibility", mesh.positions.len() as u64);
         let visible: Vec<u64> = (0..mesh.positions.len())
             .into_par_iter()
@@ -178,11 +177,7 @@ fn h_taps(grid: &Grid, wo: DVec3) -> [(usize, f64); 5] {
         _ => (n * n, 0.0),
     };
     let ring = 1.0 - pole.1;
-    let mut phi = wo.y.atan2(wo.x);
-    if phi < 0.0 {
-        phi += 2.0 * PI;
-    }
-    let fk = phi / (2.0 * PI) * n as f64 - 0.5;
+    let fk = sphere::phi(wo) / (2.0 * PI) * n as f64 - 0.5;
     let k0f = fk.floor();
     let (tk, tj) = (fk - k0f, fj - fj.floor());
     let k0 = (k0f as isize).rem_euclid(n as isize) as usize;
@@ -295,10 +290,10 @@ impl Shade for Factored {
                 let [a, b, c] = self.transport.triangles[t].map(|i| i as usize);
                 vec![(a, 1.0 - u - v), (b, u), (c, v)]
             }
-            (Support::NormalTable { width, height }, _) => latlong_taps(*width, *height, hit.n).to_vec(),
+            (Support::NormalTable { width, height }, _) => LatLong::new(*width, *height).taps(hit.n).to_vec(),
             _ => return [0.0; 3],
         };
-        let wo_l = normal_frame(hit.n).transpose() * wo;
+        let wo_l = sphere::frame_of(hit.n).transpose() * wo;
         let wo_taps = h_taps(&self.grid, wo_l);
         let mut out = [0.0; 3];
         for k in 0..kk {

@@ -307,7 +307,7 @@ pub fn uv_sphere(rings: usize, segments: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         let theta = std::f64::consts::PI * r as f64 / rings as f64;
         for s in 0..segments {
             let phi = 2.0 * std::f64::consts::PI * s as f64 / segments as f64;
-            p.push(crate::sh::basis::direction(theta, phi));
+            p.push(crate::sphere::direction(theta, phi));
         }
     }
     p.push(-DVec3::Z);

@@ -25,15 +25,7 @@ pub use camera::Camera;
 pub use frame::{render, Frame, Shade};
 pub use scene::{Hit, Scene};
 
-use glam::{DMat3, DVec3};
-
-/// The shading frame of a normal: R_z(φ)·R_y(θ) of its spherical angles, +Z along n — the same
-/// frame the SHRM texels use (`prefilter::shrm::texel_frame`), smooth away from the poles.
-pub fn normal_frame(n: DVec3) -> DMat3 {
-    let theta = n.z.clamp(-1.0, 1.0).acos();
-    let phi = n.y.atan2(n.x);
-    DMat3::from_rotation_z(phi) * DMat3::from_rotation_y(theta)
-}
+use glam::DVec3;
 
 /// Mirror reflection of the view direction `wo` (towards the viewer) about `n`.
 pub fn reflect(wo: DVec3, n: DVec3) -> DVec3 {

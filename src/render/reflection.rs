@@ -15,8 +15,8 @@ use crate::prefilter::shrm::{reflection_map, Shrm};
 use crate::sh::basis::eval_basis_dir;
 use crate::sh::legendre::LegendreTable;
 use crate::sh::{count, index};
+use crate::sphere::{self, LatLong};
 use glam::{DMat3, DVec3};
-use std::f64::consts::PI;
 use std::path::Path;
 
 /// Errors of reading an SHRM: the document/EXR pair's errors.
@@ -65,30 +65,6 @@ pub fn load(doc_path: &Path) -> Result<(Shrm, ShrmBody), ShrmLoadError> {
     Ok((Shrm { f_b: body.f_b, p_b: body.p_b, global: body.global, layers: ordered }, body))
 }
 
-/// Bilinear weights of direction `d` on a W×H lat-long grid (texel centres at half-integers,
-/// φ wraps, θ clamps): four (index, weight) pairs.
-pub fn latlong_taps(w: usize, h: usize, d: DVec3) -> [(usize, f64); 4] {
-    let theta = d.z.clamp(-1.0, 1.0).acos();
-    let mut phi = d.y.atan2(d.x);
-    if phi < 0.0 {
-        phi += 2.0 * PI;
-    }
-    let fx = phi / (2.0 * PI) * w as f64 - 0.5;
-    let fy = (theta / PI * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
-    let x0f = fx.floor();
-    let (tx, ty) = (fx - x0f, fy - fy.floor());
-    let x0 = (x0f as isize).rem_euclid(w as isize) as usize;
-    let x1 = (x0 + 1) % w;
-    let y0 = fy.floor() as usize;
-    let y1 = (y0 + 1).min(h - 1);
-    [
-        (y0 * w + x0, (1.0 - tx) * (1.0 - ty)),
-        (y0 * w + x1, tx * (1.0 - ty)),
-        (y1 * w + x0, (1.0 - tx) * ty),
-        (y1 * w + x1, tx * ty),
-    ]
-}
-
 fn sample(img: &RgbImage, taps: &[(usize, f64); 4]) -> [f64; 3] {
     let mut out = [0.0; 3];
     for &(i, wt) in taps {
@@ -128,12 +104,12 @@ impl Shade for ShrmShader {
     fn shade(&self, hit: &Hit, wo: DVec3) -> [f64; 3] {
         let key = if self.by_normal { hit.n } else { super::reflect(wo, hit.n) };
         let (w, h) = (self.shrm.width(), self.shrm.height());
-        let taps = latlong_taps(w, h, key);
+        let taps = LatLong::new(w, h).taps(key);
         if let Some(map) = &self.frame_map {
             return sample(map, &taps);
         }
         // Local SHRM, eq. 6: the view in the frame R_z(β)R_y(α) of the continuous (α, β) of R.
-        let frame: DMat3 = super::normal_frame(key);
+        let frame: DMat3 = sphere::frame_of(key);
         let mut y = vec![0.0; count(self.shrm.p_b)];
         eval_basis_dir(&self.table, frame.transpose() * wo, &mut y);
         let mut out = [0.0; 3];

@@ -23,16 +23,8 @@ pub fn eval_basis(table: &LegendreTable, cos_theta: f64, sin_theta: f64, phi: f6
 pub fn eval_basis_dir(table: &LegendreTable, dir: DVec3, out: &mut [f64]) {
     let d = dir.normalize();
     let sin_theta = (d.x * d.x + d.y * d.y).sqrt();
-    let phi = d.y.atan2(d.x);
+    let phi = crate::sphere::phi(d);
     eval_basis(table, d.z.clamp(-1.0, 1.0), sin_theta, phi, out);
-}
-
-/// Direction of spherical angles in the prtkit frame (+Z up, φ from +X towards +Y).
-#[inline]
-pub fn direction(theta: f64, phi: f64) -> DVec3 {
-    let (st, ct) = theta.sin_cos();
-    let (sp, cp) = phi.sin_cos();
-    DVec3::new(st * cp, st * sp, ct)
 }
 
 #[cfg(test)]

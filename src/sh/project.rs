@@ -14,8 +14,9 @@
 
 use super::legendre::LegendreTable;
 use super::{count, index, ShCoeffs};
-use crate::envmap::{latlong_row_solid_angle, EnvMap, Layout};
+use crate::envmap::{EnvMap, Layout};
 use crate::progress::Progress;
+use crate::sphere::LatLong;
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
 use std::f64::consts::{PI, SQRT_2};
@@ -109,7 +110,7 @@ fn project_latlong(map: &EnvMap, order: usize, progress: &dyn Progress) -> ShCoe
                 let theta = PI * (y as f64 + 0.5) / h as f64;
                 let (st, ct) = theta.sin_cos();
                 table.eval(ct, st, &mut plm);
-                let omega = latlong_row_solid_angle(w, h, y);
+                let omega = LatLong::new(w, h).row_solid_angle(y);
                 for l in 0..=order {
                     let p0 = plm[index(l, 0)] * omega;
                     let a = &mut acc[index(l, 0)];
