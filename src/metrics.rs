@@ -2,7 +2,7 @@
 //! accuracy tests and benchmarks) uses these definitions. `docs/render.md` lists them.
 
 use crate::io::RgbImage;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Errors of comparing.
 #[derive(Debug, thiserror::Error)]
@@ -28,7 +28,7 @@ pub enum CompareError {
 }
 
 /// Error metrics (all channels pooled).
-#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Metrics {
     /// Pixels compared.
     pub pixels: usize,

@@ -6,6 +6,7 @@ use glam::DVec3;
 use predicates::str::contains;
 use prtkit::io::image::{read_image, write_image};
 use prtkit::io::RgbImage;
+use prtkit::render::stage::Summary;
 use std::path::{Path, PathBuf};
 
 fn bin(name: &str) -> Command {
@@ -45,9 +46,14 @@ fn centre(img: &RgbImage, r: usize) -> [f64; 3] {
     s.map(|v| v / (r * r) as f64)
 }
 
-fn json_field(out: &[u8], key: &str) -> f64 {
-    let v: serde_json::Value = serde_json::from_slice(out).unwrap();
-    v[key].as_f64().unwrap_or_else(|| panic!("no {key} in {v}"))
+/// The `render --json` summary.
+fn summary(out: &[u8]) -> Summary {
+    serde_json::from_slice(out).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(out)))
+}
+
+/// Relative error of a `render --compare --json` run.
+fn rel_error(out: &[u8]) -> f64 {
+    summary(out).metrics.expect("--compare gives metrics").rel_error
 }
 
 #[test]
@@ -114,7 +120,7 @@ fn render_irradiance_matches_the_reference_for_lambert_within_one_percent() {
         .get_output()
         .stdout
         .clone();
-    let e = json_field(&out, "rel_error");
+    let e = rel_error(&out);
     assert!(e < 0.01 && e > 0.0, "irradiance vs reference: {e}");
 }
 
@@ -149,7 +155,7 @@ fn render_shrm_matches_the_reference_within_the_prefilter_epsilon() {
         .get_output()
         .stdout
         .clone();
-    let (e, eps) = (json_field(&out, "rel_error"), json_field(&out, "epsilon_achieved"));
+    let (e, eps) = (rel_error(&out), summary(&out).epsilon_achieved.unwrap());
     assert!(eps > 0.0 && eps <= 0.01, "ε {eps}");
     assert!(e <= eps, "shrm vs reference: rel error {e} > ε {eps}");
 }
@@ -177,7 +183,7 @@ fn render_factored_error_falls_monotonically_with_k() {
             .get_output()
             .stdout
             .clone();
-        errors.push(json_field(&out, "rel_error"));
+        errors.push(rel_error(&out));
     }
     for w in errors.windows(2) {
         assert!(w[1] < w[0], "errors not decreasing: {errors:?}");
@@ -200,7 +206,7 @@ fn render_obj_without_normals_is_shaded_with_computed_normals_and_says_so() {
         .arg(&env)
         .args(["--scene"])
         .arg(&obj)
-        .args(["--shading", "irradiance", "--res", "16x16", "-q", "-o"])
+        .args(["--shading", "irradiance", "--res", "16x16", "-o"])
         .arg(&out)
         .assert()
         .success()
@@ -321,7 +327,7 @@ fn render_factored_reads_factor_brdf_files_with_or_without_the_cosine_folded_in(
             .get_output()
             .stdout
             .clone();
-        json_field(&out, "rel_error")
+        rel_error(&out)
     };
     // The stored factors (f32) give the render of the in-process factorization (f64).
     let folded = factor_file(dir.path(), "folded", "phong:s=8", true, 20);

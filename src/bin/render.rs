@@ -1,5 +1,4 @@
 //! `render`: images of each bake against ground truth.
 fn main() -> std::process::ExitCode {
-    let args = <prtkit::cli::render::Args as clap::Parser>::parse();
-    prtkit::cli::common::run_stage("render", || prtkit::cli::render::run(args))
+    prtkit::cli::common::main::<prtkit::cli::render::Args>()
 }

@@ -1,5 +1,4 @@
 //! `sh-project`: project an environment map onto spherical harmonics.
 fn main() -> std::process::ExitCode {
-    let args = <prtkit::cli::sh_project::Args as clap::Parser>::parse();
-    prtkit::cli::common::run_stage("sh-project", || prtkit::cli::sh_project::run(args))
+    prtkit::cli::common::main::<prtkit::cli::sh_project::Args>()
 }

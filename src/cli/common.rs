@@ -1,5 +1,8 @@
-//! What every stage's command line shares: exit codes, error printing, progress bars.
+//! How every stage runs: exit codes, the thread pool, interruption, progress bars, narration on
+//! stderr, and error reporting (`docs/cli.md`).
 
+use super::options::Execution;
+use std::fmt::Display;
 use std::io::IsTerminal;
 use std::process::ExitCode;
 
@@ -11,6 +14,8 @@ pub mod exit {
     pub const NEGATIVE: u8 = 1;
     /// An error: bad input, I/O, usage.
     pub const ERROR: u8 = 2;
+    /// Interrupted by SIGINT, SIGTERM or SIGHUP.
+    pub const INTERRUPTED: u8 = 130;
 }
 
 /// The outcome of a stage that ran without error.
@@ -22,30 +27,92 @@ pub enum Outcome {
     Negative,
 }
 
-/// Runs a stage, printing errors as `<stage>: error: …` with their causes, and maps the result
-/// to an exit code. A broken pipe on stdout ends quietly with status 0.
-pub fn run_stage(stage: &str, f: impl FnOnce() -> anyhow::Result<Outcome>) -> ExitCode {
-    match f() {
+/// A stage's command line: its clap arguments and how they run.
+pub trait Stage: clap::Parser + Send {
+    /// The stage's name, e.g. `sh-project`: the prefix of its messages.
+    const NAME: &'static str;
+    /// The shared execution options (`--threads`, `--quiet`).
+    fn execution(&self) -> &Execution;
+    /// Turns the arguments into the library's config, calls the library, writes the outputs.
+    fn run(self, ctx: &Context) -> anyhow::Result<Outcome>;
+}
+
+/// What a running stage may use of its surroundings: progress and narration on stderr.
+pub struct Context {
+    stage: &'static str,
+    quiet: bool,
+    bar: Bar,
+}
+
+impl Context {
+    /// A context for `stage`; `quiet` silences everything on stderr but errors.
+    pub fn new(stage: &'static str, quiet: bool) -> Self {
+        Context { stage, quiet, bar: Bar::new(quiet) }
+    }
+
+    /// Progress for the library's long computations.
+    pub fn progress(&self) -> &dyn crate::progress::Progress {
+        &self.bar
+    }
+
+    /// Says something on stderr (`stage: message`), unless `--quiet`.
+    pub fn note(&self, message: impl Display) {
+        if !self.quiet {
+            self.bar.suspend(|| eprintln!("{}: {message}", self.stage));
+        }
+    }
+
+    /// True with `--quiet`.
+    pub fn quiet(&self) -> bool {
+        self.quiet
+    }
+}
+
+/// Parses the process's arguments as stage `S` and runs it (the `main` of every binary).
+pub fn main<S: Stage>() -> ExitCode {
+    run(S::parse())
+}
+
+/// Runs a parsed stage: installs the interruption handler, sizes its thread pool, prints errors
+/// as `<stage>: error: …` with their causes, and maps the result to an exit code. A broken pipe
+/// on stdout ends quietly with status 0.
+pub fn run<S: Stage>(args: S) -> ExitCode {
+    install_interrupt_handler();
+    let ctx = Context::new(S::NAME, args.execution().quiet);
+    let result = args.execution().pool(&ctx).and_then(|pool| pool.install(|| args.run(&ctx)));
+    match result {
         Ok(Outcome::Success) => ExitCode::from(exit::SUCCESS),
         Ok(Outcome::Negative) => ExitCode::from(exit::NEGATIVE),
+        Err(err) if is_broken_pipe(&err) => ExitCode::from(exit::SUCCESS),
         Err(err) => {
-            if is_broken_pipe(&err) {
-                return ExitCode::from(exit::SUCCESS);
-            }
-            eprintln!("{stage}: error: {err:#}");
+            eprintln!("{}: error: {err:#}", S::NAME);
             ExitCode::from(exit::ERROR)
         }
     }
 }
 
-fn is_broken_pipe(err: &anyhow::Error) -> bool {
-    err.chain()
-        .any(|cause| cause.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe))
+/// On SIGINT, SIGTERM or SIGHUP: remove the temporary files of outputs not yet in place and exit
+/// 130. Outputs being renamed into place are finished first (`io::atomic`), so a run leaves all
+/// of its outputs or none, and never a temporary file.
+fn install_interrupt_handler() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // A second handler cannot be set (a test running stages in-process); the first stays.
+        let _ = ctrlc::set_handler(|| {
+            crate::io::atomic::remove_pending();
+            std::process::exit(exit::INTERRUPTED as i32);
+        });
+    });
 }
 
-/// Parses clap arguments; usage errors exit 2 (clap's default), `--help` exits 0.
-pub fn parse_args<T: clap::Parser>() -> T {
-    T::parse()
+fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|cause| {
+        let io = cause.downcast_ref::<std::io::Error>().or_else(|| match cause.downcast_ref::<crate::io::IoError>() {
+            Some(crate::io::IoError::Os { error, .. }) => Some(error),
+            _ => None,
+        });
+        io.is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// An indicatif bar behind the library's [`crate::progress::Progress`] callback, drawn on stderr
@@ -59,6 +126,13 @@ impl Bar {
     pub fn new(quiet: bool) -> Self {
         let visible = !quiet && std::io::stderr().is_terminal();
         Bar { bar: visible.then(indicatif::ProgressBar::hidden) }
+    }
+
+    fn suspend(&self, f: impl FnOnce()) {
+        match &self.bar {
+            Some(bar) => bar.suspend(f),
+            None => f(),
+        }
     }
 }
 
@@ -86,69 +160,4 @@ impl crate::progress::Progress for Bar {
             bar.finish_and_clear();
         }
     }
-}
-
-/// Parses `WxH` (e.g. `512x256`) for clap.
-pub fn parse_size(s: &str) -> Result<(usize, usize), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, e.g. 512x256, got {s:?}"))?;
-    let w: usize = w.trim().parse().map_err(|_| format!("bad width in {s:?}"))?;
-    let h: usize = h.trim().parse().map_err(|_| format!("bad height in {s:?}"))?;
-    if w == 0 || h == 0 || w > 1 << 16 || h > 1 << 16 {
-        return Err(format!("size {s:?} must be between 1x1 and 65536x65536"));
-    }
-    Ok((w, h))
-}
-
-/// Parses `x,y,z` (three finite numbers) for points and directions on the command line.
-pub fn parse_xyz(s: &str) -> Result<glam::DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("expected x,y,z, got {s:?}"))?;
-    if v.len() != 3 || v.iter().any(|c| !c.is_finite()) {
-        return Err(format!("expected three finite numbers x,y,z, got {s:?}"));
-    }
-    Ok(glam::DVec3::new(v[0], v[1], v[2]))
-}
-
-/// The options every stage shares for how it runs (flattened into each stage's `Args`).
-#[derive(Clone, Debug, Default, clap::Args)]
-pub struct Execution {
-    /// Worker threads (default or 0: all cores). Results do not depend on it.
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-
-    /// Do not draw progress bars (they are drawn only on a terminal anyway).
-    #[arg(short, long)]
-    pub quiet: bool,
-}
-
-impl Execution {
-    /// Sizes the thread pool and returns the progress bar for the stage.
-    pub fn start(&self) -> anyhow::Result<Bar> {
-        init_threads(self.threads)?;
-        Ok(Bar::new(self.quiet))
-    }
-}
-
-/// Sets the size of rayon's global pool (`--threads`; 0 or none: all cores); results never
-/// depend on it. A pool that already exists (a test calling `run` twice) is kept.
-pub fn init_threads(threads: Option<usize>) -> anyhow::Result<()> {
-    if let Some(n) = threads.filter(|&n| n > 0) {
-        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n).build_global() {
-            if rayon::current_num_threads() != n {
-                anyhow::bail!("cannot start {n} threads: {e}");
-            }
-        }
-    }
-    Ok(())
-}
-
-/// `--json` owns stdout: a document that would also go there must be given a file instead.
-pub fn check_json_output(document: &crate::io::Output, json: bool) -> anyhow::Result<()> {
-    if json && *document == crate::io::Output::Stdout {
-        anyhow::bail!("--json prints the summary on stdout: give the document a file with -o FILE");
-    }
-    Ok(())
 }

@@ -1,24 +1,36 @@
-//! `prtkit convert`: resample an environment map into another layout (e.g. a light probe to
-//! lat-long), or write it in another format.
+//! `convert`: clap arguments → [`envmap::stage::Config`] → one library call → outputs.
 
-use super::common::parse_size;
-use super::common::{Execution, Outcome};
-use super::envinput::EnvInput;
-use crate::envmap::{self, Layout};
-use crate::io;
-use anyhow::{Context, Result};
-use clap::Parser;
+use super::common::{Context, Outcome, Stage};
+use super::options::{parse_output, parse_size, EnvArgs, Execution, Exposure};
+use super::outputs::{check_writable, Outputs};
+use crate::envmap::stage::{self, Config};
+use crate::envmap::{Layout, FACES};
+use crate::io::Output;
+use anyhow::Result;
+use clap::{Parser, ValueEnum};
 use std::path::PathBuf;
 
-/// Resample an environment map into another layout (lat-long, angular, cube crosses, six faces).
+/// File format of the six faces written by `--to faces`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FaceFormat {
+    /// OpenEXR, float.
+    Exr,
+    /// Portable float map.
+    Pfm,
+    /// Tone-mapped PNG (sRGB, --exposure).
+    Png,
+}
+
+/// Resample an environment map into another layout (lat-long, angular probe, cube crosses, six
+/// faces), or write it in another format.
 #[derive(Debug, Parser)]
-#[command(name = "convert", version, about, long_about = None)]
+#[command(name = "convert", version)]
 pub struct Args {
     #[command(flatten)]
-    pub input: EnvInput,
+    pub input: EnvArgs,
 
     /// Output layout.
-    #[arg(long = "to", default_value = "latlong", value_parser = clap::value_parser!(Layout))]
+    #[arg(long = "to", default_value = "latlong")]
     pub to: Layout,
 
     /// Output size WxH (per face for `faces`). Default: 2S x S for lat-long, where S keeps the
@@ -26,65 +38,61 @@ pub struct Args {
     #[arg(long, value_parser = parse_size)]
     pub size: Option<(usize, usize)>,
 
-    /// Sub-samples per texel edge (k x k bilinear lookups averaged per output texel).
+    /// Sub-samples per texel edge (k x k bilinear lookups averaged per output texel), 1..=16.
     #[arg(long, default_value_t = 3)]
     pub supersample: usize,
 
-    /// Output file (.exr, .pfm, .png). For `--to faces`, a directory that receives
-    /// px/nx/py/ny/pz/nz with the extension of `--face-format`.
+    /// Output file (.exr, .pfm, .png; `-`: EXR on stdout). For `--to faces`, a directory that
+    /// receives px/nx/py/ny/pz/nz with the extension of `--face-format` (created if missing).
     #[arg(short, long)]
     pub output: PathBuf,
 
-    /// Extension of the face files when writing `--to faces`.
-    #[arg(long, default_value = "exr")]
-    pub face_format: String,
+    /// Format of the face files when writing `--to faces`.
+    #[arg(long, value_enum, default_value_t = FaceFormat::Exr)]
+    pub face_format: FaceFormat,
 
-    /// Exposure in stops for PNG output.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub exposure: f32,
+    #[command(flatten)]
+    pub exposure: Exposure,
 
     #[command(flatten)]
     pub run: Execution,
 }
 
-/// Runs `convert`.
-pub fn run(args: Args) -> Result<Outcome> {
-    let map = args.input.load()?;
-    let texels = map.texel_count();
-    let (w, h) = match (args.size, args.to) {
-        (Some(s), _) => s,
-        (None, Layout::LatLong) => {
-            let s = ((texels as f64 / 2.0).sqrt().round() as usize).max(1);
-            (2 * s, s)
-        }
-        (None, Layout::CrossHorizontal) => {
-            let n = ((texels as f64 / 6.0).sqrt().round() as usize).max(1);
-            (4 * n, 3 * n)
-        }
-        (None, Layout::CrossVertical) => {
-            let n = ((texels as f64 / 6.0).sqrt().round() as usize).max(1);
-            (3 * n, 4 * n)
-        }
-        (None, Layout::Faces) => {
-            let n = ((texels as f64 / 6.0).sqrt().round() as usize).max(1);
-            (n, n)
-        }
-        (None, Layout::Angular) => {
-            let s = ((texels as f64).sqrt().round() as usize).max(1);
-            (s, s)
-        }
-    };
-    let out = envmap::resample(&map, args.to, w, h, args.supersample)
-        .with_context(|| format!("cannot write a {} map of {w}x{h}", args.to))?;
-    if args.to == Layout::Faces {
-        std::fs::create_dir_all(&args.output)
-            .with_context(|| format!("cannot create directory {}", args.output.display()))?;
-        for (face, img) in envmap::FACES.iter().zip(out.images()) {
-            let path = args.output.join(format!("{}.{}", face.short_name(), args.face_format));
-            io::image::write_image(&path, img, args.exposure)?;
-        }
-    } else {
-        io::image::write_image(&args.output, out.image(), args.exposure)?;
+impl TryFrom<&Args> for Config {
+    type Error = anyhow::Error;
+    fn try_from(args: &Args) -> Result<Config> {
+        Ok(Config { to: args.to, size: args.size, supersample: args.supersample })
     }
-    Ok(Outcome::Success)
+}
+
+impl Stage for Args {
+    const NAME: &'static str = "convert";
+    fn execution(&self) -> &Execution {
+        &self.run
+    }
+    fn run(self, ctx: &Context) -> Result<Outcome> {
+        let config = Config::try_from(&self)?;
+        let single = parse_output(&self.output.to_string_lossy()).map_err(anyhow::Error::msg)?;
+        if self.to != Layout::Faces {
+            check_writable([&single])?;
+        } else if let Some(parent) = self.output.parent().filter(|p| !p.as_os_str().is_empty()) {
+            check_writable([&Output::File(parent.join("faces"))])?;
+        }
+        let map = self.input.load(ctx)?;
+        let out = stage::run(&config, &map)?;
+
+        let mut outputs = Outputs::new();
+        if self.to == Layout::Faces {
+            outputs.create_dir(&self.output)?;
+            let ext = self.face_format.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default();
+            for (face, img) in FACES.iter().zip(out.images()) {
+                let path = self.output.join(format!("{}.{ext}", face.short_name()));
+                outputs.image(&Output::File(path), img, self.exposure.stops)?;
+            }
+        } else {
+            outputs.image(&single, out.image(), self.exposure.stops)?;
+        }
+        outputs.commit()?;
+        Ok(Outcome::Success)
+    }
 }

@@ -1,35 +1,39 @@
-//! `count-terms`: how many in-out BRDF terms each material needs — predicted by the closed forms
-//! of Mahajan, Tseng & Ramamoorthi 2008 and measured by SVD — with a `--check` mode for CI.
+//! `count-terms`: clap arguments → [`factor::count::CountConfig`] and the materials → one
+//! library call → the table, the plot and the check's exit status.
 
-use super::common::{Execution, Outcome};
-use super::factor_brdf::parse_memory;
-use crate::brdf::BrdfSpec;
-use crate::factor::count::{self, CountConfig, Material, Row};
-use crate::factor::{manifest, plot, svd, Channel};
-use crate::io::{self, Output};
-use anyhow::{Context, Result};
+use super::common::{Context, Outcome, Stage};
+use super::options::{parse_brdf, parse_output, Execution, MatrixArgs};
+use super::outputs::{check_writable, Outputs};
+use crate::brdf::Brdf;
+use crate::factor::count::{self, CountConfig, Material};
+use crate::factor::{manifest, plot};
+use crate::io::Output;
+use anyhow::{Context as _, Result};
 use clap::Parser;
 use std::path::PathBuf;
 
-/// Predict and measure the number of in-out BRDF terms each material needs.
+/// Predict and measure how many in-out BRDF terms each material needs (Mahajan et al. 2008).
+///
+/// Prints a table (or JSON rows) of predicted K from the closed forms and measured K from the
+/// SVD; `--check` exits 1 naming each material over its budget or mispredicted.
 #[derive(Debug, Parser)]
-#[command(name = "count-terms", version, about, long_about = None)]
+#[command(name = "count-terms", version)]
 pub struct Args {
     /// A BRDF spec (docs/brdf-specs.md); repeat for several materials. Its name is the spec
     /// (the file stem for merl:).
-    #[arg(long = "brdf", value_name = "SPEC")]
-    pub brdfs: Vec<String>,
+    #[arg(long = "brdf", value_name = "SPEC", value_parser = parse_brdf)]
+    pub brdfs: Vec<Brdf>,
 
     #[command(flatten)]
-    pub matrix: super::factor_brdf::MatrixArgs,
+    pub matrix: MatrixArgs,
 
     /// A manifest of `name spec [budget]` lines (docs/count-terms.md).
     #[arg(long, value_name = "FILE")]
     pub manifest: Option<PathBuf>,
 
     /// Term budget for every material without a budget of its own.
-    #[arg(long, value_name = "N")]
-    pub max_terms: Option<usize>,
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_terms: Option<u64>,
 
     /// One row per R, G, B channel for RGB (measured) materials, named NAME/r, NAME/g, NAME/b.
     #[arg(long)]
@@ -47,9 +51,9 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
-    /// Write an SVG plot: singular values vs predicted F_l, and K vs (l*)².
-    #[arg(long, value_name = "FILE.svg")]
-    pub plot: Option<PathBuf>,
+    /// Write an SVG plot: singular values vs predicted F_l, and K vs (l*)² (`-`: stdout).
+    #[arg(long, value_name = "FILE.svg", value_parser = parse_output)]
+    pub plot: Option<Output>,
 
     /// CI mode: exit 1 naming each material whose measured K exceeds its budget or whose
     /// prediction misses the measurement by more than --tolerance.
@@ -59,10 +63,6 @@ pub struct Args {
     /// Allowed |predicted − measured| / measured, as a fraction (0.25) or percent (25%).
     #[arg(long, default_value = "25%", value_parser = parse_tolerance)]
     pub tolerance: f64,
-
-    /// Memory budget per SVD, e.g. 512M, 4G.
-    #[arg(long, default_value = "4G", value_parser = parse_memory)]
-    pub max_memory: u128,
 
     #[command(flatten)]
     pub run: Execution,
@@ -80,90 +80,85 @@ pub fn parse_tolerance(s: &str) -> Result<f64, String> {
     Ok(v)
 }
 
-fn default_name(spec: &BrdfSpec, text: &str) -> String {
-    match spec {
-        BrdfSpec::Merl(p) => p.file_stem().map_or(text.to_string(), |s| s.to_string_lossy().into_owned()),
-        other => other.to_string(),
+impl TryFrom<&Args> for CountConfig {
+    type Error = anyhow::Error;
+    fn try_from(args: &Args) -> Result<CountConfig> {
+        Ok(CountConfig {
+            sampling: args.matrix.sampling(),
+            per_channel: args.per_channel,
+            max_memory: args.matrix.max_memory,
+            energy: args.energy,
+            predict_only: args.predict_only,
+            method: args.matrix.method,
+            tolerance: args.tolerance,
+        })
     }
 }
 
-/// Runs `count-terms`.
-pub fn run(args: Args) -> Result<Outcome> {
-    if !(args.energy > 0.0 && args.energy < 1.0) {
-        anyhow::bail!("--energy must be in (0, 1), got {}", args.energy);
-    }
-    if args.max_terms == Some(0) {
-        anyhow::bail!("--max-terms must be at least 1");
-    }
-    let mut entries: Vec<(String, BrdfSpec, Option<usize>)> = Vec::new();
-    for text in &args.brdfs {
-        let spec = BrdfSpec::parse(text)?;
-        entries.push((default_name(&spec, text), spec, args.max_terms));
-    }
-    if let Some(path) = &args.manifest {
-        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-        let base = path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
-        for e in manifest::parse(&text, &path.display().to_string(), &base)? {
-            entries.push((e.name, e.spec, e.budget.or(args.max_terms)));
-        }
-    }
-    if entries.is_empty() {
-        anyhow::bail!("no material: give --brdf SPEC (repeatable) or --manifest FILE");
-    }
-    let plot_out = args.plot.as_ref().map(|p| Output::File(p.clone()));
-    if let Some(p) = &plot_out {
-        p.check_writable()?;
-    }
-    let sampling = args.matrix.sampling();
-    // Load every material and check every budget before the first SVD.
-    let mut materials = Vec::new();
-    for (name, spec, budget) in entries {
-        let brdf = spec.load()?;
-        if !args.predict_only {
-            let method = svd::resolve_method(&brdf, args.matrix.method)?;
-            svd::check_budget(&sampling, method, 0, args.max_memory).with_context(|| format!("material {name}"))?;
-        }
-        if args.per_channel && brdf.is_rgb() {
-            for (suffix, channel) in [("r", Channel::R), ("g", Channel::G), ("b", Channel::B)] {
-                materials.push(Material { name: format!("{name}/{suffix}"), brdf: brdf.clone(), channel, budget });
+impl Args {
+    /// The materials: each --brdf (named by its spec, or the MERL file's stem), then the
+    /// manifest's lines (their MERL files read here, errors naming the manifest line).
+    fn materials(&self) -> Result<Vec<Material>> {
+        let budget = self.max_terms.map(|b| b as usize);
+        let channel = self.matrix.channel;
+        let mut out: Vec<Material> = self
+            .brdfs
+            .iter()
+            .map(|brdf| {
+                let name = match brdf {
+                    Brdf::Merl(m) => m.path().file_stem().map_or(brdf.spec(), |s| s.to_string_lossy().into_owned()),
+                    _ => brdf.spec(),
+                };
+                Material { name, brdf: brdf.clone(), channel, budget }
+            })
+            .collect();
+        if let Some(path) = &self.manifest {
+            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+            let base = path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
+            for e in manifest::parse(&text, &path.display().to_string(), &base)? {
+                let brdf =
+                    e.spec.load().with_context(|| format!("{}:{}: material {}", path.display(), e.line, e.name))?;
+                out.push(Material { name: e.name, brdf, channel, budget: e.budget.or(budget) });
             }
+        }
+        Ok(out)
+    }
+}
+
+impl Stage for Args {
+    const NAME: &'static str = "count-terms";
+    fn execution(&self) -> &Execution {
+        &self.run
+    }
+    fn run(self, ctx: &Context) -> Result<Outcome> {
+        check_writable(self.plot.iter().chain([&Output::Stdout]))?;
+        let config = CountConfig::try_from(&self)?;
+        let out = count::run(&config, self.materials()?, ctx.progress())?;
+
+        let mut outputs = Outputs::new();
+        if let Some(plot_out) = &self.plot {
+            let title = format!(
+                "count-terms: {} , n = {}, {:.1} % energy",
+                self.matrix.domain,
+                self.matrix.resolution,
+                100.0 * self.energy
+            );
+            let svg = plot::count_plot(&title, &out.rows, &out.spectra).map_err(anyhow::Error::msg)?;
+            outputs.bytes(plot_out, svg.into_bytes())?;
+        }
+        if self.json {
+            outputs.json(&Output::Stdout, &out.rows)?;
         } else {
-            materials.push(Material { name, brdf, channel: args.matrix.channel, budget });
+            outputs.bytes(&Output::Stdout, count::markdown_table(&out.rows).into_bytes())?;
         }
-    }
-    let config = CountConfig {
-        sampling,
-        energy: args.energy,
-        predict_only: args.predict_only,
-        method: args.matrix.method,
-        tolerance: args.tolerance,
-    };
-    let bar = args.run.start()?;
-    let mut rows: Vec<Row> = Vec::new();
-    let mut spectra = Vec::new();
-    for m in &materials {
-        let (row, spectrum) = count::count(m, &config, &bar).with_context(|| format!("material {}", m.name))?;
-        rows.push(row);
-        spectra.push(spectrum);
-    }
-    if let Some(out) = &plot_out {
-        let title = format!(
-            "count-terms: {} , n = {}, {:.1} % energy",
-            args.matrix.domain,
-            args.matrix.resolution,
-            100.0 * args.energy
-        );
-        let svg = plot::count_plot(&title, &rows, &spectra).map_err(anyhow::Error::msg)?;
-        out.write(svg.as_bytes())?;
-    }
-    let text = if args.json { io::document::to_json_pretty(&rows) } else { count::markdown_table(&rows) };
-    Output::Stdout.write(text.as_bytes())?;
-    let failing: Vec<&Row> = rows.iter().filter(|r| !r.failures.is_empty()).collect();
-    if args.check && !failing.is_empty() {
-        for r in &failing {
-            eprintln!("count-terms: check failed: {}: {}", r.name, r.failures.join("; "));
+        outputs.commit()?;
+        let failing: Vec<_> = out.failing().collect();
+        if self.check && !failing.is_empty() {
+            for r in failing {
+                eprintln!("count-terms: check failed: {}: {}", r.name, r.failures.join("; "));
+            }
+            return Ok(Outcome::Negative);
         }
-        return Ok(Outcome::Negative);
+        Ok(Outcome::Success)
     }
-    Ok(Outcome::Success)
 }

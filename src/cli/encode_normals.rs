@@ -2,7 +2,8 @@
 //! report the exact error against the closed-form bounds, decode codes back, emit shader
 //! decoders, and reproduce Table 1 (`--table`).
 
-use super::common::{init_threads, Bar, Execution, Outcome};
+use super::common::{Bar, Outcome, Stage};
+use super::options::Execution;
 use crate::io::{Document, Output, Provenance};
 use crate::normals::metrics::{self, ErrorStats, Histogram};
 use crate::normals::shader::{self, Language};
@@ -60,7 +61,7 @@ pub struct Args {
     #[arg(long, requires = "decode")]
     pub header: Option<PathBuf>,
     /// Image size for --decode to .exr.
-    #[arg(long, value_parser = super::common::parse_size)]
+    #[arg(long, value_parser = super::options::parse_size)]
     pub size: Option<(usize, usize)>,
     /// Print a shader decode function for --scheme/--bits: glsl, hlsl or wgsl.
     #[arg(long, value_parser = parse_language, conflicts_with_all = ["table", "decode"])]
@@ -163,7 +164,6 @@ pub struct Replaced {
 
 /// Runs `encode-normals`.
 pub fn run(args: Args) -> Result<Outcome> {
-    init_threads(args.run.threads)?;
     let codec = Codec::new(args.scheme, args.bits.unwrap_or(32))?;
     if let Some(lang) = args.emit_decoder {
         Output::Stdout.write(shader::decoder(&codec, lang).as_bytes())?;
@@ -414,4 +414,14 @@ fn markdown(rows: &[Row], bits: u32, seed: u64) -> String {
     }
     s += "\n";
     s
+}
+
+impl Stage for Args {
+    const NAME: &'static str = "encode-normals";
+    fn execution(&self) -> &Execution {
+        &self.run
+    }
+    fn run(self, _ctx: &super::common::Context) -> Result<Outcome> {
+        run(self)
+    }
 }

@@ -1,12 +1,15 @@
-//! Command-line front ends: one module per stage (clap args → typed config → library call →
-//! outputs), plus the conventions they share (exit codes, progress bars, error reporting).
+//! Command-line front ends: one module per stage (clap args → the library's typed config → one
+//! library call → outputs), plus what they share: [`common`] (running a stage: exit codes, the
+//! thread pool, interruption, narration), [`options`] (the option vocabulary) and [`outputs`]
+//! (all-or-nothing writing).
 
 pub mod common;
 pub mod convert;
 pub mod count_terms;
 pub mod encode_normals;
-pub mod envinput;
 pub mod factor_brdf;
+pub mod options;
+pub mod outputs;
 pub mod prefilter;
 pub mod render;
 pub mod sample_shader;

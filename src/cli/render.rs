@@ -1,28 +1,23 @@
-//! `render`: images of each bake next to ground truth — SH irradiance, SHRMs, K-term factored
-//! relighting and a reference integrator — with error images, metrics and labelled panels.
+//! `render`: clap arguments → [`render::stage::Config`] (reading the bakes it names) → one
+//! library call → outputs.
 
-use super::common::{parse_size, parse_xyz, Execution, Outcome};
-use super::envinput::EnvInput;
+use super::common::{Context, Outcome, Stage};
+use super::options::{parse_brdf, parse_output, parse_size, parse_xyz, EnvArgs, Execution, Exposure};
+use super::outputs::{check_writable, Outputs};
 use crate::brdf::Brdf;
-use crate::factor::{Channel, Domain, Method, Sampling};
-use crate::io::{self, Output, RgbImage};
-use crate::metrics::{compare, Metrics};
-use crate::render::factored::{Factored, Transport};
-use crate::render::irradiance::Irradiance;
+use crate::io::{self, Output};
 use crate::render::mesh::Mesh;
-use crate::render::panel::{layout, Cell};
-use crate::render::reference::{Integrand, Reference};
-use crate::render::reflection::{self, ShrmShader};
-use crate::render::{render, Camera, Frame, Scene, Shade};
-use anyhow::{bail, Context, Result};
+use crate::render::reference::Integrand;
+use crate::render::stage::{self, Config, PanelItem, Shading, StoredFactors};
+use crate::render::{Camera, Scene};
+use anyhow::{bail, Context as _, Result};
 use clap::{Parser, ValueEnum};
 use glam::DVec3;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// Shading modes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Shading {
+pub enum ShadingArg {
     /// Lambert from SH lighting: (albedo/π) Σ Â_l L_lm Y_lm(n).
     Irradiance,
     /// From a prefilter SHRM (global: distant viewer, eq. 12; local: per pixel, eq. 6).
@@ -33,36 +28,25 @@ pub enum Shading {
     Reference,
 }
 
-impl Shading {
-    fn name(self) -> &'static str {
-        match self {
-            Shading::Irradiance => "irradiance",
-            Shading::Shrm => "shrm",
-            Shading::Factored => "factored",
-            Shading::Reference => "reference",
-        }
-    }
-}
-
 /// Render a sphere or an OBJ mesh under an environment map with one of the bakes, or the
 /// reference, and compare.
 #[derive(Debug, Parser)]
-#[command(name = "render", version, about, long_about)]
+#[command(name = "render", version)]
 pub struct Args {
     #[command(flatten)]
-    pub input: EnvInput,
+    pub input: EnvArgs,
 
     /// The object: `sphere` (unit sphere at the origin) or an OBJ file.
     #[arg(long, default_value = "sphere")]
     pub scene: String,
 
     /// Shading mode.
-    #[arg(long, value_enum, default_value_t = Shading::Reference)]
-    pub shading: Shading,
+    #[arg(long, value_enum, default_value_t = ShadingArg::Reference)]
+    pub shading: ShadingArg,
 
     /// BRDF spec (docs/brdf-specs.md). For `shrm` it must equal the SHRM's.
-    #[arg(long, default_value = "lambert")]
-    pub brdf: String,
+    #[arg(long, default_value = "lambert", value_parser = parse_brdf)]
+    pub brdf: Brdf,
 
     /// Camera position x,y,z (+Z up).
     #[arg(long, value_parser = parse_xyz, allow_hyphen_values = true, default_value = "0,-4,0")]
@@ -119,34 +103,33 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = Integrand::BrdfCosine)]
     pub integrand: Integrand,
 
-    /// Linear EXR output.
-    #[arg(short, long, value_name = "FILE.exr")]
-    pub output: Option<PathBuf>,
+    /// Linear EXR output (`-`: stdout).
+    #[arg(short, long, value_name = "FILE.exr", value_parser = parse_output)]
+    pub output: Option<Output>,
 
     /// Tone-mapped PNG output (× 2^exposure, sRGB).
-    #[arg(long, value_name = "FILE.png")]
-    pub png: Option<PathBuf>,
+    #[arg(long, value_name = "FILE.png", value_parser = parse_output)]
+    pub png: Option<Output>,
 
-    /// Exposure in stops for PNG outputs.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub exposure: f32,
+    #[command(flatten)]
+    pub exposure: Exposure,
 
     /// Compare with a reference render of the same size, over the object's pixels.
     #[arg(long, value_name = "REF.exr")]
     pub compare: Option<PathBuf>,
 
     /// With --compare: write |render − reference| here (EXR, or PNG tone-mapped).
-    #[arg(long, value_name = "FILE")]
-    pub error_image: Option<PathBuf>,
+    #[arg(long, value_name = "FILE", value_parser = parse_output)]
+    pub error_image: Option<Output>,
 
-    /// With --compare: write the metrics JSON here.
-    #[arg(long, value_name = "FILE.json")]
-    pub metrics: Option<PathBuf>,
+    /// With --compare: write the prtkit.render-metrics document here (`-`: stdout).
+    #[arg(long, value_name = "FILE.json", value_parser = parse_output)]
+    pub metrics: Option<Output>,
 
     /// Write a labelled panel PNG: the --panel-item images in order, then this render (unless an
     /// item placed it).
-    #[arg(long, value_name = "FILE.png")]
-    pub panel: Option<PathBuf>,
+    #[arg(long, value_name = "FILE.png", value_parser = parse_output)]
+    pub panel: Option<Output>,
 
     /// A panel cell `LABEL=FILE.exr` (repeatable; with --compare its error is added to the label).
     /// `LABEL=-` places this render there, under that label.
@@ -157,7 +140,7 @@ pub struct Args {
     #[arg(long)]
     pub label: Option<String>,
 
-    /// Print a one-line JSON summary on stdout.
+    /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
 
@@ -165,252 +148,153 @@ pub struct Args {
     pub run: Execution,
 }
 
-fn parse_item(s: &str) -> Result<(String, PathBuf)> {
-    let (label, file) = s.rsplit_once('=').with_context(|| format!("--panel-item {s:?}: expected LABEL=FILE.exr"))?;
-    Ok((label.to_string(), PathBuf::from(file)))
+impl Args {
+    fn outputs(&self) -> impl Iterator<Item = &Output> {
+        [&self.output, &self.png, &self.error_image, &self.metrics, &self.panel].into_iter().flatten()
+    }
+
+    /// The mode with the bakes it reads (documents and their EXRs).
+    fn shading(&self) -> Result<Shading> {
+        Ok(match self.shading {
+            ShadingArg::Irradiance => Shading::Irradiance {
+                order: self.order,
+                coefficients: match &self.sh {
+                    Some(p) => {
+                        let text =
+                            std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?;
+                        let doc =
+                            crate::sh::document::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+                        Some(doc.body.coeffs())
+                    }
+                    None => None,
+                },
+            },
+            ShadingArg::Shrm => {
+                let doc =
+                    self.shrm.as_ref().context("--shading shrm needs --shrm SHRM.json (from prefilter --shrm)")?;
+                let (shrm, body) = crate::render::reflection::load(doc)?;
+                Shading::Shrm { shrm, body: Box::new(body) }
+            }
+            ShadingArg::Factored => {
+                let factors = match &self.factors {
+                    Some(doc) => {
+                        let (body, factorization) = crate::factor::document::load(doc)?;
+                        let name = doc.display().to_string();
+                        Some(Box::new(StoredFactors { name, factorization, cosine: body.cosine, brdf: body.brdf }))
+                    }
+                    None => None,
+                };
+                Shading::Factored {
+                    terms: self.terms,
+                    factors,
+                    resolution: self.factor_resolution,
+                    cell_samples: self.cell_samples,
+                    normal_table: self.normal_table,
+                }
+            }
+            ShadingArg::Reference => Shading::Reference { integrand: self.integrand },
+        })
+    }
+
+    /// The panel items: `LABEL=FILE.exr` read, `LABEL=-` for this render.
+    fn panel_items(&self) -> Result<Option<Vec<PanelItem>>> {
+        if self.panel.is_none() {
+            if !self.panel_item.is_empty() {
+                bail!("--panel-item needs --panel FILE.png");
+            }
+            return Ok(None);
+        }
+        let mut items = Vec::new();
+        for s in &self.panel_item {
+            let (label, file) =
+                s.rsplit_once('=').with_context(|| format!("--panel-item {s:?}: expected LABEL=FILE.exr"))?;
+            let image = if file == "-" { None } else { Some(io::image::read_image(Path::new(file))?) };
+            items.push(PanelItem { label: label.to_string(), image });
+        }
+        if items.iter().filter(|item| item.image.is_none()).count() > 1 {
+            bail!("--panel-item LABEL=- (this render) may be given once");
+        }
+        Ok(Some(items))
+    }
 }
 
-fn write_image(path: &Path, image: &RgbImage, exposure: f32) -> Result<()> {
-    io::image::write_image(path, image, exposure).with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// Runs `render`.
-pub fn run(args: Args) -> Result<Outcome> {
-    let bar = args.run.start()?;
-    let outputs: Vec<&PathBuf> =
-        [&args.output, &args.png, &args.error_image, &args.metrics, &args.panel].into_iter().flatten().collect();
-    if outputs.is_empty() && !args.json {
-        bail!("nothing to write: give -o FILE.exr, --png, --panel or --json");
+impl Stage for Args {
+    const NAME: &'static str = "render";
+    fn execution(&self) -> &Execution {
+        &self.run
     }
-    if (args.error_image.is_some() || args.metrics.is_some()) && args.compare.is_none() {
-        bail!("--error-image and --metrics need --compare REF.exr");
-    }
-    for o in &outputs {
-        Output::File(o.to_path_buf()).check_writable()?;
-    }
-    let items: Vec<(String, PathBuf)> = args.panel_item.iter().map(|s| parse_item(s)).collect::<Result<_>>()?;
-    if !items.is_empty() && args.panel.is_none() {
-        bail!("--panel-item needs --panel FILE.png");
-    }
-    let brdf = Brdf::parse(&args.brdf).map_err(|e| anyhow::anyhow!("--brdf {}: {e}", args.brdf))?;
-    let env = args.input.load()?;
-    let (w, h) = args.res;
-    let camera = Camera::look_at(args.eye, args.target, args.fov, w, h)?;
-    let scene = if args.scene == "sphere" {
-        Scene::unit_sphere()
-    } else {
-        let mesh = Mesh::load(Path::new(&args.scene))?;
-        if mesh.normals_computed {
-            eprintln!(
-                "render: {}: no vertex normals in the file; computed area-weighted normals for {} vertices",
-                args.scene,
-                mesh.positions.len()
-            );
+    fn run(self, ctx: &Context) -> Result<Outcome> {
+        if self.outputs().next().is_none() && !self.json {
+            bail!("nothing to write: give -o FILE.exr, --png, --panel or --json");
         }
-        Scene::Mesh(Box::new(mesh))
-    };
-    // Read the reference before the long work, so a bad file fails fast.
-    let reference = match &args.compare {
-        Some(p) => Some(io::image::read_image(p)?),
-        None => None,
-    };
-    if let Some(r) = &reference {
-        if (r.width, r.height) != (w, h) {
-            bail!(
-                "{}: the reference is {}x{}, the render is {w}x{h} (--res)",
-                args.compare.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
-                r.width,
-                r.height
-            );
+        if (self.error_image.is_some() || self.metrics.is_some()) && self.compare.is_none() {
+            bail!("--error-image and --metrics need --compare REF.exr");
         }
-    }
-    // `None` marks the cell of this render (`LABEL=-`).
-    let panel_images: Vec<(String, Option<RgbImage>)> = items
-        .iter()
-        .map(|(l, p)| Ok((l.clone(), if p.as_os_str() == "-" { None } else { Some(io::image::read_image(p)?) })))
-        .collect::<Result<_>>()?;
-    if panel_images.iter().filter(|(_, i)| i.is_none()).count() > 1 {
-        bail!("--panel-item LABEL=- (this render) may be given once");
-    }
-
-    let start = Instant::now();
-    let mut extra = serde_json::Map::new();
-    let label;
-    let frame: Frame = match args.shading {
-        Shading::Irradiance => {
-            let Brdf::Lambert(m) = &brdf else {
-                bail!("--shading irradiance shades Lambertian surfaces; --brdf {} is not lambert", brdf.spec());
-            };
-            let light = match &args.sh {
-                Some(p) => {
-                    let text = std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?;
-                    let doc = crate::sh::document::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
-                    let c = doc.body.coeffs();
-                    if c.order < args.order {
-                        bail!(
-                            "{}: the coefficients have order {}, --order asks for {}",
-                            p.display(),
-                            c.order,
-                            args.order
-                        );
-                    }
-                    c.truncated(args.order)
-                }
-                None => crate::sh::project::project(&env, args.order, &bar)?,
-            };
-            extra.insert("order".into(), args.order.into());
-            label = format!("irradiance F={}", args.order);
-            render(&scene, &camera, &env, &Irradiance::new(&light, m.albedo), &bar)
-        }
-        Shading::Shrm => {
-            let doc = args.shrm.as_ref().context("--shading shrm needs --shrm SHRM.json (from prefilter --shrm)")?;
-            let (shrm, body) = reflection::load(doc)?;
-            if body.brdf != brdf.spec() {
-                bail!("{}: the SHRM was computed for {}, --brdf says {}", doc.display(), body.brdf, brdf.spec());
+        let json_out = self.json.then_some(Output::Stdout);
+        check_writable(self.outputs().chain(&json_out))?;
+        let camera = Camera::look_at(self.eye, self.target, self.fov, self.res.0, self.res.1)?;
+        let scene = if self.scene == "sphere" {
+            Scene::unit_sphere()
+        } else {
+            let mesh = Mesh::load(Path::new(&self.scene))?;
+            if mesh.normals_computed {
+                ctx.note(format!(
+                    "{}: no vertex normals in the file; computed area-weighted normals for {} vertices",
+                    self.scene,
+                    mesh.positions.len()
+                ));
             }
-            extra.insert("f_b".into(), body.f_b.into());
-            extra.insert("p_b".into(), body.p_b.into());
-            extra.insert("epsilon_achieved".into(), body.epsilon_achieved.into());
-            extra.insert("global".into(), body.global.into());
-            label = format!("SHRM F={} P={}", body.f_b, body.p_b);
-            let shader = ShrmShader::new(shrm, body.parameterization == "normal", camera.view_direction());
-            render(&scene, &camera, &env, &shader, &bar)
-        }
-        Shading::Factored => {
-            if args.terms == 0 {
-                bail!("--terms must be at least 1");
-            }
-            if !(1..=8).contains(&args.cell_samples) {
-                bail!("--cell-samples {} must be in 1..=8", args.cell_samples);
-            }
-            let (f, cosine_in_factors) = match &args.factors {
-                Some(doc) => {
-                    let (body, f) = crate::factor::document::load(doc)?;
-                    if body.brdf != brdf.spec() {
-                        bail!("{}: the factorization is of {}, --brdf says {}", doc.display(), body.brdf, brdf.spec());
-                    }
-                    if let Some(n) = args.factor_resolution.filter(|&n| n != body.resolution) {
-                        bail!(
-                            "{}: a factorization of another resolution: n = {}, --factor-resolution asks for {n}",
-                            doc.display(),
-                            body.resolution
-                        );
-                    }
-                    if f.g.len() < args.terms {
-                        bail!(
-                            "{}: the factor file holds {} terms, --terms asks for {} (factor-brdf --terms {})",
-                            doc.display(),
-                            f.g.len(),
-                            args.terms,
-                            args.terms
-                        );
-                    }
-                    (f, body.cosine)
-                }
-                None => {
-                    let resolution = args.factor_resolution.unwrap_or(64);
-                    if !(2..=256).contains(&resolution) {
-                        bail!("--factor-resolution {resolution} must be in 2..=256");
-                    }
-                    let sampling =
-                        Sampling { resolution, domain: Domain::Hemisphere, cosine: true, channel: Channel::Mean };
-                    (crate::factor::factor(&brdf, &sampling, Method::Auto, args.terms, &bar)?, true)
-                }
-            };
-            let transport = match &scene {
-                Scene::Sphere { .. } => Transport::sphere(args.normal_table.0, args.normal_table.1),
-                Scene::Mesh(_) => Transport::mesh(&scene, &f.grid, &bar),
-            };
-            extra.insert("k".into(), args.terms.into());
-            extra.insert("energy".into(), f.cumulative_energy().get(args.terms - 1).copied().unwrap_or(1.0).into());
-            let shader = Factored::new(&f, args.terms, cosine_in_factors, transport, &env, args.cell_samples);
-            label = format!("K={}", shader.terms());
-            render(&scene, &camera, &env, &shader, &bar)
-        }
-        Shading::Reference => {
-            let shader = Reference::new(&env, brdf.clone(), args.integrand, &scene).map_err(|e| anyhow::anyhow!(e))?;
-            extra.insert("texels".into(), shader.texel_count().into());
-            label = "reference".to_string();
-            render(&scene, &camera, &env, &shader as &dyn Shade, &bar)
-        }
-    };
-    let seconds = start.elapsed().as_secs_f64();
-    let label = args.label.clone().unwrap_or(label);
-
-    let mut metrics: Option<Metrics> = None;
-    if let (Some(r), Some(rp)) = (&reference, &args.compare) {
-        let (m, err) =
-            compare(&frame.image, r, &frame.mask).with_context(|| format!("comparing with {}", rp.display()))?;
-        eprintln!(
-            "render: vs {}: rel error {:.4} ({:.2} %), RMS {:.4e}, PSNR {:.2} dB over {} pixels",
-            rp.display(),
-            m.rel_error,
-            100.0 * m.rel_error,
-            m.rms,
-            m.psnr,
-            m.pixels
-        );
-        if let Some(p) = &args.error_image {
-            write_image(p, &err, args.exposure)?;
-        }
-        if let Some(p) = &args.metrics {
-            let doc = serde_json::json!({
-                "format": "prtkit.render-metrics", "version": 1,
-                "render": args.output.as_ref().map(|p| p.display().to_string()),
-                "reference": rp.display().to_string(),
-                "shading": args.shading.name(), "brdf": brdf.spec(), "label": label,
-                "metrics": m,
-            });
-            io::write_atomic(p, io::document::to_json_pretty(&doc).as_bytes())?;
-        }
-        metrics = Some(m);
-    }
-    if let Some(p) = &args.output {
-        write_image(p, &frame.image, args.exposure)?;
-    }
-    if let Some(p) = &args.png {
-        write_image(p, &frame.image, args.exposure)?;
-    }
-    if let Some(p) = &args.panel {
-        let with_error = |mut lines: Vec<String>, m: Option<Metrics>| {
-            if let Some(m) = m.filter(|m| m.rel_error > 0.0) {
-                lines.push(format!("{:.2}%", 100.0 * m.rel_error));
-            }
-            lines
+            Scene::Mesh(Box::new(mesh))
         };
-        let split = |l: &str| -> Vec<String> { l.split('|').map(str::to_string).collect() };
-        let own = |l: &str| Cell { image: frame.image.clone(), label: with_error(split(l), metrics) };
-        let mut cells = Vec::new();
-        for (l, img) in panel_images {
-            cells.push(match img {
-                Some(image) => {
-                    let m = reference.as_ref().and_then(|r| compare(&image, r, &frame.mask).ok()).map(|(m, _)| m);
-                    Cell { label: with_error(split(&l), m), image }
-                }
-                None => own(&l),
-            });
+        let compare = match &self.compare {
+            Some(p) => Some((p.display().to_string(), io::image::read_image(p)?)),
+            None => None,
+        };
+        let config = Config {
+            brdf: self.brdf.clone(),
+            shading: self.shading()?,
+            camera,
+            compare,
+            panel: self.panel_items()?,
+            label: self.label.clone(),
+            exposure: self.exposure.stops,
+            output_name: self.output.as_ref().map(|o| o.display()),
+            args: std::env::args().collect(),
+        };
+        let env = self.input.load(ctx)?;
+        let out = stage::run(&config, &env, &scene, ctx.progress())?;
+
+        let mut outputs = Outputs::new();
+        let stops = self.exposure.stops;
+        for o in self.output.iter().chain(&self.png) {
+            outputs.image(o, &out.frame.image, stops)?;
         }
-        if !items.iter().any(|(_, p)| p.as_os_str() == "-") {
-            cells.push(own(&label));
+        if let Some((doc, error_image)) = &out.comparison {
+            let m = &doc.body.metrics;
+            ctx.note(format!(
+                "vs {}: rel error {:.4} ({:.2} %), RMS {:.4e}, PSNR {:.2} dB over {} pixels",
+                doc.body.reference,
+                m.rel_error,
+                100.0 * m.rel_error,
+                m.rms,
+                m.psnr,
+                m.pixels
+            ));
+            if let Some(o) = &self.error_image {
+                outputs.image(o, error_image, stops)?;
+            }
+            if let Some(o) = &self.metrics {
+                outputs.json(o, doc)?;
+            }
         }
-        let img = layout(&cells, args.exposure);
-        let bytes = io::png::encode_png(&img, args.exposure).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
-        io::write_atomic(p, &bytes)?;
+        if let (Some(o), Some(panel)) = (&self.panel, &out.panel) {
+            let bytes = io::png::encode_png(panel, stops).map_err(|e| anyhow::anyhow!("{}: {e}", o.display()))?;
+            outputs.bytes(o, bytes)?;
+        }
+        if let Some(o) = &json_out {
+            outputs.json(o, &out.summary)?;
+        }
+        outputs.commit()?;
+        Ok(Outcome::Success)
     }
-    if args.json {
-        let mut summary = serde_json::Map::new();
-        summary.insert("shading".into(), args.shading.name().into());
-        summary.insert("brdf".into(), brdf.spec().into());
-        summary.insert("width".into(), w.into());
-        summary.insert("height".into(), h.into());
-        summary.insert("seconds".into(), seconds.into());
-        summary.extend(extra);
-        if let Some(m) = metrics {
-            summary.insert("rel_error".into(), m.rel_error.into());
-            summary.insert("rms".into(), m.rms.into());
-            summary.insert("psnr".into(), if m.psnr.is_finite() { m.psnr.into() } else { serde_json::Value::Null });
-        }
-        println!("{}", serde_json::Value::Object(summary));
-    }
-    Ok(Outcome::Success)
 }

@@ -1,6 +1,6 @@
 //! The umbrella binary `prtkit <stage> …`: the same code as the stand-alone binaries.
 
-use super::common::run_stage;
+use super::common::run;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
@@ -9,11 +9,11 @@ use std::process::ExitCode;
 #[command(name = "prtkit", version, about, long_about = None, propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
-    stage: Stage,
+    stage: StageArgs,
 }
 
 #[derive(Debug, Subcommand)]
-enum Stage {
+enum StageArgs {
     /// Resample an environment map into another layout.
     Convert(super::convert::Args),
     /// Project an environment map onto spherical harmonics.
@@ -35,13 +35,13 @@ enum Stage {
 /// Parses `prtkit <stage> …` and runs the stage.
 pub fn main() -> ExitCode {
     match Cli::parse().stage {
-        Stage::Convert(args) => run_stage("convert", || super::convert::run(args)),
-        Stage::ShProject(args) => run_stage("sh-project", || super::sh_project::run(args)),
-        Stage::Prefilter(args) => run_stage("prefilter", || super::prefilter::run(args)),
-        Stage::FactorBrdf(args) => run_stage("factor-brdf", || super::factor_brdf::run(args)),
-        Stage::CountTerms(args) => run_stage("count-terms", || super::count_terms::run(args)),
-        Stage::SampleShader(args) => run_stage("sample-shader", || super::sample_shader::run(args)),
-        Stage::EncodeNormals(args) => run_stage("encode-normals", || super::encode_normals::run(args)),
-        Stage::Render(args) => run_stage("render", || super::render::run(args)),
+        StageArgs::Convert(args) => run(args),
+        StageArgs::ShProject(args) => run(args),
+        StageArgs::Prefilter(args) => run(args),
+        StageArgs::FactorBrdf(args) => run(args),
+        StageArgs::CountTerms(args) => run(args),
+        StageArgs::SampleShader(args) => run(args),
+        StageArgs::EncodeNormals(args) => run(args),
+        StageArgs::Render(args) => run(args),
     }
 }

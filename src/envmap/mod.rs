@@ -4,11 +4,14 @@
 
 mod cube;
 mod layout;
+mod load;
 mod probe;
 mod resample;
+pub mod stage;
 
 pub use cube::{Face, FACES};
 pub use layout::Layout;
+pub use load::{LoadError, LoadOptions, Loaded, NegativePolicy};
 pub use probe::WORLD_FROM_PROBE;
 pub use resample::resample;
 

@@ -32,11 +32,15 @@ pub struct Material {
     pub budget: Option<usize>,
 }
 
-/// What to compute for every material.
+/// What to compute for every material: the `count-terms` stage's config.
 #[derive(Clone, Copy, Debug)]
 pub struct CountConfig {
-    /// Matrix sampling (its channel is replaced by each material's).
+    /// Matrix sampling (its channel is each material's unless `per_channel` splits it).
     pub sampling: Sampling,
+    /// One row per R, G, B channel for RGB (measured) materials, named NAME/r, NAME/g, NAME/b.
+    pub per_channel: bool,
+    /// Memory budget of one SVD in bytes.
+    pub max_memory: u128,
     /// Energy fraction for K (default 0.99).
     pub energy: f64,
     /// Skip the SVD.
@@ -158,6 +162,76 @@ pub fn count(
         failures,
     };
     Ok((row, spectrum))
+}
+
+/// What `count-terms` produces.
+#[derive(Clone, Debug)]
+pub struct CountOutput {
+    /// One row per material (per channel with `per_channel`).
+    pub rows: Vec<Row>,
+    /// Their singular-value curves, for plots.
+    pub spectra: Vec<Spectrum>,
+}
+
+impl CountOutput {
+    /// The rows that fail the check (a budget exceeded, a prediction off by more than the
+    /// tolerance).
+    pub fn failing(&self) -> impl Iterator<Item = &Row> {
+        self.rows.iter().filter(|r| !r.failures.is_empty())
+    }
+}
+
+/// Errors of `count-terms`, naming the material.
+#[derive(Debug, thiserror::Error)]
+pub enum CountError {
+    /// No material was given.
+    #[error("no material: give --brdf SPEC (repeatable) or --manifest FILE")]
+    NoMaterial,
+    /// The energy fraction is not in (0, 1).
+    #[error("--energy must be in (0, 1), got {0}")]
+    Energy(f64),
+    /// A material's factorization cannot run (method, memory budget) or failed.
+    #[error("material {name}: {error}")]
+    Material {
+        /// The material.
+        name: String,
+        /// Why.
+        error: FactorError,
+    },
+}
+
+/// Runs `count-terms`: checks every material's memory budget before the first SVD, then
+/// predicts and measures K for each (each channel of RGB materials with `per_channel`).
+pub fn run(config: &CountConfig, materials: Vec<Material>, progress: &dyn Progress) -> Result<CountOutput, CountError> {
+    if !(config.energy > 0.0 && config.energy < 1.0) {
+        return Err(CountError::Energy(config.energy));
+    }
+    if materials.is_empty() {
+        return Err(CountError::NoMaterial);
+    }
+    let mut expanded = Vec::new();
+    for m in materials {
+        let fail = |error| CountError::Material { name: m.name.clone(), error };
+        if !config.predict_only {
+            let method = svd::resolve_method(&m.brdf, config.method).map_err(fail)?;
+            svd::check_budget(&config.sampling, method, 0, config.max_memory).map_err(fail)?;
+        }
+        if config.per_channel && m.brdf.is_rgb() {
+            for (suffix, channel) in [("r", Channel::R), ("g", Channel::G), ("b", Channel::B)] {
+                expanded.push(Material { name: format!("{}/{suffix}", m.name), channel, ..m.clone() });
+            }
+        } else {
+            expanded.push(m);
+        }
+    }
+    let (mut rows, mut spectra) = (Vec::new(), Vec::new());
+    for m in &expanded {
+        let (row, spectrum) =
+            count(m, config, progress).map_err(|error| CountError::Material { name: m.name.clone(), error })?;
+        rows.push(row);
+        spectra.push(spectrum);
+    }
+    Ok(CountOutput { rows, spectra })
 }
 
 /// The singular values a reflection-lobe prediction implies: |F_l| repeated 2l+1 times on the

@@ -18,6 +18,7 @@ pub mod manifest;
 pub mod maps;
 pub mod plot;
 pub mod predict;
+pub mod stage;
 pub mod svd;
 
 pub use channel::Channel;

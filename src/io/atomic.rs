@@ -8,6 +8,7 @@
 use super::IoError;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 /// Where an output goes: a file path or standard output (`-`).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -31,10 +32,7 @@ impl Output {
     /// Writes `bytes` to this output (atomically for files).
     pub fn write(&self, bytes: &[u8]) -> Result<(), IoError> {
         match self {
-            Output::Stdout => {
-                let mut out = std::io::stdout().lock();
-                out.write_all(bytes).and_then(|_| out.flush()).map_err(|e| IoError::os(Path::new("<stdout>"), e))
-            }
+            Output::Stdout => write_stdout(bytes),
             Output::File(path) => write_atomic(path, bytes),
         }
     }
@@ -47,25 +45,24 @@ impl Output {
         }
     }
 
-    /// Fails fast when the destination directory does not exist, before any long work starts.
+    /// Fails fast, before any long work starts, when the destination directory does not exist
+    /// or cannot be written (a temporary file is created there and removed).
     pub fn check_writable(&self) -> Result<(), IoError> {
-        match self {
-            Output::Stdout => Ok(()),
-            Output::File(path) => {
-                let dir = parent_dir(path);
-                if dir.is_dir() {
-                    Ok(())
-                } else {
-                    Err(IoError::os(
-                        path,
-                        std::io::Error::new(
-                            std::io::ErrorKind::NotFound,
-                            format!("directory {} does not exist", dir.display()),
-                        ),
-                    ))
-                }
-            }
+        let Output::File(path) = self else { return Ok(()) };
+        if is_special(path) {
+            return Ok(());
         }
+        let dir = parent_dir(path);
+        if !dir.is_dir() {
+            return Err(IoError::os(
+                path,
+                std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    format!("directory {} does not exist", dir.display()),
+                ),
+            ));
+        }
+        temp_file_in(dir).map(drop).map_err(|e| IoError::os(path, e))
     }
 }
 
@@ -76,30 +73,186 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+/// Temporary files written but not yet renamed into place, removed by [`remove_pending`] when
+/// the process is interrupted. Held locked while a set of outputs is renamed, so an interruption
+/// waits until all of them are in place: outputs appear all together or not at all.
+static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    PENDING.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Removes every temporary output file not yet renamed into place (for a signal handler, just
+/// before the process exits): an interrupted run leaves no partial or temporary file.
+pub fn remove_pending() {
+    let mut list = pending();
+    for path in list.drain(..) {
+        let _ = std::fs::remove_file(path);
+    }
+}
+
+fn temp_file_in(dir: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+    tempfile::Builder::new().prefix(".prtkit-").suffix(".tmp").tempfile_in(dir)
+}
+
+/// The outputs of one run, written all or none: [`OutputSet::add`] writes each file's bytes to
+/// a temporary file beside it, [`OutputSet::commit`] renames them all into place and then writes
+/// standard output. Dropped without a commit (an error part-way), it removes its temporary files
+/// and no destination is touched.
+#[derive(Default)]
+pub struct OutputSet {
+    staged: Vec<Staged>,
+    /// Directories this set created, removed again (when empty) if it is dropped uncommitted.
+    created_dirs: Vec<PathBuf>,
+}
+
+enum Staged {
+    /// A temporary file to rename over `dest`.
+    Renamed { temp: tempfile::TempPath, dest: PathBuf },
+    /// A device, FIFO or `/dev/stdout`-like destination, written in place at commit.
+    InPlace { dest: PathBuf, bytes: Vec<u8> },
+    /// Standard output, written last.
+    Stdout(Vec<u8>),
+}
+
+impl OutputSet {
+    /// An empty set.
+    pub fn new() -> Self {
+        OutputSet::default()
+    }
+
+    /// Creates directory `dir` (and its missing parents) for outputs to go into. Dropped
+    /// without a commit, the set removes the directories it created, if they are still empty.
+    pub fn create_dir(&mut self, dir: &Path) -> Result<(), IoError> {
+        let mut missing = Vec::new();
+        let mut d = Some(dir);
+        while let Some(p) = d.filter(|p| !p.as_os_str().is_empty() && !p.exists()) {
+            missing.push(p.to_path_buf());
+            d = p.parent();
+        }
+        std::fs::create_dir_all(dir).map_err(|e| IoError::os(dir, e))?;
+        // Deepest first, so removing them in order empties each parent before it.
+        self.created_dirs.extend(missing);
+        Ok(())
+    }
+
+    /// Stages `bytes` for `output`. Files are written to a temporary file now (so a full disk
+    /// or a bad directory fails here, before anything is replaced).
+    pub fn add(&mut self, output: &Output, bytes: Vec<u8>) -> Result<(), IoError> {
+        match output {
+            Output::Stdout => self.staged.push(Staged::Stdout(bytes)),
+            Output::File(path) if is_special(path) => self.staged.push(Staged::InPlace { dest: path.clone(), bytes }),
+            Output::File(path) => {
+                if self.staged.iter().any(|s| matches!(s, Staged::Renamed { dest, .. } if dest == path)) {
+                    return Err(IoError::os(
+                        path,
+                        std::io::Error::new(std::io::ErrorKind::AlreadyExists, "given twice as an output"),
+                    ));
+                }
+                let temp = stage_file(path, &bytes)?;
+                self.staged.push(Staged::Renamed { temp, dest: path.clone() });
+            }
+        }
+        Ok(())
+    }
+
+    /// Renames every staged file into place, writes the in-place destinations, then standard
+    /// output. An interruption during the renames waits for them to finish.
+    pub fn commit(mut self) -> Result<(), IoError> {
+        let staged = std::mem::take(&mut self.staged);
+        self.created_dirs.clear();
+        let mut rest = Vec::new();
+        {
+            let mut list = pending();
+            let mut renames = Vec::new();
+            for item in staged {
+                match item {
+                    Staged::Renamed { temp, dest } => renames.push((temp, dest)),
+                    other => rest.push(other),
+                }
+            }
+            for (temp, dest) in renames {
+                let path: PathBuf = temp.to_path_buf();
+                list.retain(|p| *p != path);
+                temp.persist(&dest).map_err(|e| IoError::os(&dest, e.error))?;
+            }
+        }
+        for item in rest {
+            match item {
+                Staged::InPlace { dest, bytes } => {
+                    let mut file =
+                        std::fs::OpenOptions::new().write(true).open(&dest).map_err(|e| IoError::os(&dest, e))?;
+                    file.write_all(&bytes).and_then(|_| file.flush()).map_err(|e| IoError::os(&dest, e))?;
+                }
+                Staged::Stdout(bytes) => write_stdout(&bytes)?,
+                Staged::Renamed { .. } => unreachable!("renamed above"),
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for OutputSet {
+    fn drop(&mut self) {
+        // Dropping a TempPath removes its file; only then is it taken off the pending list, so an
+        // interruption in between still finds it.
+        let temps: Vec<PathBuf> = self
+            .staged
+            .drain(..)
+            .filter_map(|item| match item {
+                Staged::Renamed { temp, .. } => {
+                    let path = temp.to_path_buf();
+                    drop(temp);
+                    Some(path)
+                }
+                _ => None,
+            })
+            .collect();
+        pending().retain(|p| !temps.contains(p));
+        for dir in &self.created_dirs {
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
+}
+
+/// Writes `bytes` to a registered temporary file beside `dest`, with the mode `dest` will have.
+fn stage_file(dest: &Path, bytes: &[u8]) -> Result<tempfile::TempPath, IoError> {
+    let mut tmp = temp_file_in(parent_dir(dest)).map_err(|e| IoError::os(dest, e))?;
+    pending().push(tmp.path().to_path_buf());
+    let temp = (|| {
+        tmp.write_all(bytes)?;
+        tmp.as_file().sync_data()?;
+        // Temporary files are created 0600; an output keeps the mode of the file it replaces,
+        // or gets the usual 0644, so other users and tools can read it.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(dest).map(|m| m.permissions().mode() & 0o7777).unwrap_or(0o644);
+            tmp.as_file().set_permissions(std::fs::Permissions::from_mode(mode))?;
+        }
+        Ok(())
+    })();
+    let path = tmp.path().to_path_buf();
+    match temp {
+        Ok(()) => Ok(tmp.into_temp_path()),
+        Err(e) => {
+            pending().retain(|p| *p != path);
+            Err(IoError::os(dest, e))
+        }
+    }
+}
+
+fn write_stdout(bytes: &[u8]) -> Result<(), IoError> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(bytes).and_then(|_| out.flush()).map_err(|e| IoError::os(Path::new("<stdout>"), e))
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename (an
+/// [`OutputSet`] of one).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
-    if is_special(path) {
-        let mut file = std::fs::OpenOptions::new().write(true).open(path).map_err(|e| IoError::os(path, e))?;
-        return file.write_all(bytes).and_then(|_| file.flush()).map_err(|e| IoError::os(path, e));
-    }
-    let dir = parent_dir(path);
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".prtkit-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| IoError::os(path, e))?;
-    tmp.write_all(bytes).map_err(|e| IoError::os(path, e))?;
-    tmp.as_file().sync_data().map_err(|e| IoError::os(path, e))?;
-    // Temporary files are created 0600; an output keeps the mode of the file it replaces, or gets
-    // the usual 0644, so other users and tools can read it.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let mode = std::fs::metadata(path).map(|m| m.permissions().mode() & 0o7777).unwrap_or(0o644);
-        tmp.as_file().set_permissions(std::fs::Permissions::from_mode(mode)).map_err(|e| IoError::os(path, e))?;
-    }
-    tmp.persist(path).map_err(|e| IoError::os(path, e.error))?;
-    Ok(())
+    let mut set = OutputSet::new();
+    set.add(&Output::File(path.to_path_buf()), bytes.to_vec())?;
+    set.commit()
 }
 
 /// True when `path` (after symlinks) exists and is neither a regular file nor a directory.
@@ -125,6 +278,49 @@ mod tests {
             let mode = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
             assert_eq!(mode, 0o644, "outputs must be readable by others");
         }
+    }
+
+    #[test]
+    fn a_set_that_fails_part_way_replaces_nothing_and_leaves_no_temporaries() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.txt"), dir.path().join("b.txt"));
+        std::fs::write(&a, b"old").unwrap();
+        let mut set = OutputSet::new();
+        set.add(&Output::File(a.clone()), b"new".to_vec()).unwrap();
+        assert_eq!(pending().iter().filter(|p| p.starts_with(dir.path())).count(), 1);
+        let bad = Output::File(dir.path().join("missing-dir/c.txt"));
+        assert!(set.add(&bad, b"x".to_vec()).is_err());
+        drop(set);
+        assert_eq!(std::fs::read(&a).unwrap(), b"old");
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("a.txt")]);
+        assert!(pending().iter().all(|p| !p.starts_with(dir.path())));
+
+        let mut set = OutputSet::new();
+        set.add(&Output::File(a.clone()), b"new".to_vec()).unwrap();
+        set.add(&Output::File(b.clone()), b"too".to_vec()).unwrap();
+        assert!(set.add(&Output::File(b.clone()), b"twice".to_vec()).is_err());
+        set.commit().unwrap();
+        assert_eq!((std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap()), (b"new".to_vec(), b"too".to_vec()));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_read_only_directory_is_reported_before_work() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o555)).unwrap();
+        let probe = dir.path().join("probe");
+        let root = std::fs::write(&probe, b"").is_ok();
+        let _ = std::fs::remove_file(&probe);
+        let result = Output::File(dir.path().join("x.json")).check_writable();
+        std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o755)).unwrap();
+        if root {
+            eprintln!("skipping: running as root, directory permissions are not enforced");
+            return;
+        }
+        assert!(result.is_err());
     }
 
     #[test]

@@ -40,14 +40,19 @@ pub struct Provenance {
 }
 
 impl Provenance {
-    /// Provenance of the running process for `stage`.
-    pub fn current(stage: &str, inputs: Vec<String>) -> Self {
+    /// Provenance of `stage` run with the command line `args` on `inputs`.
+    pub fn new(stage: &str, args: &[String], inputs: Vec<String>) -> Self {
         Provenance {
             tool: format!("prtkit {}", env!("CARGO_PKG_VERSION")),
             stage: stage.to_string(),
-            args: std::env::args().collect(),
+            args: args.to_vec(),
             inputs,
         }
+    }
+
+    /// Provenance of the running process for `stage`.
+    pub fn current(stage: &str, inputs: Vec<String>) -> Self {
+        Provenance::new(stage, &std::env::args().collect::<Vec<_>>(), inputs)
     }
 }
 

@@ -100,3 +100,46 @@ pub fn write_image(path: &Path, image: &RgbImage, exposure: f32) -> Result<(), I
         _ => Err(IoError::UnknownFormat { path: path.to_path_buf(), extra: ", .png" }),
     }
 }
+
+impl ImageFormat {
+    /// The format whose signature starts `bytes`: OpenEXR's magic number, Radiance's `#?`,
+    /// PFM's `PF`/`Pf`. Used for standard input, which has no file name.
+    pub fn sniff(bytes: &[u8]) -> Option<ImageFormat> {
+        match bytes {
+            [0x76, 0x2f, 0x31, 0x01, ..] => Some(ImageFormat::Exr),
+            [b'#', b'?', ..] => Some(ImageFormat::Rgbe),
+            [b'P', b'F' | b'f', b'\n' | b'\r' | b' ' | b'\t', ..] => Some(ImageFormat::Pfm),
+            _ => None,
+        }
+    }
+}
+
+/// Decodes an HDR image held in memory; `name` is used in messages and, when it has an image
+/// extension, chooses the format (else the bytes' signature does, as for standard input).
+pub fn decode_image(name: &Path, bytes: &[u8]) -> Result<RgbImage, IoError> {
+    let format = ImageFormat::from_path(name)
+        .or_else(|| ImageFormat::sniff(bytes))
+        .ok_or_else(|| IoError::UnknownFormat { path: name.to_path_buf(), extra: "" })?;
+    let image = match format {
+        ImageFormat::Exr => super::exr::decode(name, bytes)?,
+        ImageFormat::Rgbe => super::rgbe::decode(name, bytes)?,
+        ImageFormat::Pfm => super::pfm::decode(name, bytes)?,
+    };
+    if image.width == 0 || image.height == 0 {
+        return Err(IoError::invalid(name, "image", "the image is empty (zero width or height)"));
+    }
+    Ok(image)
+}
+
+/// Encodes an image for a file named `path`, by its extension: `.exr` (float), `.pfm`, or
+/// `.png` (tone-mapped with `exposure` stops and the sRGB curve).
+pub fn encode_image(path: &Path, image: &RgbImage, exposure: f32) -> Result<Vec<u8>, IoError> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    let fail = |e: String| IoError::invalid(path, "image", e);
+    match ext.as_deref() {
+        Some("exr") => super::exr::encode_layers(&[("", image)]).map_err(fail),
+        Some("pfm") => Ok(super::pfm::encode(image)),
+        Some("png") => super::png::encode_png(image, exposure).map_err(fail),
+        _ => Err(IoError::UnknownFormat { path: path.to_path_buf(), extra: ", .png" }),
+    }
+}

@@ -10,7 +10,7 @@ pub mod png;
 pub mod rgbe;
 
 pub use self::image::{ImageFormat, RgbImage};
-pub use atomic::{write_atomic, Output};
+pub use atomic::{write_atomic, Output, OutputSet};
 pub use document::{Document, Provenance};
 
 use std::path::{Path, PathBuf};

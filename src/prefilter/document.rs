@@ -49,8 +49,10 @@ pub struct ShrmBody {
     /// Reflection maps written: file and view direction (absent for radially symmetric BRDFs).
     #[serde(default)]
     pub maps: Vec<MapEntry>,
-    /// Seconds per step.
-    pub timings: serde_json::Value,
+    /// Seconds per step: written by versions before 0.1 only. Documents are deterministic (the
+    /// same inputs give the same bytes); timings are in `prefilter --json`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timings: Option<serde_json::Value>,
 }
 
 /// The lighting an SHRM was computed from.

@@ -7,3 +7,4 @@ pub mod document;
 pub mod model;
 pub mod pipeline;
 pub mod shrm;
+pub mod stage;

@@ -20,6 +20,7 @@ pub mod panel;
 pub mod reference;
 pub mod reflection;
 pub mod scene;
+pub mod stage;
 
 pub use camera::Camera;
 pub use frame::{render, Frame, Shade};

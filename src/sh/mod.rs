@@ -17,6 +17,7 @@ pub mod document;
 pub mod legendre;
 pub mod project;
 pub mod rotate;
+pub mod stage;
 pub mod synth;
 
 pub use basis::{eval_basis, eval_basis_dir};

@@ -10,6 +10,7 @@ pub mod parser;
 pub mod report;
 pub mod rng;
 pub mod sampler;
+pub mod stage;
 
 use crate::affine::Real;
 use check::Checked;

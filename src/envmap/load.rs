@@ -1,0 +1,202 @@
+//! Reading an environment map from a file, a directory of six faces or bytes (standard input),
+//! with the bad-pixel policy every stage shares: NaN and ±Inf are always an error, negative
+//! radiance per [`NegativePolicy`].
+
+use super::{EnvMap, EnvMapError, Layout, FACES};
+use crate::io::{self, IoError, RgbImage};
+use std::path::{Path, PathBuf};
+
+/// What to do with negative pixel components (NaN and ±Inf are always an error).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NegativePolicy {
+    /// Refuse the file, naming the first negative pixel.
+    #[default]
+    Error,
+    /// Replace negative components by 0 (and count them).
+    Clamp,
+    /// Keep them (valid for signed data such as SH reconstructions).
+    Keep,
+}
+
+/// How to read a map.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// The layout, or `None` to detect it from the aspect ratio (a directory is six faces).
+    pub layout: Option<Layout>,
+    /// The negative-pixel policy.
+    pub negative: NegativePolicy,
+}
+
+/// A map read, with what the policy did to it.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The map.
+    pub map: EnvMap,
+    /// Negative components replaced by 0 under [`NegativePolicy::Clamp`].
+    pub clamped: usize,
+}
+
+/// Errors of reading an environment map; each names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file cannot be read or decoded.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// A pixel the policy refuses.
+    #[error("{path}: pixel ({x}, {y}) channel {channel} is {value}: {reason}")]
+    BadPixel {
+        /// The file.
+        path: PathBuf,
+        /// Column.
+        x: usize,
+        /// Row.
+        y: usize,
+        /// `R`, `G` or `B`.
+        channel: &'static str,
+        /// The value.
+        value: f32,
+        /// Why it is refused and what to do.
+        reason: &'static str,
+    },
+    /// A face file of a cube directory is missing.
+    #[error("{}: no face file {face}.exr, {face}.hdr or {face}.pfm", dir.display())]
+    MissingFace {
+        /// The directory.
+        dir: PathBuf,
+        /// The face's short name, e.g. `px`.
+        face: &'static str,
+    },
+    /// The image does not fit the layout.
+    #[error("{}: cannot use as an environment map: {error}", path.display())]
+    Geometry {
+        /// The file.
+        path: PathBuf,
+        /// What does not fit.
+        error: EnvMapError,
+    },
+}
+
+impl LoadOptions {
+    /// Reads the map at `path`: an image file, or a directory of six faces `px nx py ny pz nz`
+    /// (any of .exr, .hdr, .pfm).
+    pub fn load(&self, path: &Path) -> Result<Loaded, LoadError> {
+        let mut clamped = 0;
+        if path.is_dir() || self.layout == Some(Layout::Faces) {
+            let mut faces = Vec::with_capacity(6);
+            for face in FACES {
+                let file = find_face(path, face.short_name())?;
+                let mut image = io::image::read_image(&file)?;
+                clamped += self.check_pixels(&file, &mut image)?;
+                faces.push(image);
+            }
+            let map = EnvMap::from_faces(faces).map_err(|error| LoadError::Geometry { path: path.into(), error })?;
+            return Ok(Loaded { map, clamped });
+        }
+        self.wrap(path, io::image::read_image(path)?)
+    }
+
+    /// Decodes a map held in memory (standard input); `name` is used in messages.
+    pub fn load_bytes(&self, name: &Path, bytes: &[u8]) -> Result<Loaded, LoadError> {
+        if self.layout == Some(Layout::Faces) {
+            return Err(LoadError::Geometry {
+                path: name.into(),
+                error: EnvMapError::BadSize {
+                    layout: "cube faces",
+                    width: 0,
+                    height: 0,
+                    reason: "six face files are read from a directory, not from one stream".into(),
+                },
+            });
+        }
+        self.wrap(name, io::image::decode_image(name, bytes)?)
+    }
+
+    fn wrap(&self, path: &Path, mut image: RgbImage) -> Result<Loaded, LoadError> {
+        let clamped = self.check_pixels(path, &mut image)?;
+        let map = match self.layout {
+            Some(layout) => EnvMap::new(layout, image),
+            None => EnvMap::detect(image),
+        }
+        .map_err(|error| LoadError::Geometry { path: path.into(), error })?;
+        Ok(Loaded { map, clamped })
+    }
+
+    /// Applies the policy to every pixel; returns how many components were clamped.
+    pub fn check_pixels(&self, path: &Path, image: &mut RgbImage) -> Result<usize, LoadError> {
+        let width = image.width;
+        let mut clamped = 0;
+        for (i, px) in image.pixels.iter_mut().enumerate() {
+            for (c, v) in px.iter_mut().enumerate() {
+                let bad = |reason| LoadError::BadPixel {
+                    path: path.into(),
+                    x: i % width,
+                    y: i / width,
+                    channel: ["R", "G", "B"][c],
+                    value: *v,
+                    reason,
+                };
+                if !v.is_finite() {
+                    return Err(bad("NaN and infinite radiance are not accepted"));
+                }
+                if *v < 0.0 {
+                    match self.negative {
+                        NegativePolicy::Error => {
+                            return Err(bad("negative radiance; pass --negative clamp or --negative keep"))
+                        }
+                        NegativePolicy::Clamp => {
+                            *v = 0.0;
+                            clamped += 1;
+                        }
+                        NegativePolicy::Keep => {}
+                    }
+                }
+            }
+        }
+        Ok(clamped)
+    }
+}
+
+fn find_face(dir: &Path, face: &'static str) -> Result<PathBuf, LoadError> {
+    ["exr", "hdr", "pfm"]
+        .iter()
+        .map(|ext| dir.join(format!("{face}.{ext}")))
+        .find(|p| p.is_file())
+        .ok_or_else(|| LoadError::MissingFace { dir: dir.into(), face })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image_with(v: f32) -> RgbImage {
+        RgbImage::from_fn(8, 4, |x, y| if (x, y) == (3, 2) { [1.0, v, 1.0] } else { [1.0; 3] })
+    }
+
+    #[test]
+    fn the_policy_names_the_first_bad_pixel_or_clamps_and_counts() {
+        let path = Path::new("sky.exr");
+        let strict = LoadOptions::default();
+        let e = strict.check_pixels(path, &mut image_with(f32::NAN)).unwrap_err().to_string();
+        assert!(e.starts_with("sky.exr: pixel (3, 2) channel G is NaN"), "{e}");
+        let e = strict.check_pixels(path, &mut image_with(-0.5)).unwrap_err().to_string();
+        assert!(e.contains("(3, 2) channel G is -0.5") && e.contains("--negative clamp"), "{e}");
+        let clamp = LoadOptions { negative: NegativePolicy::Clamp, ..strict };
+        let mut img = image_with(-0.5);
+        assert_eq!(clamp.check_pixels(path, &mut img).unwrap(), 1);
+        assert_eq!(img.get(3, 2), [1.0, 0.0, 1.0]);
+        let keep = LoadOptions { negative: NegativePolicy::Keep, ..strict };
+        assert_eq!(keep.check_pixels(path, &mut image_with(-0.5)).unwrap(), 0);
+        assert!(keep.check_pixels(path, &mut image_with(f32::INFINITY)).is_err());
+    }
+
+    #[test]
+    fn bytes_are_sniffed_when_the_name_says_nothing() {
+        let img = RgbImage::from_fn(8, 4, |x, _| [x as f32, 1.0, 2.0]);
+        let pfm = io::pfm::encode(&img);
+        let loaded = LoadOptions::default().load_bytes(Path::new("<stdin>"), &pfm).unwrap();
+        assert_eq!(loaded.map.layout(), Layout::LatLong);
+        assert_eq!(loaded.map.image(), &img);
+        let e = LoadOptions::default().load_bytes(Path::new("<stdin>"), b"hello").unwrap_err().to_string();
+        assert!(e.starts_with("<stdin>: unknown image format"), "{e}");
+    }
+}

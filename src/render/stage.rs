@@ -1,0 +1,378 @@
+//! The `render` stage as one library call: a sphere or mesh shaded with one of the bakes (SH
+//! irradiance, an SHRM, a K-term factorization) or the reference integrator, compared with a
+//! reference render, and laid out in a labelled panel.
+
+use super::factored::{Factored, Transport};
+use super::irradiance::Irradiance;
+use super::panel::{layout, Cell};
+use super::reference::{Integrand, Reference};
+use super::reflection::ShrmShader;
+use super::{render, Camera, Frame, Scene, Shade};
+use crate::brdf::Brdf;
+use crate::envmap::EnvMap;
+use crate::factor::{Channel, Domain, Factorization, Method, Sampling};
+use crate::io::{Document, Provenance, RgbImage};
+use crate::metrics::{compare, Metrics};
+use crate::prefilter::document::ShrmBody;
+use crate::prefilter::shrm::Shrm;
+use crate::progress::Progress;
+use crate::sh::ShCoeffs;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Grid bins n of a factorization made by `render` itself.
+pub const DEFAULT_FACTOR_RESOLUTION: usize = 64;
+
+/// Document kind of the metrics written with `--metrics`.
+pub const METRICS_FORMAT: &str = "prtkit.render-metrics";
+/// Its schema version.
+pub const METRICS_VERSION: u32 = 1;
+
+/// How the object is shaded.
+#[derive(Clone, Debug)]
+pub enum Shading {
+    /// Lambert from SH lighting of order `order`: `coefficients` (truncated), or the map
+    /// projected when `None`.
+    Irradiance {
+        /// The SH order used.
+        order: usize,
+        /// Given coefficients (a `prtkit.sh` document's).
+        coefficients: Option<ShCoeffs>,
+    },
+    /// From an SHRM and its document.
+    Shrm {
+        /// The SHRM.
+        shrm: Shrm,
+        /// Its document.
+        body: Box<ShrmBody>,
+    },
+    /// K-term in-out factorization (Mahajan et al. 2008, eq. 3–4).
+    Factored {
+        /// Terms K.
+        terms: usize,
+        /// A stored factorization (`factor-brdf --factors`); `None`: factor here on the
+        /// hemisphere with the cosine folded in, at `resolution`.
+        factors: Option<Box<StoredFactors>>,
+        /// Grid bins n: of the factorization made here, or (when given) the stored one's.
+        resolution: Option<usize>,
+        /// Lighting samples per grid cell along each axis.
+        cell_samples: usize,
+        /// Size of the lat-long table of normals (sphere).
+        normal_table: (usize, usize),
+    },
+    /// Ground truth: a sum over every environment texel.
+    Reference {
+        /// The rendering equation, or the ρ̂ the prefilter represents.
+        integrand: Integrand,
+    },
+}
+
+impl Shading {
+    /// The mode's name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Shading::Irradiance { .. } => "irradiance",
+            Shading::Shrm { .. } => "shrm",
+            Shading::Factored { .. } => "factored",
+            Shading::Reference { .. } => "reference",
+        }
+    }
+}
+
+/// A factorization read back from `factor-brdf`'s document and factor file.
+#[derive(Clone, Debug)]
+pub struct StoredFactors {
+    /// The document's name, for messages.
+    pub name: String,
+    /// The factorization.
+    pub factorization: Factorization,
+    /// Whether max(cos θ_i, 0) is folded into it.
+    pub cosine: bool,
+    /// The BRDF it is of (canonical spec).
+    pub brdf: String,
+}
+
+/// A cell of the panel: a label (lines separated by `|`) and an image, `None` for this render.
+#[derive(Clone, Debug)]
+pub struct PanelItem {
+    /// The label.
+    pub label: String,
+    /// The image; `None` places this render here.
+    pub image: Option<RgbImage>,
+}
+
+/// What `render` computes.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// The BRDF.
+    pub brdf: Brdf,
+    /// The shading mode.
+    pub shading: Shading,
+    /// The camera.
+    pub camera: Camera,
+    /// A reference render to compare with (same size), and its name.
+    pub compare: Option<(String, RgbImage)>,
+    /// The panel's cells, if a panel is asked for.
+    pub panel: Option<Vec<PanelItem>>,
+    /// This render's label (default: the mode and its parameters).
+    pub label: Option<String>,
+    /// Exposure (stops) the panel will be tone-mapped with: its labels are drawn to stay white.
+    pub exposure: f32,
+    /// The file the render is written to, for the metrics document.
+    pub output_name: Option<String>,
+    /// The command line, for the metrics document's provenance.
+    pub args: Vec<String>,
+}
+
+/// What `render` produces.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// The render (linear RGB) and its object mask.
+    pub frame: Frame,
+    /// Metrics against the reference, with the error image |render − reference|.
+    pub comparison: Option<(Document<MetricsBody>, RgbImage)>,
+    /// The labelled panel, if asked.
+    pub panel: Option<RgbImage>,
+    /// The `--json` summary.
+    pub summary: Summary,
+}
+
+/// The `prtkit.render-metrics` document (`docs/formats/render-metrics.md`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct MetricsBody {
+    /// The render's file, if written.
+    pub render: Option<String>,
+    /// The reference's file.
+    pub reference: String,
+    /// Shading mode.
+    pub shading: String,
+    /// Canonical BRDF spec.
+    pub brdf: String,
+    /// The render's label.
+    pub label: String,
+    /// The metrics over the object's pixels.
+    pub metrics: Metrics,
+}
+
+/// The machine-readable summary (`render --json`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Summary {
+    /// Shading mode.
+    pub shading: String,
+    /// Canonical BRDF spec.
+    pub brdf: String,
+    /// Image width.
+    pub width: usize,
+    /// Image height.
+    pub height: usize,
+    /// Time of the render.
+    pub seconds: f64,
+    /// The label.
+    pub label: String,
+    /// SH order (irradiance).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub order: Option<usize>,
+    /// F_B, P_B (shrm).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orders: Option<(usize, usize)>,
+    /// The SHRM's ε achieved (shrm).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub epsilon_achieved: Option<f64>,
+    /// K and the energy of K terms (factored).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub terms: Option<(usize, f64)>,
+    /// Metrics against the reference, if compared.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metrics: Option<Metrics>,
+}
+
+/// Errors of the stage.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The configuration is inconsistent (BRDF vs mode, sizes, counts).
+    #[error("{0}")]
+    Config(String),
+    /// Projection of the lighting failed.
+    #[error(transparent)]
+    Project(#[from] crate::sh::project::ProjectError),
+    /// The factorization failed.
+    #[error(transparent)]
+    Factor(#[from] crate::factor::FactorError),
+    /// Comparing failed.
+    #[error("comparing with {reference}: {error}")]
+    Compare {
+        /// The reference's name.
+        reference: String,
+        /// Why.
+        error: crate::metrics::CompareError,
+    },
+}
+
+/// Runs `render` of `scene` under `env`.
+pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress) -> Result<Output, Error> {
+    let bad = |m: String| Error::Config(m);
+    let (w, h) = (config.camera.width, config.camera.height);
+    if let Some((name, r)) = &config.compare {
+        if (r.width, r.height) != (w, h) {
+            return Err(bad(format!(
+                "{name}: the reference is {}x{}, the render is {w}x{h} (--res)",
+                r.width, r.height
+            )));
+        }
+    }
+    let brdf = &config.brdf;
+    let start = Instant::now();
+    let mut summary = Summary {
+        shading: config.shading.name().into(),
+        brdf: brdf.spec(),
+        width: w,
+        height: h,
+        seconds: 0.0,
+        label: String::new(),
+        order: None,
+        orders: None,
+        epsilon_achieved: None,
+        terms: None,
+        metrics: None,
+    };
+    let (frame, label) = match &config.shading {
+        Shading::Irradiance { order, coefficients } => {
+            let Brdf::Lambert(m) = brdf else {
+                return Err(bad(format!(
+                    "--shading irradiance shades Lambertian surfaces; --brdf {} is not lambert",
+                    brdf.spec()
+                )));
+            };
+            let light = match coefficients {
+                Some(c) if c.order < *order => {
+                    return Err(bad(format!("the coefficients have order {}, --order asks for {order}", c.order)))
+                }
+                Some(c) => c.truncated(*order),
+                None => crate::sh::project::project(env, *order, progress)?,
+            };
+            summary.order = Some(*order);
+            let frame = render(scene, &config.camera, env, &Irradiance::new(&light, m.albedo), progress);
+            (frame, format!("irradiance F={order}"))
+        }
+        Shading::Shrm { shrm, body } => {
+            if body.brdf != brdf.spec() {
+                return Err(bad(format!("the SHRM was computed for {}, --brdf says {}", body.brdf, brdf.spec())));
+            }
+            summary.orders = Some((body.f_b, body.p_b));
+            summary.epsilon_achieved = Some(body.epsilon_achieved);
+            let shader =
+                ShrmShader::new(shrm.clone(), body.parameterization == "normal", config.camera.view_direction());
+            (render(scene, &config.camera, env, &shader, progress), format!("SHRM F={} P={}", body.f_b, body.p_b))
+        }
+        Shading::Factored { terms, factors, resolution, cell_samples, normal_table } => {
+            if *terms == 0 {
+                return Err(bad("--terms must be at least 1".into()));
+            }
+            if !(1..=8).contains(cell_samples) {
+                return Err(bad(format!("--cell-samples {cell_samples} must be in 1..=8")));
+            }
+            let (f, cosine_in_factors) = match factors {
+                Some(stored) => {
+                    let (name, f) = (&stored.name, &stored.factorization);
+                    if stored.brdf != brdf.spec() {
+                        return Err(bad(format!(
+                            "{name}: the factorization is of {}, --brdf says {}",
+                            stored.brdf,
+                            brdf.spec()
+                        )));
+                    }
+                    if let Some(n) = resolution.filter(|&n| n != f.grid.n) {
+                        return Err(bad(format!(
+                            "{name}: a factorization of another resolution: n = {}, --factor-resolution asks for {n}",
+                            f.grid.n
+                        )));
+                    }
+                    if f.g.len() < *terms {
+                        return Err(bad(format!(
+                            "{name}: the factor file holds {} terms, --terms asks for {terms} (factor-brdf --terms {terms})",
+                            f.g.len()
+                        )));
+                    }
+                    (f.clone(), stored.cosine)
+                }
+                None => {
+                    let resolution = &resolution.unwrap_or(DEFAULT_FACTOR_RESOLUTION);
+                    if !(2..=256).contains(resolution) {
+                        return Err(bad(format!("--factor-resolution {resolution} must be in 2..=256")));
+                    }
+                    let sampling = Sampling {
+                        resolution: *resolution,
+                        domain: Domain::Hemisphere,
+                        cosine: true,
+                        channel: Channel::Mean,
+                    };
+                    (crate::factor::factor(brdf, &sampling, Method::Auto, *terms, progress)?, true)
+                }
+            };
+            let transport = match scene {
+                Scene::Sphere { .. } => Transport::sphere(normal_table.0, normal_table.1),
+                Scene::Mesh(_) => Transport::mesh(scene, &f.grid, progress),
+            };
+            let energy = f.cumulative_energy().get(terms - 1).copied().unwrap_or(1.0);
+            summary.terms = Some((*terms, energy));
+            let shader = Factored::new(&f, *terms, cosine_in_factors, transport, env, *cell_samples);
+            let label = format!("K={}", shader.terms());
+            (render(scene, &config.camera, env, &shader, progress), label)
+        }
+        Shading::Reference { integrand } => {
+            let shader = Reference::new(env, brdf.clone(), *integrand, scene).map_err(bad)?;
+            (render(scene, &config.camera, env, &shader as &dyn Shade, progress), "reference".to_string())
+        }
+    };
+    summary.seconds = start.elapsed().as_secs_f64();
+    let label = config.label.clone().unwrap_or(label);
+    summary.label = label.clone();
+
+    let comparison = match &config.compare {
+        Some((name, reference)) => {
+            let (metrics, error_image) = compare(&frame.image, reference, &frame.mask)
+                .map_err(|error| Error::Compare { reference: name.clone(), error })?;
+            summary.metrics = Some(metrics);
+            let body = MetricsBody {
+                render: config.output_name.clone(),
+                reference: name.clone(),
+                shading: config.shading.name().into(),
+                brdf: brdf.spec(),
+                label: label.clone(),
+                metrics,
+            };
+            let provenance = Provenance::new("render", &config.args, vec![name.clone()]);
+            Some((Document::new(METRICS_FORMAT, METRICS_VERSION, provenance, body), error_image))
+        }
+        None => None,
+    };
+    let panel = config.panel.as_ref().map(|items| panel(items, &frame, &label, config, summary.metrics));
+    Ok(Output { frame, comparison, panel, summary })
+}
+
+/// Lays out the panel: the items in order (each labelled with its error against the reference
+/// when comparing), this render in the item marked `None`, or last.
+fn panel(items: &[PanelItem], frame: &Frame, label: &str, config: &Config, metrics: Option<Metrics>) -> RgbImage {
+    let with_error = |mut lines: Vec<String>, m: Option<Metrics>| {
+        if let Some(m) = m.filter(|m| m.rel_error > 0.0) {
+            lines.push(format!("{:.2}%", 100.0 * m.rel_error));
+        }
+        lines
+    };
+    let split = |l: &str| -> Vec<String> { l.split('|').map(str::to_string).collect() };
+    let own = |l: &str| Cell { image: frame.image.clone(), label: with_error(split(l), metrics) };
+    let mut cells: Vec<Cell> = items
+        .iter()
+        .map(|item| match &item.image {
+            Some(image) => {
+                let m = config.compare.as_ref().and_then(|(_, r)| compare(image, r, &frame.mask).ok()).map(|(m, _)| m);
+                Cell { label: with_error(split(&item.label), m), image: image.clone() }
+            }
+            None => own(&item.label),
+        })
+        .collect();
+    if !items.iter().any(|item| item.image.is_none()) {
+        cells.push(own(label));
+    }
+    layout(&cells, config.exposure)
+}
