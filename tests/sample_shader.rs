@@ -146,7 +146,7 @@ fn umbrella_and_thread_count_give_identical_bytes_and_verify_passes() {
     let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
     bin()
         .arg(shader("marble"))
-        .args(["--res", "32x32", "--threads", "1", "--verify", "50", "-q", "-o"])
+        .args(["--res", "32x32", "--threads", "1", "--verify", "50", "-o"])
         .arg(&a)
         .assert()
         .success()

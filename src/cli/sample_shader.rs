@@ -182,10 +182,16 @@ impl Stage for Args {
         for (doc, seconds) in out.stats.iter().zip(&out.seconds) {
             let s = &doc.body;
             if let Some(v) = &s.verify {
-                ctx.note(format!(
+                let line = format!(
                     "verify ({}): {} points in {} leaves, {} outside their bounds",
                     s.arith, v.points, v.leaves, v.violations
-                ));
+                );
+                if v.violations > 0 {
+                    // The reason for exit status 1: said even with --quiet.
+                    eprintln!("sample-shader: {line}");
+                } else {
+                    ctx.note(line);
+                }
             }
             if out.comparison.is_none() {
                 ctx.note(format!(
