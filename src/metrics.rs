@@ -44,6 +44,20 @@ pub struct Metrics {
     pub peak: f64,
 }
 
+impl std::fmt::Display for Metrics {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "rel error {:.4} ({:.2} %), RMS {:.4e}, PSNR {:.2} dB over {} pixels",
+            self.rel_error,
+            100.0 * self.rel_error,
+            self.rms,
+            self.psnr,
+            self.pixels
+        )
+    }
+}
+
 /// Relative L² error ‖a − r‖₂/‖r‖₂ of `image` against `reference` over all pixels and channels:
 /// [`compare`] without a mask. Infinite when the sizes differ or the reference is zero.
 pub fn relative_rms(image: &RgbImage, reference: &RgbImage) -> f64 {

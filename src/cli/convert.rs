@@ -1,62 +1,15 @@
 //! `convert`: clap arguments → [`envmap::stage::Config`] → one library call → outputs.
 
+mod args;
+
 use super::common::{Context, Outcome, Stage};
-use super::options::{parse_output, parse_size, EnvArgs, Execution, Exposure};
+use super::options::{parse_output, Execution};
 use super::outputs::{check_writable, Outputs};
 use crate::envmap::stage::{self, Config};
 use crate::envmap::{Layout, FACES};
 use crate::io::Output;
 use anyhow::Result;
-use clap::{Parser, ValueEnum};
-use std::path::PathBuf;
-
-/// File format of the six faces written by `--to faces`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum FaceFormat {
-    /// OpenEXR, float.
-    Exr,
-    /// Portable float map.
-    Pfm,
-    /// Tone-mapped PNG (sRGB, --exposure).
-    Png,
-}
-
-/// Resample an environment map into another layout (lat-long, angular probe, cube crosses, six
-/// faces), or write it in another format.
-#[derive(Debug, Parser)]
-#[command(name = "convert", version)]
-pub struct Args {
-    #[command(flatten)]
-    pub input: EnvArgs,
-
-    /// Output layout.
-    #[arg(long = "to", default_value = "latlong")]
-    pub to: Layout,
-
-    /// Output size WxH (per face for `faces`). Default: 2S x S for lat-long, where S keeps the
-    /// input's texel count; S x S for the others.
-    #[arg(long, value_parser = parse_size)]
-    pub size: Option<(usize, usize)>,
-
-    /// Sub-samples per texel edge (k x k bilinear lookups averaged per output texel), 1..=16.
-    #[arg(long, default_value_t = 3)]
-    pub supersample: usize,
-
-    /// Output file (.exr, .pfm, .png; `-`: EXR on stdout). For `--to faces`, a directory that
-    /// receives px/nx/py/ny/pz/nz with the extension of `--face-format` (created if missing).
-    #[arg(short, long)]
-    pub output: PathBuf,
-
-    /// Format of the face files when writing `--to faces`.
-    #[arg(long, value_enum, default_value_t = FaceFormat::Exr)]
-    pub face_format: FaceFormat,
-
-    #[command(flatten)]
-    pub exposure: Exposure,
-
-    #[command(flatten)]
-    pub run: Execution,
-}
+pub use args::*;
 
 impl TryFrom<&Args> for Config {
     type Error = anyhow::Error;
@@ -84,7 +37,9 @@ impl Stage for Args {
         let mut outputs = Outputs::new();
         if self.to == Layout::Faces {
             outputs.create_dir(&self.output)?;
-            let ext = self.face_format.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default();
+            let ext = clap::ValueEnum::to_possible_value(&self.face_format)
+                .map(|v| v.get_name().to_string())
+                .unwrap_or_default();
             for (face, img) in FACES.iter().zip(out.images()) {
                 let path = self.output.join(format!("{}.{ext}", face.short_name()));
                 outputs.image(&Output::File(path), img, self.exposure.stops)?;

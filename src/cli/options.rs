@@ -239,3 +239,16 @@ pub fn parse_memory(s: &str) -> Result<u128, String> {
     }
     Ok((v * mult as f64) as u128)
 }
+
+/// Reads the SH coefficients of a `prtkit.sh` document (`-`: standard input).
+pub fn read_sh_document(path: &Path) -> Result<crate::sh::ShCoeffs> {
+    let stdin = path.as_os_str() == "-";
+    let text = if stdin {
+        std::io::read_to_string(std::io::stdin().lock()).context("cannot read standard input")?
+    } else {
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?
+    };
+    let name = if stdin { "<stdin>".to_string() } else { path.display().to_string() };
+    let doc = crate::sh::document::parse(&text).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    Ok(doc.body.coeffs())
+}

@@ -44,6 +44,14 @@ impl Outputs {
         self.bytes(output, bytes)
     }
 
+    /// Stages named RGB layers as one EXR.
+    pub fn layers(&mut self, output: &Output, layers: &[(String, RgbImage)]) -> Result<()> {
+        let refs: Vec<(&str, &RgbImage)> = layers.iter().map(|(n, i)| (n.as_str(), i)).collect();
+        let bytes =
+            io::exr::encode_layers(&refs).map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", output.display()))?;
+        self.bytes(output, bytes)
+    }
+
     /// Puts every staged output in place.
     pub fn commit(self) -> Result<()> {
         Ok(self.set.commit()?)

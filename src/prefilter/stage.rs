@@ -17,7 +17,7 @@ use std::f64::consts::PI;
 use std::time::Instant;
 
 /// Frequency space or the angular reference.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// Spherical-harmonic prefiltering (R&H 2002 App. C).

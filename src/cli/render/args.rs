@@ -1,0 +1,155 @@
+//! The flags of `render` (clap declarations only; their help text is the user's reference).
+
+use crate::brdf::Brdf;
+use crate::cli::options::{parse_brdf, parse_output, parse_size, parse_xyz, EnvArgs, Execution, Exposure};
+use crate::io::Output;
+use crate::render::reference::Integrand;
+use clap::{Parser, ValueEnum};
+use glam::DVec3;
+use std::path::PathBuf;
+
+/// Shading modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ShadingArg {
+    /// Lambert from SH lighting: (albedo/π) Σ Â_l L_lm Y_lm(n).
+    Irradiance,
+    /// From a prefilter SHRM (global: distant viewer, eq. 12; local: per pixel, eq. 6).
+    Shrm,
+    /// K-term in-out factorization, lighting projected onto the factors (Mahajan eq. 4).
+    Factored,
+    /// Ground truth: sum over every environment texel of L ρ cos (× visibility on meshes).
+    Reference,
+}
+
+/// Render a sphere or an OBJ mesh under an environment map with one of the bakes, or the
+/// reference, and compare.
+#[derive(Debug, Parser)]
+#[command(name = "render", version)]
+pub struct Args {
+    #[command(flatten)]
+    pub input: EnvArgs,
+
+    /// The object: `sphere` (unit sphere at the origin) or an OBJ file.
+    #[arg(long, default_value = "sphere")]
+    pub scene: String,
+
+    /// Shading mode.
+    #[arg(long, value_enum, default_value_t = ShadingArg::Reference)]
+    pub shading: ShadingArg,
+
+    /// BRDF spec (docs/brdf-specs.md). For `shrm` it must equal the SHRM's.
+    #[arg(long, default_value = "lambert", value_parser = parse_brdf)]
+    pub brdf: Brdf,
+
+    /// Camera position x,y,z (+Z up).
+    #[arg(long, value_parser = parse_xyz, allow_hyphen_values = true, default_value = "0,-4,0")]
+    pub eye: DVec3,
+
+    /// Point the camera looks at.
+    #[arg(long, value_parser = parse_xyz, allow_hyphen_values = true, default_value = "0,0,0")]
+    pub target: DVec3,
+
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = 32.0)]
+    pub fov: f64,
+
+    /// Image size WxH.
+    #[arg(long, value_parser = parse_size, default_value = "256x256")]
+    pub res: (usize, usize),
+
+    /// irradiance: a prtkit.sh document with the lighting (default: project the environment).
+    #[arg(long, value_name = "SH.json")]
+    pub sh: Option<PathBuf>,
+
+    /// irradiance: SH order used (truncates --sh; the projection order otherwise).
+    #[arg(short = 'F', long, default_value_t = 2)]
+    pub order: usize,
+
+    /// shrm: the prtkit.shrm document written by `prefilter --shrm` (names the EXR).
+    #[arg(long, value_name = "SHRM.json")]
+    pub shrm: Option<PathBuf>,
+
+    /// factored: number of terms K.
+    #[arg(short = 'K', long, default_value_t = 12)]
+    pub terms: usize,
+
+    /// factored: a prtkit.factor document written by `factor-brdf --factors FILE.exr` (names
+    /// the EXR). Without it the BRDF is factored here, on the hemisphere with the cosine folded in.
+    #[arg(long, value_name = "FACTOR.json")]
+    pub factors: Option<PathBuf>,
+
+    /// factored: bins n of the BRDF matrix's (cos θ, φ) hemisphere grid (n² directions);
+    /// default 64. With --factors it must equal the document's resolution.
+    #[arg(long)]
+    pub factor_resolution: Option<usize>,
+
+    /// factored: lighting samples per grid cell along each axis (averaged: a box prefilter).
+    #[arg(long, default_value_t = 2)]
+    pub cell_samples: usize,
+
+    /// factored (sphere): size WxH of the lat-long table of normals the lighting is projected at.
+    #[arg(long, value_parser = parse_size, default_value = "128x64")]
+    pub normal_table: (usize, usize),
+
+    /// reference: `brdf-cosine` (the rendering equation, ρ max(n·ω,0) V) or `prefilter` (the
+    /// ρ̂ the prefilter represents: Phong's lobe about R on the whole sphere, §6.3).
+    #[arg(long, value_enum, default_value_t = Integrand::BrdfCosine)]
+    pub integrand: Integrand,
+
+    /// Linear EXR output (`-`: stdout).
+    #[arg(short, long, value_name = "FILE.exr", value_parser = parse_output)]
+    pub output: Option<Output>,
+
+    /// Tone-mapped PNG output (× 2^exposure, sRGB).
+    #[arg(long, value_name = "FILE.png", value_parser = parse_output)]
+    pub png: Option<Output>,
+
+    #[command(flatten)]
+    pub exposure: Exposure,
+
+    /// Compare with a reference render of the same size, over the object's pixels.
+    #[arg(long, value_name = "REF.exr")]
+    pub compare: Option<PathBuf>,
+
+    /// With --compare: write |render − reference| here (EXR, or PNG tone-mapped).
+    #[arg(long, value_name = "FILE", value_parser = parse_output)]
+    pub error_image: Option<Output>,
+
+    /// With --compare: write the prtkit.render-metrics document here (`-`: stdout).
+    #[arg(long, value_name = "FILE.json", value_parser = parse_output)]
+    pub metrics: Option<Output>,
+
+    /// Write a labelled panel PNG: the --panel-item images in order, then this render (unless an
+    /// item placed it).
+    #[arg(long, value_name = "FILE.png", value_parser = parse_output)]
+    pub panel: Option<Output>,
+
+    /// A panel cell `LABEL=FILE.exr` (repeatable; with --compare its error is added to the label).
+    /// `LABEL=-` places this render there, under that label.
+    #[arg(long, value_name = "LABEL=FILE.exr", value_parser = parse_panel_item)]
+    pub panel_item: Vec<(String, PathBuf)>,
+
+    /// Label of this render in the panel (default: the shading mode and its parameters).
+    #[arg(long)]
+    pub label: Option<String>,
+
+    /// Print a JSON summary on stdout.
+    #[arg(long)]
+    pub json: bool,
+
+    #[command(flatten)]
+    pub run: Execution,
+}
+
+/// `LABEL=FILE` (the last `=` splits, so labels may hold one).
+fn parse_panel_item(s: &str) -> Result<(String, PathBuf), String> {
+    let (label, file) = s.rsplit_once('=').ok_or_else(|| format!("expected LABEL=FILE.exr, got {s:?}"))?;
+    Ok((label.to_string(), PathBuf::from(file)))
+}
+
+impl Args {
+    /// The files this run writes.
+    pub(super) fn outputs(&self) -> impl Iterator<Item = &Output> {
+        [&self.output, &self.png, &self.error_image, &self.metrics, &self.panel].into_iter().flatten()
+    }
+}
