@@ -6,11 +6,12 @@
 //!   integrated by deterministic quadrature.
 //! - [`cube`]: cube maps in the Vulkan/KTX face order and orientation, texel geometry, mip chains
 //!   and the glTF (+Y up) ↔ prtkit (+Z up) frame change.
-//! - `angular` (next): the lobe-truncated angular GGX prefilter of a cube level from a mip pyramid,
+//! - [`angular`]: the lobe-truncated angular GGX prefilter of a cube level from a mip pyramid,
 //!   its exact reference and the per-level error measurement.
 //!
 //! `docs/ibl-building-blocks.md` states the conventions and the measured speeds and accuracies.
 
+pub mod angular;
 pub mod cube;
 pub mod dfg;
 pub mod ggx;
