@@ -31,6 +31,7 @@
 //! of the unit-distance face plane in closed form.
 
 use crate::envmap::{EnvMap, Face, FACES};
+use crate::io::gpu_format::{Texture, TextureShape};
 use crate::io::RgbImage;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -330,6 +331,16 @@ impl CubeMipChain {
     pub fn into_levels(self) -> Vec<CubeMap> {
         self.levels
     }
+
+    /// The chain as texture data for the KTX2 and DDS writers (`crate::io::ktx2::encode`,
+    /// `crate::io::dds::encode`): a cube, three channels, largest level first.
+    pub fn as_texture(&self) -> Texture<'_> {
+        Texture {
+            shape: TextureShape::Cube { size: self.base().size },
+            channels: 3,
+            levels: self.levels.iter().map(|l| l.texels()).collect(),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -526,6 +537,23 @@ mod tests {
         }
         // The constant channel stays exactly constant.
         assert!(chain.levels()[3].texels().chunks(3).all(|p| (p[2] - 1.0).abs() < 1e-6));
+    }
+
+    #[test]
+    fn chains_write_to_ktx2_with_faces_in_place() {
+        // A cube bright only around world +X, written as a 2-level KTX2 and read back with the
+        // `ktx2` crate: the brightest texels of level 0 are in the first face block, +X.
+        let cube = CubeMap::from_fn(4, |d| if d.x > 0.9 { [5.0; 3] } else { [0.0; 3] }).unwrap();
+        let chain = CubeMipChain::pyramid(cube, 2).unwrap();
+        let bytes =
+            crate::io::ktx2::encode(&chain.as_texture(), crate::io::gpu_format::TexelFormat::Rgba32Float).unwrap();
+        let reader = ktx2::Reader::new(&bytes).unwrap();
+        let level0 = reader.levels().next().unwrap().data;
+        let face_bytes = 4 * 4 * 16;
+        let red = |i: usize| f32::from_le_bytes(level0[16 * i..16 * i + 4].try_into().unwrap());
+        let brightest = (0..6 * 16).max_by(|&a, &b| red(a).total_cmp(&red(b))).unwrap();
+        assert_eq!(brightest * 16 / face_bytes, Face::PosX.index());
+        assert_eq!(reader.header().level_count, 2);
     }
 
     #[test]
