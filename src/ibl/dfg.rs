@@ -36,7 +36,7 @@
 //!   specular lobe by the energy compensation `1 + F0 (1/dfg.y − 1)` (Fdez-Agüera 2019; Kulla &
 //!   Conty 2017), which makes a white furnace with F0 = 1 reflect exactly 1.
 
-use super::ggx::{Ggx, GgxError};
+use super::ggx::{lobe_rule, Ggx, GgxError};
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -106,64 +106,6 @@ pub fn split_sum_terms(n_dot_v: f64, perceptual_roughness: f64) -> Result<SplitS
     Ok(integrate(n_dot_v, Ggx::new(perceptual_roughness)?, DEFAULT_ORDER))
 }
 
-/// One θ_h piece of the outer rule: where its integrand has a √-type endpoint.
-#[derive(Clone, Copy, PartialEq)]
-enum Endpoint {
-    Smooth,
-    RootAtStart,
-    RootAtEnd,
-}
-
-/// Nodes (θ_h, weight) on [0, end] for the outer integral, with pieces that double from α/8,
-/// are at most π/16 long and break at the root-type points `roots`.
-fn outer_rule(alpha: f64, roots: &[f64], end: f64, order: usize) -> Vec<(f64, f64)> {
-    let mut cuts = vec![0.0, end];
-    cuts.extend(roots.iter().copied().filter(|&t| t > 0.0 && t < end));
-    let mut edge = (alpha / 8.0).max(f64::MIN_POSITIVE);
-    while edge < end {
-        cuts.push(edge);
-        edge *= 2.0;
-    }
-    cuts.sort_by(f64::total_cmp);
-    cuts.dedup();
-    let max_piece = PI / 16.0;
-    let is_root = |t: f64| roots.contains(&t);
-    let rule = gauss_legendre(order.max(1));
-    let mut out = Vec::new();
-    for pair in cuts.windows(2) {
-        let (a, b) = (pair[0], pair[1]);
-        let count = ((b - a) / max_piece).ceil().max(1.0) as usize;
-        let h = (b - a) / count as f64;
-        for p in 0..count {
-            let (pa, pb) = (a + p as f64 * h, if p + 1 == count { b } else { a + (p + 1) as f64 * h });
-            let mut pieces = vec![(pa, pb, Endpoint::Smooth)];
-            match (p == 0 && is_root(a), p + 1 == count && is_root(b)) {
-                (true, true) => {
-                    let mid = 0.5 * (pa + pb);
-                    pieces = vec![(pa, mid, Endpoint::RootAtStart), (mid, pb, Endpoint::RootAtEnd)];
-                }
-                (true, false) => pieces[0].2 = Endpoint::RootAtStart,
-                (false, true) => pieces[0].2 = Endpoint::RootAtEnd,
-                (false, false) => {}
-            }
-            for (a, b, kind) in pieces {
-                let len = b - a;
-                for &(x, w) in rule.iter() {
-                    let u = 0.5 * (x + 1.0);
-                    let wu = 0.5 * w;
-                    out.push(match kind {
-                        Endpoint::Smooth => (a + len * u, len * wu),
-                        // θ = a + len·u²: √(θ − a) = √len·u is smooth in u.
-                        Endpoint::RootAtStart => (a + len * u * u, 2.0 * len * u * wu),
-                        Endpoint::RootAtEnd => (b - len * u * u, 2.0 * len * u * wu),
-                    });
-                }
-            }
-        }
-    }
-    out
-}
-
 /// A and B by the half-vector quadrature with `order` nodes per θ_h piece and 2·order in φ.
 fn integrate(n_dot_v: f64, ggx: Ggx, order: usize) -> SplitSumTerms {
     let mu = n_dot_v;
@@ -174,7 +116,7 @@ fn integrate(n_dot_v: f64, ggx: Ggx, order: usize) -> SplitSumTerms {
     let t_end = 0.5 * (FRAC_PI_2 + theta_v);
     let phi_rule = gauss_legendre(2 * order.max(1));
     let (mut a, mut b) = (0.0, 0.0);
-    for (theta_h, w_theta) in outer_rule(ggx.alpha(), &[t_full, t_end], t_end, order) {
+    for (theta_h, w_theta) in lobe_rule(ggx.alpha(), 0.0, t_end, PI / 16.0, order, &[t_full, t_end]) {
         let (s_h, c_h) = theta_h.sin_cos();
         let d = ggx.d_half_angle(c_h * c_h, s_h * s_h);
         // n·l > 0 ⇔ sin θ_v sin θ_h cos φ > −cos θ_v cos 2θ_h / (2 cos θ_h) =: rhs.

@@ -122,8 +122,13 @@ impl Ggx {
 /// 0: pieces [0, w/8], [w/8, w/4], … double in length up to `max_piece`, then stay that long.
 /// Each piece gets `order` nodes. The integrand's poles lie ~`width` off the real axis at 0,
 /// so on every piece they are at least a piece length away and the rule converges geometrically.
-pub(crate) fn lobe_rule(width: f64, lo: f64, hi: f64, max_piece: f64, order: usize) -> Vec<(f64, f64)> {
-    let mut cuts = vec![lo];
+///
+/// `roots` are points in (lo, hi] where the integrand behaves like a power of √|θ − t| (the
+/// DFG integral's horizon cuts): they become piece boundaries, and the pieces that end there use
+/// θ = t ∓ (b − a)u², which makes √|θ − t| = √(b − a)·u smooth in u.
+pub(crate) fn lobe_rule(width: f64, lo: f64, hi: f64, max_piece: f64, order: usize, roots: &[f64]) -> Vec<(f64, f64)> {
+    let mut cuts = vec![lo, hi];
+    cuts.extend(roots.iter().copied().filter(|&t| t > lo && t < hi));
     let mut edge = (width / 8.0).max(f64::MIN_POSITIVE);
     while edge < hi {
         if edge > lo {
@@ -131,17 +136,38 @@ pub(crate) fn lobe_rule(width: f64, lo: f64, hi: f64, max_piece: f64, order: usi
         }
         edge *= 2.0;
     }
-    cuts.push(hi);
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    let is_root = |t: f64| roots.contains(&t);
     let rule = gauss_legendre(order.max(1));
     let mut out = Vec::new();
     for pair in cuts.windows(2) {
         let (a, b) = (pair[0], pair[1]);
-        let pieces = ((b - a) / max_piece).ceil().max(1.0) as usize;
-        let h = (b - a) / pieces as f64;
-        for p in 0..pieces {
-            let (pa, pb) = (a + p as f64 * h, a + (p + 1) as f64 * h);
-            let (mid, half) = (0.5 * (pa + pb), 0.5 * (pb - pa));
-            out.extend(rule.iter().map(|&(x, w)| (mid + half * x, half * w)));
+        let count = ((b - a) / max_piece).ceil().max(1.0) as usize;
+        let h = (b - a) / count as f64;
+        for p in 0..count {
+            let pa = a + p as f64 * h;
+            let pb = if p + 1 == count { b } else { a + (p + 1) as f64 * h };
+            let pieces = match (p == 0 && is_root(a), p + 1 == count && is_root(b)) {
+                (true, true) => {
+                    let mid = 0.5 * (pa + pb);
+                    vec![(pa, mid, Some(pa)), (mid, pb, Some(pb))]
+                }
+                (true, false) => vec![(pa, pb, Some(pa))],
+                (false, true) => vec![(pa, pb, Some(pb))],
+                (false, false) => vec![(pa, pb, None)],
+            };
+            for (a, b, root) in pieces {
+                let len = b - a;
+                for &(x, w) in rule.iter() {
+                    let (u, wu) = (0.5 * (x + 1.0), 0.5 * w);
+                    out.push(match root {
+                        None => (a + len * u, len * wu),
+                        Some(t) if t == a => (a + len * u * u, 2.0 * len * u * wu),
+                        Some(_) => (b - len * u * u, 2.0 * len * u * wu),
+                    });
+                }
+            }
         }
     }
     out
@@ -218,7 +244,7 @@ impl SplitSumLobe {
     /// ∫_{angle < θ} k dω (with the current normalization) by the lobe rule of `order` nodes per piece.
     fn mass(&self, theta: f64, order: usize) -> f64 {
         let theta = theta.clamp(0.0, FRAC_PI_2);
-        lobe_rule(self.width(), 0.0, theta, FRAC_PI_2 / 8.0, order)
+        lobe_rule(self.width(), 0.0, theta, FRAC_PI_2 / 8.0, order, &[])
             .iter()
             .map(|&(t, w)| w * 2.0 * PI * self.kernel_at_angle(t) * t.sin())
             .sum()
@@ -262,7 +288,7 @@ impl SplitSumLobe {
         let mut k = vec![0.0; order + 1];
         // Pieces no longer than 8/(order + 1) keep P_l's oscillation to ~1.3 periods per piece.
         let max_piece = (8.0 / (order + 1) as f64).min(FRAC_PI_2 / 8.0);
-        for (t, w) in lobe_rule(self.width(), 0.0, FRAC_PI_2, max_piece, nodes) {
+        for (t, w) in lobe_rule(self.width(), 0.0, FRAC_PI_2, max_piece, nodes, &[]) {
             let weight = w * 2.0 * PI * self.kernel_at_angle(t) * t.sin();
             table.eval_zonal(t.cos(), &mut y);
             for l in 0..=order {
@@ -296,7 +322,7 @@ mod tests {
         // ∫ D(h)(n·h) dω_h = 2π ∫ D(θ_h) cos θ_h sin θ_h dθ_h = 1, by the lobe rule in θ_h.
         for r in [0.005, 0.02, 0.1, 0.3, 0.6, 1.0] {
             let g = Ggx::new(r).unwrap();
-            let total: f64 = lobe_rule(g.alpha(), 0.0, FRAC_PI_2, 0.2, 32)
+            let total: f64 = lobe_rule(g.alpha(), 0.0, FRAC_PI_2, 0.2, 32, &[])
                 .iter()
                 .map(|&(t, w)| {
                     let (s, c) = t.sin_cos();
