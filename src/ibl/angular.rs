@@ -69,8 +69,10 @@ pub enum AngularError {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AngularOptions {
     /// ε: the share of the kernel's weight left outside the cone (0 = the whole support).
+    /// Default 1e-4.
     pub epsilon: f64,
     /// Largest source texel solid angle as a fraction of the lobe's equivalent solid angle.
+    /// Default 1/64 (texels about an eighth of the lobe's width).
     pub texel_ratio: f64,
 }
 
@@ -175,7 +177,6 @@ impl AngularPrefilter {
         }
         let mut out = CubeMap::new(size)?;
         if perceptual_roughness == 0.0 {
-            super::ggx::Ggx::new(perceptual_roughness)?;
             let level = self.chain.levels().iter().find(|l| l.size() == size).ok_or(AngularError::NoLevel(size))?;
             return Ok((level.clone(), LevelSource { source_size: size, cone_angle: 0.0 }));
         }
