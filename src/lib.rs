@@ -8,6 +8,7 @@ pub mod brdf;
 pub mod cli;
 pub mod envmap;
 pub mod factor;
+pub mod ibl;
 pub mod io;
 pub mod metrics;
 pub mod normals;

@@ -2,9 +2,12 @@
 //! and atomic writes. Everything that touches a file format lives here, once.
 
 pub mod atomic;
+pub mod dds;
 pub mod document;
 pub mod exr;
+pub mod gpu_format;
 pub mod image;
+pub mod ktx2;
 pub mod pfm;
 pub mod png;
 pub mod rgbe;
