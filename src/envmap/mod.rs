@@ -2,6 +2,7 @@
 //! direction, layout detection and resampling. Mappings to the +Z-up frame are documented in
 //! `docs/envmap-layouts.md`.
 
+pub mod bright;
 mod cube;
 mod layout;
 mod load;

@@ -53,6 +53,10 @@ pub struct ShrmBody {
     /// same inputs give the same bytes); timings are in `prefilter --json`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub timings: Option<serde_json::Value>,
+    /// How the ring-free bake was made: the order rule and its guarantee, the bright sources
+    /// filtered in angle, the window (frequency method).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bake: Option<super::hybrid::Report>,
 }
 
 /// The lighting an SHRM was computed from.

@@ -4,7 +4,9 @@
 pub mod angular;
 pub mod brdf_sh;
 pub mod document;
+pub mod hybrid;
 pub mod model;
+pub mod orders;
 pub mod pipeline;
 pub mod shrm;
 pub mod stage;

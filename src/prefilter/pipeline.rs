@@ -32,6 +32,7 @@ pub enum Orders {
 }
 
 /// The lighting: an environment map (projected to F_B as needed) or given coefficients.
+#[derive(Clone, Copy)]
 pub enum Lighting<'a> {
     /// An environment map.
     Map(&'a EnvMap),
@@ -54,6 +55,9 @@ pub enum PrefilterError {
     /// Angular reference problems.
     #[error(transparent)]
     Angular(#[from] angular::AngularError),
+    /// Resampling the map to lat-long for the angular passes failed.
+    #[error("cannot resample the map to lat-long: {0}")]
+    Resample(String),
     /// Given coefficients are of too low an order.
     #[error("the SH coefficients have order {have}, but F_B = {need} is needed: re-run sh-project with --order {need} (or give the environment map)")]
     LightingOrder {

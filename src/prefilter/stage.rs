@@ -2,14 +2,20 @@
 //! harmonic reflection map and the maps derived from it (Ramamoorthi & Hanrahan 2002), or the
 //! angular reference (App. D).
 
+use super::brdf_sh::BrdfSh;
 use super::document::{layer_name, Lighting as DocLighting, MapEntry, ShrmBody, FORMAT, VERSION};
+use super::hybrid::{self, Settings};
 use super::model::{residual_bound, Centre, Model, ModelError};
+use super::orders::OrderRule;
 use super::pipeline::{self, Lighting, Orders, PrefilterError};
 use super::shrm;
 use crate::brdf::Brdf;
+use crate::envmap::bright::{BrightRule, BrightSources};
 use crate::envmap::{self, EnvMap, EnvMapError, Layout};
 use crate::io::{Document, Provenance, RgbImage};
 use crate::progress::Progress;
+use crate::sh::window::Window;
+use crate::sh::ShCoeffs;
 use crate::sh::{count, lm};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -60,6 +66,12 @@ pub struct Config {
     pub orders: Option<(usize, usize)>,
     /// Largest P_B the ε search considers.
     pub max_p: usize,
+    /// How the orders are chosen from ε.
+    pub order_rule: OrderRule,
+    /// Bright sources apart (filtered in angle).
+    pub bright: BrightRule,
+    /// The window at synthesis.
+    pub window: Window,
     /// Compute App. B's bound.
     pub bound: bool,
     /// Size of the lat-long grid of reflection vectors; default 2S × S, S = clamp(10 F_B, 32, 512).
@@ -92,6 +104,9 @@ impl Config {
             epsilon: 0.01,
             orders: None,
             max_p: 6,
+            order_rule: OrderRule::Texel,
+            bright: BrightRule::Auto,
+            window: Window::Nonneg,
             bound: false,
             size: None,
             output_layout: Layout::LatLong,
@@ -220,33 +235,37 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
     let views: Vec<DVec3> = config.maps.iter().map(|m| m.view).collect();
     let start = Instant::now();
     let mut timings = Timings::default();
+    let mut bake = None;
     let (maps, shrm_out, f_b, p_b, epsilon_achieved, light_order, bound, (width, height)) = match config.method {
         Method::Frequency => {
-            let brdf_sh = pipeline::brdf_coefficients(&model, orders).map_err(fail)?;
-            let size = config.size.unwrap_or_else(|| default_size(brdf_sh.f));
-            let fixed = Orders::Fixed { f: brdf_sh.f, p: brdf_sh.p };
-            let env = match lighting {
-                Lighting::Map(m) => Some(m),
-                Lighting::Coefficients(_) => None,
+            let settings = Settings {
+                epsilon: config.epsilon,
+                rule: config.order_rule,
+                orders: config.orders,
+                max_p: config.max_p,
+                bright: config.bright,
+                window: config.window,
+                size: config.size,
             };
-            let result = pipeline::frequency(&model, lighting, fixed, size.0, size.1, progress).map_err(fail)?;
-            timings.brdf_seconds = result.timings.brdf_seconds;
-            timings.lighting_seconds = result.timings.lighting_seconds;
-            timings.shrm_seconds = result.timings.shrm_seconds;
             let t = Instant::now();
-            let global = shrm::to_global(&result.shrm);
-            let maps = shrm::reflection_maps(&global, &views);
+            let mut pre = hybrid::prefilter(&model, lighting, &settings, progress).map_err(fail)?;
+            timings.shrm_seconds = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let wanted = if config.irradiance && views.is_empty() { vec![DVec3::Z] } else { views.clone() };
+            let maps = pre.reflection_maps(&model, &wanted, progress).map_err(fail)?;
             timings.maps_seconds = t.elapsed().as_secs_f64();
-            let (f_b, p_b) = (result.brdf.f, result.brdf.p);
-            let epsilon_achieved = if config.orders.is_none() {
-                result.brdf.residual(f_b, p_b)
+            let (f_b, p_b) = (pre.brdf.f, pre.brdf.p);
+            // BRDF energy missed by (F_B, P_B), against a generous expansion of the same BRDF.
+            let epsilon_achieved = model.coefficients((2 * f_b).max(32), (p_b + 3).min(8)).residual(f_b, p_b);
+            let bound = config.bound.then(|| app_b_bound(&pre.brdf, &pre.lighting, &pre.bright, lighting));
+            let shrm = if config.shrm_file.is_some() || config.kautz_mccool_slices > 0 {
+                Some(pre.shrm(&model, config.global, progress).map_err(fail)?)
             } else {
-                // With fixed orders, measure against a generous expansion of the same BRDF.
-                model.coefficients((2 * f_b).max(32), (p_b + 3).min(8)).residual(f_b, p_b)
+                None
             };
-            let bound = config.bound.then(|| app_b_bound(&result, env));
-            let shrm = if config.global { global } else { result.shrm };
-            (maps, Some(shrm), f_b, p_b, epsilon_achieved, result.lighting.order, bound, size)
+            bake = Some(pre.report.clone());
+            let size = (pre.remainder_shrm.width(), pre.remainder_shrm.height());
+            (maps, shrm, f_b, p_b, epsilon_achieved, pre.lighting.order, bound, size)
         }
         Method::Angular => {
             if config.shrm_file.is_some() || config.kautz_mccool_slices > 0 {
@@ -348,6 +367,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
             .map(|m| MapEntry { file: m.file.clone(), view: (!radial).then(|| m.view.to_array()) })
             .collect(),
         timings: None,
+        bake,
     };
     let provenance = Provenance::new("prefilter", &config.args, vec![config.source.clone()]);
     let summary = Summary {
@@ -392,21 +412,25 @@ fn to_output_layout(image: &RgbImage, layout: Layout) -> Result<RgbImage, EnvMap
     Ok(envmap::resample(&src, layout, w, h, 2)?.image().clone())
 }
 
-/// App. B: ε_B ≤ B_res/(Σ|B|² + B_res) with B_res = Λ_{F+1}(ε_L L_tot)(ε_ρ ρ_tot).
-fn app_b_bound(result: &pipeline::Frequency, env: Option<&EnvMap>) -> f64 {
-    let f = result.brdf.f;
-    let brdf_res = result.brdf.residual(f, result.brdf.p) * result.brdf.total_energy;
-    let light_total =
-        env.map(crate::sh::project::map_energy).unwrap_or_else(|| result.lighting.band_energy().iter().sum());
-    let light_res = (light_total - result.lighting.band_energy().iter().sum::<f64>()).max(0.0);
+/// App. B: ε_B ≤ B_res/(Σ|B|² + B_res) with B_res = Λ_{F+1}(ε_L L_tot)(ε_ρ ρ_tot), for the
+/// lighting the SH expansion carries (the remainder when bright sources are apart).
+fn app_b_bound(brdf: &BrdfSh, light: &ShCoeffs, bright: &BrightSources, lighting: Lighting<'_>) -> f64 {
+    let f = brdf.f;
+    let brdf_res = brdf.residual(f, brdf.p) * brdf.total_energy;
+    let captured_light: f64 = light.band_energy().iter().sum();
+    let light_total = match lighting {
+        Lighting::Map(m) if bright.is_empty() => crate::sh::project::map_energy(m),
+        _ => captured_light,
+    };
+    let light_res = (light_total - captured_light).max(0.0);
     // Σ|B_lmpq|² with B_lmpq = Λ_l L_lm ρ̂_lpq (eq. 5), per channel.
     let mut captured = 0.0;
-    for (i, lc) in result.lighting.rgb.iter().enumerate() {
+    for (i, lc) in light.rgb.iter().enumerate() {
         let (l, _) = lm(i);
         let lambda2 = crate::sh::convolve::lambda(l).powi(2);
-        for p in 0..=result.brdf.p {
+        for p in 0..=brdf.p {
             for q in -(p.min(l) as isize)..=(p.min(l) as isize) {
-                let r = result.brdf.get(l, p, q);
+                let r = brdf.get(l, p, q);
                 captured += lambda2 * (0..3).map(|c| (lc[c] * r[c]).powi(2)).sum::<f64>();
             }
         }

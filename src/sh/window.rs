@@ -21,10 +21,10 @@
 //!   maps every non-negative environment to a non-negative result (the projection is a
 //!   weighted sum of texels with positive solid angles), so a non-negative map is always found.
 
-use super::legendre::legendre_polynomials;
-use super::{lm, ShCoeffs};
 #[cfg(test)]
 use super::index;
+use super::legendre::legendre_polynomials;
+use super::{lm, ShCoeffs};
 use std::f64::consts::PI;
 
 /// A window family (`--window`).
@@ -151,8 +151,14 @@ pub fn nonneg<T>(kernel: &[f64], synthesize: impl Fn(&[f64]) -> T, min_of: impl 
     if min_of(&raw) >= 0.0 {
         return NonNeg { t: 0.0, factors: heat_factors(order, 0.0), map: raw };
     }
-    let hi = kernel_nonneg_t(kernel).max(1e-12);
-    let t = bisect(0.0, hi, |t| min_of(&synthesize(&heat_factors(order, t))) >= 0.0);
+    // The kernel bound guarantees a non-negative result for exact, non-negative inputs; grow it
+    // until this map is non-negative (inputs may carry small negative noise of their own).
+    let ok = |t: f64| min_of(&synthesize(&heat_factors(order, t))) >= 0.0;
+    let mut hi = kernel_nonneg_t(kernel).max(1e-6 / (order * (order + 1)).max(1) as f64);
+    while !ok(hi) && hi < 1e3 {
+        hi *= 2.0;
+    }
+    let t = bisect(0.0, hi, ok);
     let factors = heat_factors(order, t);
     let map = synthesize(&factors);
     NonNeg { t, factors, map }

@@ -4,9 +4,12 @@
 use crate::brdf::Brdf;
 use crate::cli::options::{parse_brdf, parse_direction, parse_output, parse_size};
 use crate::cli::options::{Execution, Exposure};
+use crate::envmap::bright::BrightRule;
 use crate::envmap::Layout;
 use crate::io::Output;
+use crate::prefilter::orders::OrderRule;
 use crate::prefilter::stage::{icosahedron_views, view_grid, Method};
+use crate::sh::window::Window;
 use anyhow::{bail, Result};
 use clap::{Parser, ValueEnum};
 use glam::DVec3;
@@ -61,10 +64,29 @@ pub struct Args {
     #[arg(long, value_parser = parse_brdf)]
     pub brdf: Brdf,
 
-    /// Tolerance: the smallest F_B, P_B keeping 1 - ε of the BRDF energy (§5.1). Also the angular
-    /// method's truncation.
+    /// Tolerance ε. With --order-rule texel: the worst-case error of any texel, as a fraction of
+    /// the darkest texels counted (1 % of the mean); with energy: the BRDF energy F_B, P_B may
+    /// miss (§5.1). Also the angular method's truncation.
     #[arg(short = 'e', long, default_value_t = 0.01)]
     pub epsilon: f64,
+
+    /// How F_B, P_B are chosen from ε: texel (bounds the error of every texel under this
+    /// lighting; texels of grazing views the SHRM does not represent are integrated in angle) or
+    /// energy (the paper's rule, §5.1; it ignores the lighting and rings under HDR suns).
+    #[arg(long, value_enum, default_value_t = OrderRule::Texel)]
+    pub order_rule: OrderRule,
+
+    /// Bright sources filtered in angle with the exact lobe, the rest through SH: auto (a
+    /// threshold from the map's histogram, docs/prefilter.md), off (the paper's method), or a
+    /// luminance threshold.
+    #[arg(long, value_name = "auto|off|Y", default_value = "auto", value_parser = parse_bright)]
+    pub bright: BrightRule,
+
+    /// Window applied to the lighting's bands at synthesis: none, hann, lanczos, sigma, or
+    /// nonneg (no window unless a texel would be negative; then the gentlest heat window that
+    /// makes every texel non-negative).
+    #[arg(long, value_enum, default_value_t = Window::Nonneg)]
+    pub window: Window,
 
     /// Fixed orders F_B[,P_B] instead of choosing them from ε.
     #[arg(long, value_parser = parse_orders)]
@@ -207,5 +229,17 @@ impl Args {
             (None, false) => Some(Output::Stdout),
             (None, true) => None,
         }
+    }
+}
+
+/// `auto`, `off` or a luminance threshold.
+fn parse_bright(s: &str) -> Result<BrightRule, String> {
+    match s {
+        "auto" => Ok(BrightRule::Auto),
+        "off" => Ok(BrightRule::Off),
+        v => match v.parse::<f64>() {
+            Ok(t) if t.is_finite() && t > 0.0 => Ok(BrightRule::Threshold(t)),
+            _ => Err(format!("expected auto, off or a positive luminance threshold, got {s:?}")),
+        },
     }
 }

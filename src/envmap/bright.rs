@@ -1,0 +1,190 @@
+//! Compact, very bright sources (the sun, lamps, windows) apart from the rest of a map.
+//!
+//! A truncated SH expansion of a source 10⁴× brighter than the sky rings at 10⁻⁴ of the
+//! source's energy, which is already the sky's own level. Such sources are few texels, so they
+//! are cheap to filter exactly in angle; what remains is smooth enough for spherical harmonics.
+//! The split clips the map at a threshold T: the remainder is min(L, T) (scaled per texel, so
+//! its colour is kept), the bright part is the excess L − min(L, T), kept as a list of texels
+//! (direction, solid angle, excess radiance). Remainder + excess = the map, texel for texel.
+//!
+//! The threshold (`docs/prefilter.md`, "Bright sources apart"): with Y the luminance
+//! (the mean of RGB) and Q the value above which the brightest [`AREA_FRACTION`] of the sphere's
+//! solid angle lies, T = max(Q, [`MEAN_MULTIPLE`] × mean Y). Q bounds the number of texels the
+//! angular pass visits; the mean multiple keeps maps without compact sources (an overcast sky,
+//! a white furnace) whole.
+
+use super::{EnvMap, Layout};
+use crate::sphere::LatLong;
+use glam::DVec3;
+
+/// The brightest share of the sphere that may be moved to the angular pass.
+pub const AREA_FRACTION: f64 = 0.01;
+/// The threshold is at least this multiple of the mean luminance.
+pub const MEAN_MULTIPLE: f64 = 4.0;
+
+/// How the bright sources are chosen (`--bright`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum BrightRule {
+    /// No split: everything goes through spherical harmonics (the paper's method).
+    Off,
+    /// The threshold from the histogram (module docs).
+    #[default]
+    Auto,
+    /// A given luminance threshold.
+    Threshold(f64),
+}
+
+/// One bright texel: its direction, solid angle and excess radiance above the threshold.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BrightTexel {
+    /// Unit direction of the texel centre.
+    pub dir: DVec3,
+    /// Solid angle (steradians).
+    pub solid_angle: f64,
+    /// Radiance above the threshold, RGB.
+    pub excess: [f64; 3],
+}
+
+/// The bright part of a map.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BrightSources {
+    /// The luminance threshold T (infinite when nothing was split).
+    pub threshold: f64,
+    /// The texels above it.
+    pub texels: Vec<BrightTexel>,
+    /// Share of the map's radiant energy ∫ Y dω in the bright part.
+    pub energy_fraction: f64,
+    /// Share of the map's ∫ Y² dω (what drives SH ringing) in the bright part.
+    pub squared_fraction: f64,
+}
+
+impl BrightSources {
+    /// True when nothing was split.
+    pub fn is_empty(&self) -> bool {
+        self.texels.is_empty()
+    }
+}
+
+fn luminance(rgb: [f32; 3]) -> f64 {
+    (rgb[0] as f64 + rgb[1] as f64 + rgb[2] as f64) / 3.0
+}
+
+/// The threshold of [`BrightRule::Auto`] for a lat-long map: max(Q, MEAN_MULTIPLE × mean).
+pub fn auto_threshold(map: &EnvMap) -> f64 {
+    let img = map.image();
+    let grid = LatLong::new(img.width, img.height);
+    let mut texels: Vec<(f64, f64)> =
+        img.pixels.iter().enumerate().map(|(i, &p)| (luminance(p), grid.row_solid_angle(i / img.width))).collect();
+    let total_area: f64 = texels.iter().map(|t| t.1).sum();
+    let mean = texels.iter().map(|t| t.0 * t.1).sum::<f64>() / total_area;
+    texels.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut area = 0.0;
+    let mut q = 0.0;
+    for &(y, omega) in &texels {
+        area += omega;
+        if area > AREA_FRACTION * total_area {
+            q = y;
+            break;
+        }
+    }
+    q.max(MEAN_MULTIPLE * mean)
+}
+
+/// Splits a lat-long map into the remainder (clipped at the threshold) and the bright texels.
+/// Other layouts, [`BrightRule::Off`] and maps with nothing above the threshold come back whole
+/// with an empty bright part.
+pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
+    let none = || (map.clone(), BrightSources { threshold: f64::INFINITY, ..Default::default() });
+    if map.layout() != Layout::LatLong {
+        return none();
+    }
+    let threshold = match rule {
+        BrightRule::Off => return none(),
+        BrightRule::Auto => auto_threshold(map),
+        BrightRule::Threshold(t) => t,
+    };
+    let mut remainder = map.clone();
+    let img = &mut remainder.images_mut()[0];
+    let (w, h) = (img.width, img.height);
+    let grid = LatLong::new(w, h);
+    let (mut total, mut total2, mut bright, mut bright2) = (0.0, 0.0, 0.0, 0.0);
+    let mut texels = Vec::new();
+    for (i, px) in img.pixels.iter_mut().enumerate() {
+        let (x, y) = (i % w, i / w);
+        let omega = grid.row_solid_angle(y);
+        let l = luminance(*px);
+        total += l * omega;
+        total2 += l * l * omega;
+        if l > threshold {
+            let keep = threshold / l;
+            let excess = px.map(|c| c as f64 * (1.0 - keep));
+            *px = px.map(|c| (c as f64 * keep) as f32);
+            let e = (excess[0] + excess[1] + excess[2]) / 3.0;
+            bright += e * omega;
+            bright2 += (l * l - threshold * threshold) * omega;
+            texels.push(BrightTexel { dir: grid.texel_direction(x, y), solid_angle: omega, excess });
+        }
+    }
+    let fraction = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
+    let sources = BrightSources {
+        threshold,
+        texels,
+        energy_fraction: fraction(bright, total),
+        squared_fraction: fraction(bright2, total2),
+    };
+    (remainder, sources)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::RgbImage;
+
+    fn sky_with_sun() -> EnvMap {
+        let grid = LatLong::new(64, 32);
+        let sun = DVec3::new(0.3, 0.2, 0.9).normalize();
+        EnvMap::latlong(RgbImage::from_fn(64, 32, |x, y| {
+            let d = grid.texel_direction(x, y);
+            let v = 1.0 + if d.dot(sun) > 0.995 { 5000.0 } else { 0.0 };
+            [v, 0.9 * v, 0.8 * v]
+        }))
+        .unwrap()
+    }
+
+    #[test]
+    fn remainder_plus_excess_is_the_map_and_the_sun_goes_apart() {
+        let map = sky_with_sun();
+        let (rest, bright) = split(&map, BrightRule::Auto);
+        assert!(!bright.is_empty() && bright.texels.len() < 20, "{} texels", bright.texels.len());
+        assert!(bright.energy_fraction > 0.5, "{bright:?}");
+        let grid = LatLong::new(64, 32);
+        let mut sum = rest.image().clone();
+        for t in &bright.texels {
+            let (px, py) = grid.position(t.dir);
+            let (x, y) = (px as usize, py as usize);
+            let v = sum.get(x, y);
+            sum.set(x, y, [0, 1, 2].map(|c| v[c] + t.excess[c] as f32));
+        }
+        for (a, b) in sum.pixels.iter().zip(&map.image().pixels) {
+            for c in 0..3 {
+                assert!((a[c] - b[c]).abs() <= 1e-3 * b[c], "{a:?} vs {b:?}");
+            }
+        }
+        // The remainder keeps each texel's colour and is clipped at the threshold.
+        assert!(rest.image().pixels.iter().all(|p| luminance(*p) <= bright.threshold * (1.0 + 1e-6)));
+    }
+
+    #[test]
+    fn a_map_without_compact_sources_stays_whole() {
+        let grid = LatLong::new(32, 16);
+        let map = EnvMap::latlong(RgbImage::from_fn(32, 16, |x, y| {
+            let d = grid.texel_direction(x, y);
+            [(1.0 + 0.5 * d.z) as f32; 3]
+        }))
+        .unwrap();
+        let (rest, bright) = split(&map, BrightRule::Auto);
+        assert!(bright.is_empty());
+        assert_eq!(rest.image(), map.image());
+        assert!(split(&sky_with_sun(), BrightRule::Off).1.is_empty());
+    }
+}

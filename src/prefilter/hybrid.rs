@@ -1,0 +1,552 @@
+//! Ring-free prefiltering (`docs/prefilter.md`, "Ring-free bakes"): frequency space where it is
+//! exact and cheap, angle where it is not.
+//!
+//! 1. **Bright sources apart** ([`crate::envmap::bright`]): the excess of compact, very bright
+//!    texels over a threshold is filtered in angle with the exact lobe; the clipped remainder is
+//!    smooth enough for spherical harmonics.
+//! 2. **Orders for this lighting** ([`super::orders`]): F_B from the worst-case per-texel error
+//!    bound on the remainder's band energies (or the paper's energy rule); P_B from how well the
+//!    expansion represents ρ̂ per view angle.
+//! 3. **Out-of-range texels in angle**: for view-dependent BRDFs, reflection-map texels whose
+//!    view angle θ_o lies beyond the SHRM's valid range (grazing views) are integrated directly.
+//! 4. **Window** ([`crate::sh::window`]): applied to the lighting's bands at synthesis; the
+//!    default `nonneg` leaves a non-negative map alone and otherwise finds the gentlest heat
+//!    window that makes it non-negative.
+//!
+//! The SHRM itself holds the remainder's expansion plus, for radially symmetric BRDFs, the bright
+//! part (its single layer is a reflection map); for view-dependent BRDFs the bright part is
+//! projected onto the view basis texel by texel (exact in angle, truncated at P_B like the rest).
+
+use super::angular::{radial_cutoff, ConeIntegrator, CutoffTable};
+use super::brdf_sh::BrdfSh;
+use super::model::Model;
+use super::orders::{texel_orders, OrderRule, TexelOrders};
+use super::pipeline::{brdf_coefficients, Lighting, Orders, PrefilterError};
+use super::shrm::{self, texel_frame, Shrm, ShrmError};
+use crate::envmap::bright::{split, BrightRule, BrightSources};
+use crate::envmap::{self, EnvMap, Layout};
+use crate::io::RgbImage;
+use crate::progress::Progress;
+use crate::sh::project::project;
+use crate::sh::window::{self, Window};
+use crate::sh::{lm, ShCoeffs};
+use crate::sphere::LatLong;
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// Highest band the texel rule considers (the cost of the projection and of the BRDF
+/// coefficients grows with it; a 512×256 map resolves up to 255).
+pub const MAX_TEXEL_ORDER: usize = 255;
+
+/// Lobe energy left outside the cone of the exact angular passes (bright texels, fallbacks).
+const ANGULAR_EPSILON: f64 = 1e-5;
+
+/// How the prefilter chooses its orders and treats the lighting.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// The tolerance ε of the order rule.
+    pub epsilon: f64,
+    /// The order rule.
+    pub rule: OrderRule,
+    /// Fixed orders (F_B, P_B), overriding the rule.
+    pub orders: Option<(usize, usize)>,
+    /// Largest P_B considered.
+    pub max_p: usize,
+    /// Bright sources apart.
+    pub bright: BrightRule,
+    /// The window at synthesis.
+    pub window: Window,
+    /// The grid of reflection vectors (W, H); `None`: [`default_size`].
+    pub size: Option<(usize, usize)>,
+}
+
+/// What the prefilter did, for the document.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// The order rule used (`texel`, `energy`, or `fixed`).
+    pub rule: String,
+    /// The texel rule's guarantee, when it chose the orders.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texel: Option<TexelOrders>,
+    /// The bright sources: threshold, texels and energy shares.
+    pub bright: BrightReport,
+    /// The window applied at synthesis.
+    pub window: WindowReport,
+}
+
+/// The bright part, in figures.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BrightReport {
+    /// The luminance threshold (absent when nothing was split).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub threshold: Option<f64>,
+    /// Texels filtered in angle.
+    pub texels: usize,
+    /// Share of the map's radiant energy filtered in angle.
+    pub energy_fraction: f64,
+    /// Share of ∫ Y² dω (the ringing energy) filtered in angle.
+    pub squared_fraction: f64,
+}
+
+/// The window, in figures.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WindowReport {
+    /// `none`, `hann`, `lanczos`, `sigma` or `nonneg`.
+    pub kind: Window,
+    /// For `nonneg`: the heat parameter t of exp(−t·l(l+1)) it needed (0: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t: Option<f64>,
+}
+
+/// A ring-free prefiltered lighting: everything reflection maps and the SHRM file are made of.
+pub struct Prefiltered {
+    /// ρ̂_lpq truncated to (F_B, P_B).
+    pub brdf: BrdfSh,
+    /// The remainder's lighting coefficients to F_B (raw, before the window).
+    pub lighting: ShCoeffs,
+    /// The window's band factors.
+    pub factors: Vec<f64>,
+    /// The local SHRM of the remainder (windowed), without the bright part.
+    pub remainder_shrm: Shrm,
+    /// The bright texels.
+    pub bright: BrightSources,
+    /// The lat-long map (for the angular passes), when the lighting was a map.
+    pub env: Option<EnvMap>,
+    /// What was done.
+    pub report: Report,
+}
+
+/// The grid size for F_B: 2S × S with S = clamp(10·F_B, 32, 512) (§5.2: S ≈ 10F), at least
+/// F_B + 1.
+pub fn default_size(f_b: usize) -> (usize, usize) {
+    let s = (10 * f_b).clamp(32, 512).max(f_b + 1);
+    (2 * s, s)
+}
+
+/// The highest band a lat-long map resolves: below its height, below the Nyquist frequency of
+/// its rows, and within [`MAX_TEXEL_ORDER`].
+fn resolvable_order(map: &EnvMap) -> usize {
+    let img = map.image();
+    map.max_order().min(img.width / 2 - 1).min(img.height - 1).min(MAX_TEXEL_ORDER)
+}
+
+/// Runs steps 1–2 and the SHRM of the remainder: everything but the per-view angular passes.
+pub fn prefilter(
+    model: &Model,
+    lighting: Lighting<'_>,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<Prefiltered, PrefilterError> {
+    let radial = model.centre().is_some();
+    let max_p = if radial { 0 } else { settings.max_p };
+    let (env, remainder, bright) = match lighting {
+        Lighting::Map(map) => {
+            let latlong = as_latlong(map).map_err(|e| PrefilterError::Resample(e.to_string()))?;
+            let (rest, bright) = split(&latlong, settings.bright);
+            (Some(latlong), Some(rest), bright)
+        }
+        Lighting::Coefficients(_) => (None, None, BrightSources { threshold: f64::INFINITY, ..Default::default() }),
+    };
+    // The lighting to the highest band any rule may ask for.
+    let full_light = match (&remainder, lighting) {
+        (Some(rest), _) => {
+            let order = match (settings.orders, settings.rule) {
+                (Some((f, _)), _) => f,
+                (None, OrderRule::Texel) => resolvable_order(rest),
+                (None, OrderRule::Energy) => 0,
+            };
+            Some(project(rest, order, progress)?)
+        }
+        (None, Lighting::Coefficients(c)) => Some(c.clone()),
+        _ => None,
+    };
+    let (brdf, texel) = match (settings.orders, settings.rule, &full_light) {
+        (Some((f, p)), _, _) => (brdf_coefficients(model, Orders::Fixed { f, p })?, None),
+        (None, OrderRule::Energy, _) => {
+            (brdf_coefficients(model, Orders::Epsilon { epsilon: settings.epsilon, max_p })?, None)
+        }
+        (None, OrderRule::Texel, Some(light)) => {
+            let l_max = light.order;
+            let full = model.coefficients(l_max, max_p);
+            let mean = mean_reflected(&full, light, &bright);
+            let orders = texel_orders(model, &full, &light.band_energy_rgb(), mean, settings.epsilon, max_p);
+            (full.truncated(orders.f_b, orders.p_b), Some(orders))
+        }
+        (None, OrderRule::Texel, None) => unreachable!("the texel rule always has the lighting"),
+    };
+    let f_b = brdf.f;
+    let light = match (&remainder, lighting, &full_light) {
+        (_, Lighting::Coefficients(c), _) if c.order < f_b => {
+            return Err(PrefilterError::LightingOrder { have: c.order, need: f_b })
+        }
+        (Some(rest), _, Some(l)) if l.order < f_b => project(rest, f_b, progress)?,
+        (_, _, Some(l)) => l.truncated(f_b),
+        (Some(rest), _, None) => project(rest, f_b, progress)?,
+        (None, _, None) => unreachable!("coefficients are given when there is no map"),
+    };
+    let (width, height) = settings.size.unwrap_or_else(|| default_size(f_b));
+    if width < 2 * f_b + 2 {
+        return Err(ShrmError::TooSmall { width, f_b, need: 2 * f_b + 2 }.into());
+    }
+    let factors = match settings.window {
+        Window::Nonneg => window::heat_factors(f_b, 0.0),
+        w => w.factors(f_b),
+    };
+    let remainder_shrm = remainder_shrm(model, &brdf, &light, &factors, width, height, progress)?;
+    let report = Report {
+        rule: match (settings.orders, settings.rule) {
+            (Some(_), _) => "fixed".into(),
+            (None, OrderRule::Texel) => "texel".into(),
+            (None, OrderRule::Energy) => "energy".into(),
+        },
+        texel,
+        bright: BrightReport {
+            threshold: (!bright.is_empty()).then_some(bright.threshold),
+            texels: bright.texels.len(),
+            energy_fraction: bright.energy_fraction,
+            squared_fraction: bright.squared_fraction,
+        },
+        window: WindowReport { kind: settings.window, t: (settings.window == Window::Nonneg).then_some(0.0) },
+    };
+    Ok(Prefiltered { brdf, lighting: light, factors, remainder_shrm, bright, env, report })
+}
+
+/// The mean reflected radiance per channel, which the texel floor is a fraction of: band 0 of
+/// the light field, ρ̂_000 L_00 Y_00 (L_00 of the whole map: remainder plus bright part).
+fn mean_reflected(brdf: &BrdfSh, light: &ShCoeffs, bright: &BrightSources) -> [f64; 3] {
+    let y00 = 1.0 / (4.0 * PI).sqrt();
+    let mut l00 = light.rgb[0];
+    for t in &bright.texels {
+        for c in 0..3 {
+            l00[c] += t.excess[c] * t.solid_angle * y00;
+        }
+    }
+    let r = brdf.get(0, 0, 0);
+    [0, 1, 2].map(|c| (r[c] * l00[c] * y00).abs())
+}
+
+/// The local SHRM of the (windowed) remainder: the 1-D path for radially symmetric BRDFs
+/// (B(R) = Σ Λ_l ρ̂_l L_lm Y_lm(R), one layer B_00 = √(4π) B), App. C otherwise.
+fn remainder_shrm(
+    model: &Model,
+    brdf: &BrdfSh,
+    light: &ShCoeffs,
+    factors: &[f64],
+    width: usize,
+    height: usize,
+    progress: &dyn Progress,
+) -> Result<Shrm, PrefilterError> {
+    let windowed = window::apply(light, factors);
+    if model.centre().is_some() {
+        let mut conv = windowed;
+        for (i, c) in conv.rgb.iter_mut().enumerate() {
+            let k = brdf.radial_kernel(lm(i).0);
+            for ch in 0..3 {
+                c[ch] *= k[ch] * (4.0 * PI).sqrt();
+            }
+        }
+        let layer = crate::sh::synth::synthesize_latlong(&conv, width, height).map_err(|_| ShrmError::TooSmall {
+            width,
+            f_b: brdf.f,
+            need: 2 * brdf.f + 2,
+        })?;
+        return Ok(Shrm { f_b: brdf.f, p_b: 0, global: false, layers: vec![layer] });
+    }
+    Ok(shrm::local_shrm(&windowed, brdf, width, height, progress)?)
+}
+
+impl Prefiltered {
+    /// The SHRM file's content: the remainder's SHRM plus the bright part (radially symmetric
+    /// BRDFs: its exact map in the single layer; others: projected onto the view basis), global
+    /// or local. With the `nonneg` window, the window is searched on the SHRM's reflection map
+    /// towards +Z first.
+    pub fn shrm(&mut self, model: &Model, global: bool, progress: &dyn Progress) -> Result<Shrm, PrefilterError> {
+        let mut out = self.remainder_shrm.clone();
+        if !self.bright.is_empty() {
+            if model.centre().is_some() {
+                let mut layer = RgbImage::new(out.width(), out.height());
+                add_bright(&mut layer, model, &self.bright, None);
+                let s = (4.0 * PI).sqrt() as f32;
+                for (o, b) in out.layers[0].pixels.iter_mut().zip(&layer.pixels) {
+                    for c in 0..3 {
+                        o[c] += s * b[c];
+                    }
+                }
+            } else {
+                add_bright_to_shrm(&mut out, model, &self.bright, progress);
+            }
+        }
+        Ok(if global { shrm::to_global(&out) } else { out })
+    }
+
+    /// Reflection maps for `views` (eq. 12): the remainder's SHRM, plus the bright part and the
+    /// out-of-range texels in angle, then the window. Radially symmetric BRDFs ignore the view.
+    pub fn reflection_maps(
+        &mut self,
+        model: &Model,
+        views: &[DVec3],
+        progress: &dyn Progress,
+    ) -> Result<Vec<RgbImage>, PrefilterError> {
+        let global = shrm::to_global(&self.remainder_shrm);
+        let mut maps = shrm::reflection_maps(&global, views);
+        let cone = self.env.as_ref().map(ConeIntegrator::new).transpose()?;
+        let valid = self.report.texel.as_ref().map_or(PI, |t| t.valid_view_angle.to_radians());
+        let cutoff = model
+            .centre()
+            .is_none()
+            .then(|| CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), ANGULAR_EPSILON, 65));
+        for (map, &view) in maps.iter_mut().zip(views) {
+            add_bright(map, model, &self.bright, cutoff.as_ref().map(|c| (view, c)));
+            if let (Some(cone), Some(cutoff)) = (&cone, &cutoff) {
+                if valid < PI {
+                    fallback(map, model, cone, cutoff, view, valid);
+                }
+            }
+        }
+        if self.report.window.kind == Window::Nonneg && maps.iter().any(has_negative) {
+            maps = self.nonneg_maps(model, views, progress)?;
+        }
+        Ok(maps)
+    }
+
+    /// The `nonneg` window: the smallest heat parameter t for which every map is ≥ 0, bracketed
+    /// by the kernel-positivity bound (for radially symmetric BRDFs exact; for others the bound
+    /// of the l-dimension's worst kernel, which the bisection then relaxes).
+    fn nonneg_maps(
+        &mut self,
+        model: &Model,
+        views: &[DVec3],
+        progress: &dyn Progress,
+    ) -> Result<Vec<RgbImage>, PrefilterError> {
+        let f_b = self.brdf.f;
+        let kernel: Vec<f64> = (0..=f_b).map(|l| self.brdf.radial_kernel(l)[1].abs().max(1e-300)).collect();
+        let kernel = if model.centre().is_some() { kernel } else { vec![1.0; f_b + 1] };
+        let (w, h) = (self.remainder_shrm.width(), self.remainder_shrm.height());
+        let saved = (self.factors.clone(), self.remainder_shrm.clone());
+        let synth = |factors: &[f64]| -> Vec<RgbImage> {
+            let mut this = Prefiltered {
+                brdf: self.brdf.clone(),
+                lighting: self.lighting.clone(),
+                factors: factors.to_vec(),
+                remainder_shrm: match remainder_shrm(model, &self.brdf, &self.lighting, factors, w, h, progress) {
+                    Ok(s) => s,
+                    Err(_) => saved.1.clone(),
+                },
+                bright: self.bright.clone(),
+                env: self.env.clone(),
+                report: Report { window: WindowReport { kind: Window::None, t: None }, ..self.report.clone() },
+            };
+            this.reflection_maps(model, views, progress).unwrap_or_default()
+        };
+        let min_of = |maps: &Vec<RgbImage>| {
+            maps.iter().flat_map(|m| m.pixels.iter().flatten()).fold(0.0f64, |a, &v| a.min(v as f64))
+        };
+        let found = window::nonneg(&kernel, synth, min_of);
+        self.factors = found.factors.clone();
+        self.remainder_shrm = remainder_shrm(model, &self.brdf, &self.lighting, &self.factors, w, h, progress)?;
+        self.report.window.t = Some(found.t);
+        Ok(found.map)
+    }
+}
+
+fn has_negative(map: &RgbImage) -> bool {
+    map.pixels.iter().flatten().any(|&v| v < 0.0)
+}
+
+/// Adds the bright texels' exact contribution Σ_j e_j ΔΩ_j ρ̂(ω_j; R, V) to every texel of a
+/// lat-long map of R (of N for Lambert). `view`: `None` for radially symmetric lobes. A texel
+/// visits only the bright texels within its lobe's cone (1 − 10⁻⁵ of the lobe; for
+/// view-dependent BRDFs per view angle, from `cutoff`): the bright texels are sorted by θ, and a
+/// row of texels at θ_R takes the range θ_R ± θ*.
+fn add_bright(map: &mut RgbImage, model: &Model, bright: &BrightSources, view: Option<(DVec3, &CutoffTable)>) {
+    if bright.is_empty() {
+        return;
+    }
+    let (w, h) = (map.width, map.height);
+    let grid = LatLong::new(w, h);
+    let mut sorted: Vec<(f64, usize)> =
+        bright.texels.iter().enumerate().map(|(i, t)| (crate::sphere::theta(t.dir), i)).collect();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let radial_star = match view {
+        None => radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON),
+        Some((_, cutoff)) => cutoff.max(),
+    };
+    map.pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let theta_r = grid.row_theta(y);
+        let lo = sorted.partition_point(|t| t.0 < theta_r - radial_star);
+        let hi = sorted.partition_point(|t| t.0 <= theta_r + radial_star);
+        if lo == hi {
+            return;
+        }
+        for (x, px) in row.iter_mut().enumerate() {
+            let r = grid.texel_direction(x, y);
+            let (prepared, cos_star) = match view {
+                None => (None, radial_star.cos()),
+                Some((v, cutoff)) => match model.prepare_view(r, v) {
+                    Some(p) => (Some(p), cutoff.at(r.dot(v).clamp(-1.0, 1.0).acos()).cos()),
+                    None => continue,
+                },
+            };
+            let mut acc = [0.0f64; 3];
+            for &(_, i) in &sorted[lo..hi] {
+                let t = &bright.texels[i];
+                let c = r.dot(t.dir);
+                if c < cos_star {
+                    continue;
+                }
+                let rho = match &prepared {
+                    Some(p) => model.rho_hat_prepared(p, t.dir),
+                    None => model.lobe(c),
+                };
+                for k in 0..3 {
+                    acc[k] += rho[k] * t.excess[k] * t.solid_angle;
+                }
+            }
+            for k in 0..3 {
+                px[k] += acc[k] as f32;
+            }
+        }
+    });
+}
+
+/// Replaces the texels whose view angle θ_o (cos θ_o = R·V) exceeds `valid` by the angular
+/// integral of the whole map (the SHRM does not represent ρ̂ there within the tolerance).
+fn fallback(map: &mut RgbImage, model: &Model, cone: &ConeIntegrator, cutoff: &CutoffTable, view: DVec3, valid: f64) {
+    let (w, h) = (map.width, map.height);
+    let grid = LatLong::new(w, h);
+    map.pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, px) in row.iter_mut().enumerate() {
+            let r = grid.texel_direction(x, y);
+            let theta_o = r.dot(view).clamp(-1.0, 1.0).acos();
+            if theta_o <= valid {
+                continue;
+            }
+            let v = match model.prepare_view(r, view) {
+                Some(prepared) => cone.integrate(r, cutoff.at(theta_o), |l| model.rho_hat_prepared(&prepared, l)),
+                None => [0.0; 3],
+            };
+            *px = v.map(|c| c as f32);
+        }
+    });
+}
+
+/// Adds the bright texels to a local SHRM of a view-dependent BRDF: per texel R,
+/// B_pq(R) += Σ_j e_j ΔΩ_j T_pq(R⁻¹ω_j) with T_pq(ω_i) = ∫ ρ̂(ω_i, ω_o) Y_pq(ω_o) dω_o, the
+/// BRDF's view-basis projection (isotropy: T_p|q| depends on θ_i only, times cos/sin qφ_i).
+fn add_bright_to_shrm(shrm: &mut Shrm, model: &Model, bright: &BrightSources, progress: &dyn Progress) {
+    let table = ViewProjection::new(model, shrm.p_b);
+    let (w, h, n) = (shrm.width(), shrm.height(), crate::sh::count(shrm.p_b));
+    progress.start("bright", h as u64);
+    let rows: Vec<Vec<[f32; 3]>> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let mut out = vec![[0.0f32; 3]; n * w];
+            let mut t = vec![0.0; n];
+            for x in 0..w {
+                let to_local = texel_frame(w, h, x, y).transpose();
+                for b in &bright.texels {
+                    let local = to_local * b.dir;
+                    if local.z < table.min_cos {
+                        continue;
+                    }
+                    table.eval(local, &mut t);
+                    for (i, tv) in t.iter().enumerate() {
+                        for c in 0..3 {
+                            out[i * w + x][c] += (tv * b.excess[c] * b.solid_angle) as f32;
+                        }
+                    }
+                }
+            }
+            progress.advance(1);
+            out
+        })
+        .collect();
+    progress.finish();
+    for (y, row) in rows.iter().enumerate() {
+        for (i, layer) in shrm.layers.iter_mut().enumerate() {
+            for x in 0..w {
+                let px = &mut layer.pixels[y * w + x];
+                for c in 0..3 {
+                    px[c] += row[i * w + x][c];
+                }
+            }
+        }
+    }
+}
+
+/// T_p|q|(θ_i) = ∫ ρ̂(θ_i, φ_i = 0; ω_o) Y_p|q|(ω_o) dω_o tabulated in cos θ_i; the full
+/// T_pq(θ_i, φ_i) is T_p|q|(θ_i) cos(qφ_i) for q ≥ 0 and T_p|q|(θ_i) sin(|q|φ_i) for q < 0
+/// (rotating ω_i about R by φ_i rotates the view basis: real SH of order q pick up cos/sin qφ).
+struct ViewProjection {
+    p: usize,
+    bins: usize,
+    /// [bin][p(p+1)+|q|], bins uniform in cos θ_i ∈ [min_cos, 1].
+    values: Vec<Vec<f64>>,
+    min_cos: f64,
+}
+
+impl ViewProjection {
+    fn new(model: &Model, p: usize) -> Self {
+        let bins = 1024;
+        let min_cos = -1.0;
+        let nodes = crate::quadrature::gauss_legendre_cached(96);
+        let nphi = 96;
+        let table = crate::sh::legendre::LegendreTable::new(p);
+        let values = (0..bins)
+            .into_par_iter()
+            .map(|b| {
+                let ci = min_cos + (1.0 - min_cos) * b as f64 / (bins - 1) as f64;
+                let wi = DVec3::new((1.0 - ci * ci).max(0.0).sqrt(), 0.0, ci);
+                let mut out = vec![0.0; crate::sh::count(p)];
+                let mut ylm = vec![0.0; crate::sh::count(p)];
+                for &(co, wgt) in nodes.iter() {
+                    let so = (1.0 - co * co).max(0.0).sqrt();
+                    for k in 0..nphi {
+                        let phi = 2.0 * PI * (k as f64 + 0.5) / nphi as f64;
+                        let wo = DVec3::new(so * phi.cos(), so * phi.sin(), co);
+                        let rho = model.rho_hat(wi, wo)[1];
+                        if rho == 0.0 {
+                            continue;
+                        }
+                        crate::sh::basis::eval_basis_dir(&table, wo, &mut ylm);
+                        let d = wgt * 2.0 * PI / nphi as f64 * rho;
+                        for (o, y) in out.iter_mut().zip(&ylm) {
+                            *o += d * y;
+                        }
+                    }
+                }
+                out
+            })
+            .collect();
+        ViewProjection { p, bins, values, min_cos }
+    }
+
+    /// T_pq at local direction `l` into `out` (index p(p+1)+q), linear in cos θ_i.
+    fn eval(&self, l: DVec3, out: &mut [f64]) {
+        let f =
+            ((l.z - self.min_cos) / (1.0 - self.min_cos) * (self.bins - 1) as f64).clamp(0.0, (self.bins - 1) as f64);
+        let (b0, t) = (f.floor() as usize, f - f.floor());
+        let b1 = (b0 + 1).min(self.bins - 1);
+        let phi = crate::sphere::phi(l);
+        for pp in 0..=self.p {
+            for q in -(pp as isize)..=(pp as isize) {
+                let i0 = crate::sh::index(pp, q.abs());
+                let base = (1.0 - t) * self.values[b0][i0] + t * self.values[b1][i0];
+                let ang = q.unsigned_abs() as f64 * phi;
+                out[crate::sh::index(pp, q)] = if q >= 0 { base * ang.cos() } else { base * ang.sin() };
+            }
+        }
+    }
+}
+
+/// The angular passes integrate lat-long maps: other layouts are resampled at a resolution that
+/// keeps their texel count.
+pub fn as_latlong(env: &EnvMap) -> Result<EnvMap, envmap::EnvMapError> {
+    if env.layout() == Layout::LatLong {
+        return Ok(env.clone());
+    }
+    let s = env.max_order().max(16);
+    envmap::resample(env, Layout::LatLong, 2 * s, s, 3)
+}

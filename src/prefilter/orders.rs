@@ -1,0 +1,377 @@
+//! Choosing the orders F_B, P_B. Two rules (`--order-rule`):
+//!
+//! - **energy** (R&H 2002 §5.1): the smallest orders keeping 1 − ε of the BRDF's energy. It looks
+//!   at the BRDF alone, so under HDR lighting the kernel tail it leaves multiplies a sun 10⁴×
+//!   brighter than the sky: rings far above the sky's own level, hidden in a relative RMS.
+//! - **texel** (the default): the smallest F_B whose worst-case error at any texel stays under
+//!   ε × the texel floor — App. B's residual bound taken to L∞ (`docs/prefilter.md`). Band l of
+//!   the light field at a texel is Σ_{p,q} ρ̂_lpq (D^l(R) L_l)_q Y_pq(ω_o); a row of the
+//!   rotation matrix D^l has unit norm, so |(D^l L_l)_q| ≤ √E_l (E_l = Σ_m L_lm², the band's
+//!   energy) and |Y_pq| ≤ √((2p+1)/4π). Bands beyond F_B thus change a texel by at most
+//!
+//!   e(F) = Σ_{l > F}^{l_max} √E_l · Σ_{p ≤ P, |q| ≤ min(l,p)} |ρ̂_lpq| √((2p+1)/4π),      (1)
+//!
+//!   whatever R and ω_o, and the rule asks e(F_B) ≤ ε · floor with floor = [`TEXEL_FLOOR`] × the
+//!   mean reflected radiance (the darkest texels the per-texel error counts). l_max is the
+//!   highest band the map resolves: beyond it the map holds no information, and F_B is capped
+//!   there (the document says so).
+//!
+//!   For view-dependent BRDFs a tighter form per view angle θ_o (cos θ_o = R·V): at a fixed ω_o,
+//!   band l of ρ̂ as a function of ω_i has norm n_l(θ_o), and by Cauchy–Schwarz per band
+//!
+//!   e(F, θ_o) = Σ_{l > F}^{l_max} √E_l · n_l(θ_o).                                         (2)
+//!
+//!   ρ̂'s horizon (N·ω_i = 0) makes its expansion converge slowly at grazing view angles, which
+//!   would drive (1) to l_max; (2) is taken over θ_o ≤ 90° only. P_B is chosen from how well the
+//!   expansion represents ρ̂ per view angle: the relative L² residual r(θ_o) = ‖ρ̂ − ρ̂_FP‖/‖ρ̂‖
+//!   over ω_i. Texels whose θ_o has r(θ_o) > ε are outside the SHRM's valid range; reflection
+//!   maps compute them by angular integration instead.
+
+use super::brdf_sh::BrdfSh;
+use super::model::Model;
+use crate::metrics::TEXEL_FLOOR;
+use crate::quadrature::gauss_legendre_cached as gauss_legendre;
+use crate::sh::legendre::LegendreTable;
+use crate::sh::{count, index};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// How the orders are chosen (`--order-rule`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum OrderRule {
+    /// The worst-case per-texel error under ε × the texel floor, for this lighting.
+    #[default]
+    Texel,
+    /// 1 − ε of the BRDF's energy (R&H 2002 §5.1; the paper's Tables 4–5).
+    Energy,
+}
+
+/// Orders chosen by the texel rule, with what they guarantee.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TexelOrders {
+    /// F_B.
+    pub f_b: usize,
+    /// P_B.
+    pub p_b: usize,
+    /// The bound (1) at F_B, relative to the texel floor: ≤ ε unless `capped`.
+    pub bound: f64,
+    /// The highest band the map resolves.
+    pub l_max: usize,
+    /// True when even l_max does not meet ε (F_B = l_max then).
+    pub capped: bool,
+    /// Largest view angle θ_o (degrees) up to which r(θ_o) ≤ ε (180 for radially symmetric
+    /// BRDFs): texels beyond it fall back to angular integration in reflection maps.
+    pub valid_view_angle: f64,
+}
+
+/// |Y_pq(θ_o, ·)| at its largest over φ_o: √2 |P̄_p^|q|(cos θ_o)| (q ≠ 0) or |P̄_p^0(cos θ_o)|,
+/// per index p(p+1)+q; `None`: the bound over every θ_o, √((2p+1)/4π).
+fn view_weights(p: usize, theta_o: Option<f64>) -> Vec<f64> {
+    let mut out = vec![0.0; count(p)];
+    match theta_o {
+        None => {
+            for pp in 0..=p {
+                for q in -(pp as isize)..=(pp as isize) {
+                    out[index(pp, q)] = ((2 * pp + 1) as f64 / (4.0 * PI)).sqrt();
+                }
+            }
+        }
+        Some(t) => {
+            let mut plm = vec![0.0; count(p)];
+            LegendreTable::new(p).eval(t.cos(), t.sin().abs(), &mut plm);
+            for pp in 0..=p {
+                for q in -(pp as isize)..=(pp as isize) {
+                    let scale = if q == 0 { 1.0 } else { std::f64::consts::SQRT_2 };
+                    out[index(pp, q)] = scale * plm[index(pp, q.abs())].abs();
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The bound (1) per channel for every F ≤ l_max: `tail[F][c]` = e(F) (0 at F = l_max), with
+/// |Y_pq| bounded by `weights` (index p(p+1)+q).
+fn tail_bounds(brdf: &BrdfSh, p: usize, band_energy: &[[f64; 3]], weights: &[f64]) -> Vec<[f64; 3]> {
+    let l_max = band_energy.len() - 1;
+    let mut per_band = vec![[0.0; 3]; l_max + 1];
+    for (l, e) in band_energy.iter().enumerate() {
+        for pp in 0..=p {
+            for q in -(l.min(pp) as isize)..=(l.min(pp) as isize) {
+                let r = brdf.get(l, pp, q);
+                for c in 0..3 {
+                    per_band[l][c] += e[c].max(0.0).sqrt() * r[c].abs() * weights[index(pp, q)];
+                }
+            }
+        }
+    }
+    let mut tail = vec![[0.0; 3]; l_max + 1];
+    for f in (0..l_max).rev() {
+        for c in 0..3 {
+            tail[f][c] = tail[f + 1][c] + per_band[f + 1][c];
+        }
+    }
+    tail
+}
+
+/// The view residual r(θ_o) a texel's view angle may have and still be taken from the SHRM,
+/// relative to ε: measured, the 99th-percentile per-texel error of such texels is about twice
+/// r (`docs/prefilter.md`).
+pub const VIEW_RESIDUAL_FACTOR: f64 = 1.0;
+
+/// The texel rule. `brdf` holds ρ̂_lpq to at least (l_max, max_p) where l_max + 1 is the length
+/// of `band_energy` (the lighting's per-band, per-channel energy); `mean_reflected` is the mean
+/// radiance of the reflection map (per channel) the floor is a fraction of.
+///
+/// For view-dependent BRDFs P_B comes first: the smallest P whose expansion (with every band the
+/// map resolves) represents ρ̂ within ε for all view angles up to 90° (normals within 45° of the
+/// view), or `max_p`; its valid range is where r(θ_o) ≤ ε. F_B then takes the bound (1) with
+/// |Y_pq(ω_o)| at its largest over that range only: grazing views, where ρ̂'s horizon makes its
+/// expansion converge slowly, are integrated in angle and need not drive F_B.
+pub fn texel_orders(
+    model: &Model,
+    brdf: &BrdfSh,
+    band_energy: &[[f64; 3]],
+    mean_reflected: [f64; 3],
+    epsilon: f64,
+    max_p: usize,
+) -> TexelOrders {
+    let l_max = band_energy.len().saturating_sub(1).min(brdf.f);
+    let band_energy = &band_energy[..=l_max];
+    let floor = mean_reflected.map(|m| TEXEL_FLOOR * m.abs());
+    let relative = |t: [f64; 3]| (0..3).map(|c| if floor[c] > 0.0 { t[c] / floor[c] } else { 0.0 }).fold(0.0, f64::max);
+    let max_p = if model.centre().is_some() { 0 } else { max_p.min(brdf.p) };
+    let first_under = |tail: &[[f64; 3]]| (0..=l_max).find(|&f| relative(tail[f]) <= epsilon).unwrap_or(l_max);
+    if max_p == 0 {
+        let tail = tail_bounds(brdf, 0, band_energy, &view_weights(0, None));
+        let f_b = first_under(&tail);
+        let bound = relative(tail[f_b]);
+        return TexelOrders { f_b, p_b: 0, bound, l_max, capped: bound > epsilon, valid_view_angle: 180.0 };
+    }
+    let samples = ViewSamples::new(model, VIEW_ANGLES);
+    let limit = VIEW_RESIDUAL_FACTOR * epsilon;
+    let valid_angle = |r: &[f64]| VIEW_ANGLES.iter().zip(r).take_while(|(_, &e)| e <= limit).last().map(|(&a, _)| a);
+    let by_p: Vec<Vec<f64>> = (0..=max_p).map(|p| samples.residuals(brdf, l_max, p)).collect();
+    let p_b = (0..=max_p).find(|&p| valid_angle(&by_p[p]).is_some_and(|a| a >= 90.0)).unwrap_or(max_p);
+    // F: the bound (2) over the view angles up to 90°; the valid range is then what
+    // (F_B, P_B) represents within ε.
+    let tails: Vec<Vec<[f64; 3]>> = VIEW_ANGLES
+        .iter()
+        .filter(|&&a| a <= 90.0)
+        .map(|&a| {
+            let norms = band_norms(brdf, p_b, a.to_radians());
+            let mut tail = vec![[0.0; 3]; l_max + 1];
+            for f in (0..l_max).rev() {
+                for c in 0..3 {
+                    tail[f][c] = tail[f + 1][c] + band_energy[f + 1][c].max(0.0).sqrt() * norms[f + 1][c];
+                }
+            }
+            tail
+        })
+        .collect();
+    let worst = |f: usize| tails.iter().map(|t| relative(t[f])).fold(0.0, f64::max);
+    let f_b = (0..=l_max).find(|&f| worst(f) <= epsilon).unwrap_or(l_max);
+    let valid = valid_angle(&samples.residuals(brdf, f_b, p_b)).unwrap_or(0.0);
+    let bound = worst(f_b);
+    TexelOrders { f_b, p_b, bound, l_max, capped: bound > epsilon, valid_view_angle: valid }
+}
+
+/// n_l(θ_o) per channel: the norm of band l of ρ̂(·, ω_o) as a function of ω_i, for ω_o at
+/// angle θ_o from R, √(Σ_q c_lq²) with c_lq = Σ_{p ≤ P} ρ̂_lpq Y_pq(θ_o, 0) (rotating ω_o about R
+/// rotates ρ̂ about R and keeps every band's norm, so φ_o = 0 is general).
+fn band_norms(brdf: &BrdfSh, p: usize, theta_o: f64) -> Vec<[f64; 3]> {
+    let mut plm = vec![0.0; count(p)];
+    LegendreTable::new(p).eval(theta_o.cos(), theta_o.sin().abs(), &mut plm);
+    (0..=brdf.f)
+        .map(|l| {
+            let mut n2 = [0.0; 3];
+            for q in 0..=l.min(p) {
+                let scale = if q == 0 { 1.0 } else { std::f64::consts::SQRT_2 };
+                let mut c = [0.0; 3];
+                for pp in q..=p {
+                    let r = brdf.get(l, pp, q as isize);
+                    for ch in 0..3 {
+                        c[ch] += r[ch] * plm[index(pp, q as isize)] * scale;
+                    }
+                }
+                for ch in 0..3 {
+                    n2[ch] += c[ch] * c[ch];
+                }
+            }
+            n2.map(f64::sqrt)
+        })
+        .collect()
+}
+
+/// View angles (degrees) at which r(θ_o) is tabulated.
+pub const VIEW_ANGLES: &[f64] = &[
+    0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 110.0, 120.0, 130.0, 140.0, 150.0, 160.0, 170.0,
+    180.0,
+];
+
+/// ρ̂(·, ω_o) sampled over ω_i for ω_o at each of a list of angles (degrees) from R in the
+/// reflection frame (φ_o = 0), on a Gauss–Legendre grid in cos θ_i × a uniform grid in φ_i, to
+/// measure how well truncated expansions represent it (green channel).
+pub struct ViewSamples {
+    angles: Vec<f64>,
+    nodes: Vec<(f64, f64)>,
+    /// Per angle, NODES × NODES samples (θ_i node major).
+    samples: Vec<Vec<f64>>,
+}
+
+/// Grid size of [`ViewSamples`] per axis.
+const NODES: usize = 192;
+
+impl ViewSamples {
+    /// Samples `model`'s ρ̂ at `angles_deg`.
+    pub fn new(model: &Model, angles_deg: &[f64]) -> Self {
+        let nodes = gauss_legendre(NODES).to_vec();
+        let samples = angles_deg
+            .iter()
+            .map(|&deg| {
+                let theta_o = deg.to_radians();
+                let wo = DVec3::new(theta_o.sin(), 0.0, theta_o.cos());
+                let mut out = Vec::with_capacity(NODES * NODES);
+                for &(x, _) in &nodes {
+                    let sin_i = (1.0 - x * x).max(0.0).sqrt();
+                    for k in 0..NODES {
+                        let phi = 2.0 * PI * (k as f64 + 0.5) / NODES as f64;
+                        out.push(model.rho_hat(DVec3::new(sin_i * phi.cos(), sin_i * phi.sin(), x), wo)[1]);
+                    }
+                }
+                out
+            })
+            .collect();
+        ViewSamples { angles: angles_deg.to_vec(), nodes, samples }
+    }
+
+    /// r(θ_o) = ‖ρ̂(·, ω_o) − ρ̂_FP(·, ω_o)‖ / ‖ρ̂(·, ω_o)‖ over ω_i at each angle. At φ_o = 0
+    /// the expansion is Σ_{l,q≥0} c_lq Y_lq(ω_i) with c_lq = Σ_p ρ̂_lpq Y_pq(ω_o) (ρ̂ is even in
+    /// φ, so the sin terms vanish), evaluated per θ_i row as Σ_q cos(qφ) Σ_l c_lq Y-factors.
+    pub fn residuals(&self, brdf: &BrdfSh, f: usize, p: usize) -> Vec<f64> {
+        let (f, p) = (f.min(brdf.f), p.min(brdf.p));
+        let (table_o, table_i) = (LegendreTable::new(p), LegendreTable::new(f));
+        let (mut plm_o, mut plm_i) = (vec![0.0; count(p)], vec![0.0; count(f)]);
+        let cos_q: Vec<Vec<f64>> = (0..=p)
+            .map(|q| (0..NODES).map(|k| (q as f64 * 2.0 * PI * (k as f64 + 0.5) / NODES as f64).cos()).collect())
+            .collect();
+        let y = |q: usize| if q == 0 { 1.0 } else { std::f64::consts::SQRT_2 };
+        self.angles
+            .iter()
+            .zip(&self.samples)
+            .map(|(&deg, samples)| {
+                let theta_o = deg.to_radians();
+                table_o.eval(theta_o.cos(), theta_o.sin().abs(), &mut plm_o);
+                let c: Vec<Vec<f64>> = (0..=f)
+                    .map(|l| {
+                        (0..=l.min(p))
+                            .map(|q| {
+                                (q..=p)
+                                    .map(|pp| brdf.get(l, pp, q as isize)[1] * plm_o[index(pp, q as isize)] * y(q))
+                                    .sum()
+                            })
+                            .collect()
+                    })
+                    .collect();
+                let (mut err, mut norm) = (0.0, 0.0);
+                for (row, &(x, w)) in self.nodes.iter().enumerate() {
+                    table_i.eval(x, (1.0 - x * x).max(0.0).sqrt(), &mut plm_i);
+                    let g: Vec<f64> = (0..=p)
+                        .map(|q| {
+                            (q..=f)
+                                .map(|l| c[l].get(q).copied().unwrap_or(0.0) * plm_i[index(l, q as isize)] * y(q))
+                                .sum()
+                        })
+                        .collect();
+                    for k in 0..NODES {
+                        let approx: f64 = (0..=p).map(|q| g[q] * cos_q[q][k]).sum();
+                        let exact = samples[row * NODES + k];
+                        err += w * (exact - approx).powi(2);
+                        norm += w * exact * exact;
+                    }
+                }
+                if norm > 0.0 {
+                    (err / norm).sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::brdf::Brdf;
+    use crate::sh::basis::eval_basis_dir;
+
+    /// r(θ_o) from Parseval against the brute-force residual: sample ρ̂ and its truncated
+    /// expansion over ω_i and integrate the difference.
+    #[test]
+    fn view_residuals_match_a_brute_force_integral() {
+        let model = Model::new(Brdf::parse("torrance-sparrow:sigma=0.3").unwrap(), true).unwrap();
+        let (f, p) = (16, 3);
+        let brdf = model.coefficients(f, p);
+        let angles = [0.0, 60.0, 130.0];
+        let fast = ViewSamples::new(&model, &angles).residuals(&brdf, f, p);
+        let (tl, tp) = (LegendreTable::new(f), LegendreTable::new(p));
+        let (mut yl, mut yp) = (vec![0.0; count(f)], vec![0.0; count(p)]);
+        for (deg, got) in angles.iter().zip(&fast) {
+            let theta_o = deg.to_radians();
+            let wo = DVec3::new(theta_o.sin(), 0.0, theta_o.cos());
+            eval_basis_dir(&tp, wo, &mut yp);
+            let (mut e2, mut r2) = (0.0, 0.0);
+            let n = 300;
+            for a in 0..n {
+                let ti = PI * (a as f64 + 0.5) / n as f64;
+                for b in 0..n {
+                    let wi = crate::sphere::direction(ti, 2.0 * PI * (b as f64 + 0.5) / n as f64);
+                    eval_basis_dir(&tl, wi, &mut yl);
+                    let mut approx = 0.0;
+                    for l in 0..=f {
+                        for pp in 0..=p {
+                            for q in -(l.min(pp) as isize)..=(l.min(pp) as isize) {
+                                approx += brdf.get(l, pp, q)[1] * yl[index(l, q)] * yp[index(pp, q)];
+                            }
+                        }
+                    }
+                    let exact = model.rho_hat(wi, wo)[1];
+                    e2 += (exact - approx).powi(2) * ti.sin();
+                    r2 += exact * exact * ti.sin();
+                }
+            }
+            let want = (e2 / r2).sqrt();
+            assert!((got - want).abs() < 0.05 * want + 1e-3, "θ_o = {deg}: Parseval {got}, brute force {want}");
+        }
+        assert!(fast[0] < fast[2], "grazing views are represented worse: {fast:?}");
+    }
+
+    /// A constant lighting has energy in band 0 only: any F meets the bound, and F_B = 0.
+    #[test]
+    fn constant_lighting_needs_only_band_zero() {
+        let model = Model::new(Brdf::parse("phong:s=32").unwrap(), true).unwrap();
+        let brdf = model.coefficients(40, 0);
+        let mut energy = vec![[0.0; 3]; 41];
+        energy[0] = [4.0 * PI; 3];
+        let o = texel_orders(&model, &brdf, &energy, [1.0; 3], 0.01, 0);
+        assert_eq!((o.f_b, o.p_b, o.capped), (0, 0, false));
+    }
+
+    /// The bound (1) is monotone in F and the rule picks the first F under ε.
+    #[test]
+    fn the_texel_rule_picks_the_first_order_under_the_tolerance() {
+        let model = Model::new(Brdf::parse("phong:s=64").unwrap(), true).unwrap();
+        let brdf = model.coefficients(60, 0);
+        // A white-noise-like lighting: equal energy in every band.
+        let energy = vec![[1.0; 3]; 61];
+        let o = texel_orders(&model, &brdf, &energy, [1.0; 3], 0.01, 0);
+        let tail = tail_bounds(&brdf, 0, &energy, &view_weights(0, None));
+        assert!(tail.windows(2).all(|t| t[1][0] <= t[0][0]));
+        assert!(tail[o.f_b][0] / TEXEL_FLOOR <= 0.01 && tail[o.f_b - 1][0] / TEXEL_FLOOR > 0.01, "{o:?}");
+        // Phong's kernel falls like exp(−l²/2s): F ≈ √(2s ln(1/tolerance)) plus a few.
+        assert!((20..60).contains(&o.f_b), "{o:?}");
+    }
+}
