@@ -484,7 +484,7 @@ mod tests {
         let (w, h) = (64, 32);
         for (target, face) in [(DVec3::X, Face::PosX), (DVec3::Z, Face::PosY), (DVec3::Y, Face::NegZ)] {
             let img = RgbImage::from_fn(w, h, |x, y| {
-                let (d, _) = crate::envmap::latlong_texel(w, h, x, y);
+                let d = crate::sphere::LatLong::new(w, h).texel_direction(x, y);
                 if d.dot(target) > 0.995 {
                     [100.0; 3]
                 } else {

@@ -244,7 +244,7 @@ mod tests {
             let (t0, t1) = (FRAC_PI_2 * i as f64 / n_theta as f64, FRAC_PI_2 * (i + 1) as f64 / n_theta as f64);
             let omega = 2.0 * PI / n_phi as f64 * (t0.cos() - t1.cos());
             for j in 0..n_phi {
-                let l = crate::sh::basis::direction(0.5 * (t0 + t1), 2.0 * PI * (j as f64 + 0.5) / n_phi as f64);
+                let l = crate::sphere::direction(0.5 * (t0 + t1), 2.0 * PI * (j as f64 + 0.5) / n_phi as f64);
                 let h = (v + l).normalize();
                 let fc = (1.0 - v.dot(h)).powi(5);
                 let f = ggx.d(h.z) * ggx.visibility(mu, l.z) * l.z * omega;

@@ -381,7 +381,7 @@ mod tests {
                 let theta = 0.5 * (t0 + t1);
                 for j in 0..np {
                     let phi = 2.0 * PI * (j as f64 + 0.5) / np as f64;
-                    let w = crate::sh::basis::direction(theta, phi);
+                    let w = crate::sphere::direction(theta, phi);
                     total += lobe.kernel(axis.dot(w)) * omega;
                 }
             }
@@ -429,7 +429,7 @@ mod tests {
                 let (t0, t1) = (PI * i as f64 / nt as f64, PI * (i + 1) as f64 / nt as f64);
                 let omega = 2.0 * PI / np as f64 * (t0.cos() - t1.cos());
                 for j in 0..np {
-                    let w = crate::sh::basis::direction(0.5 * (t0 + t1), 2.0 * PI * (j as f64 + 0.5) / np as f64);
+                    let w = crate::sphere::direction(0.5 * (t0 + t1), 2.0 * PI * (j as f64 + 0.5) / np as f64);
                     let k = lobe.kernel(axis.dot(w)) * omega;
                     if k != 0.0 {
                         eval_basis_dir(&table, w, &mut y);
