@@ -22,6 +22,12 @@ pub fn bin_path(stage: &str) -> PathBuf {
     assert_cmd::cargo::cargo_bin(stage)
 }
 
+/// The binary of `stage` as a `std::process::Command`, for tests that spawn it and act on the
+/// running process (signals, pipes).
+pub fn process(stage: &str) -> std::process::Command {
+    std::process::Command::new(bin_path(stage))
+}
+
 /// A lat-long image of `f(direction)` at the texel centres.
 pub fn latlong(w: usize, h: usize, f: impl Fn(DVec3) -> [f32; 3]) -> RgbImage {
     let grid = prtkit::sphere::LatLong::new(w, h);
