@@ -87,6 +87,8 @@ fn bad_specs_are_errors_with_exit_2_and_no_output() {
         cmd().arg(spec).arg("-o").arg(&out).assert().code(2).stderr(predicate::str::contains(needle));
         assert!(!out.exists());
     }
+    // Malformed MERL files are in testdata/bad/cli (tests/conventions.rs).
+    cmd().arg("merl:/nonexistent/x.binary").assert().code(2).stderr(predicate::str::contains("x.binary"));
 }
 
 #[test]
@@ -106,35 +108,5 @@ fn absurd_resolutions_say_how_much_memory_they_need() {
         .code(2)
         .stderr(predicate::str::contains("needs about").and(predicate::str::contains("--max-memory")));
     cmd().args(["phong:s=4", "--resolution", "1"]).assert().code(2).stderr(predicate::str::contains("at least 2"));
-    assert!(!out.exists());
-}
-
-#[test]
-fn broken_merl_files_are_errors_naming_the_file() {
-    let dir = tempfile::tempdir().unwrap();
-    let truncated = dir.path().join("short.binary");
-    let mut bytes = Vec::new();
-    for d in [90i32, 90, 180] {
-        bytes.extend_from_slice(&d.to_le_bytes());
-    }
-    bytes.extend_from_slice(&[0u8; 800]);
-    std::fs::write(&truncated, &bytes).unwrap();
-    let wrong = dir.path().join("wrong.binary");
-    bytes[0..4].copy_from_slice(&64i32.to_le_bytes());
-    std::fs::write(&wrong, &bytes).unwrap();
-    let out = dir.path().join("f.json");
-    cmd()
-        .arg(format!("merl:{}", truncated.display()))
-        .arg("-o")
-        .arg(&out)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("short.binary").and(predicate::str::contains("truncated")));
-    cmd()
-        .arg(format!("merl:{}", wrong.display()))
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("wrong.binary").and(predicate::str::contains("64x90x180")));
-    cmd().arg("merl:/nonexistent/x.binary").assert().code(2).stderr(predicate::str::contains("x.binary"));
     assert!(!out.exists());
 }

@@ -193,10 +193,7 @@ fn render_bad_input_exits_2_without_output() {
     let dir = tempfile::tempdir().unwrap();
     let env = write_env(dir.path(), "white.exr", 32, 16, |_| 1.0);
     let out = dir.path().join("never.exr");
-    // Unreadable OBJ.
-    let obj = dir.path().join("bad.obj");
-    std::fs::write(&obj, "v 0 0 zero\nf 1 2 3\n").unwrap();
-    bin("render").arg(&env).arg("--scene").arg(&obj).arg("-o").arg(&out).assert().code(2).stderr(contains("bad.obj"));
+    // Malformed files (OBJ, documents) are in testdata/bad/cli (tests/conventions.rs).
     bin("render")
         .arg(&env)
         .args(["--scene", "/nonexistent/x.obj", "-o"])
@@ -210,13 +207,13 @@ fn render_bad_input_exits_2_without_output() {
     bin("render")
         .arg(&env)
         .args(["--shading", "shrm", "--brdf", "phong:s=30", "--shrm"])
-        .arg(&doc)
+        .arg(doc)
         .arg("-o")
         .arg(&out)
         .assert()
         .code(2)
         .stderr(contains("phong:s=8"));
-    let text = std::fs::read_to_string(&doc).unwrap().replace("\"width\": ", "\"width\": 1");
+    let text = std::fs::read_to_string(doc).unwrap().replace("\"width\": ", "\"width\": 1");
     let bad_doc = dir.path().join("bad.shrm.json");
     std::fs::write(&bad_doc, text).unwrap();
     bin("render")
