@@ -333,6 +333,23 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "no temporary file left");
     }
 
+    #[test]
+    fn directories_made_for_a_set_that_fails_are_removed_and_kept_when_it_commits() {
+        let dir = tempfile::tempdir().unwrap();
+        let maps = dir.path().join("maps/k8");
+        let mut set = OutputSet::new();
+        set.create_dir(&maps).unwrap();
+        set.add(&Output::File(maps.join("a.exr")), b"a".to_vec()).unwrap();
+        drop(set);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "maps/ and maps/k8/ are removed");
+
+        let mut set = OutputSet::new();
+        set.create_dir(&maps).unwrap();
+        set.add(&Output::File(maps.join("a.exr")), b"a".to_vec()).unwrap();
+        set.commit().unwrap();
+        assert_eq!(std::fs::read(maps.join("a.exr")).unwrap(), b"a");
+    }
+
     #[cfg(unix)]
     #[test]
     fn a_read_only_directory_is_reported_before_work() {
