@@ -522,6 +522,45 @@ fn threads_1_and_2_write_identical_bytes() {
     }
 }
 
+#[test]
+fn exposure_scales_png_outputs_by_two_to_the_stops() {
+    let w = world();
+    let wood = testdata("shaders/wood.sl");
+    // sRGB's inverse (IEC 61966-2-1), to read linear values back from 8-bit PNG samples.
+    let linear = |c: u8| {
+        let c = c as f64 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    for r in [
+        run("sh-project", &[&w.sky, "-o", "d.json", "--irradiance", "out.png"]),
+        run("prefilter", &[&w.sky, "--brdf", "phong:s=8", "--reflection-map", "out.png", "-o", "d.json"]),
+        run("render", &[&w.sky, "--res", "16x16", "--png", "out.png"]),
+        run("sample-shader", &[&wood, "--res", "16x16", "-o", "out.png"]),
+        run("convert", &[&w.sky, "-o", "out.png"]),
+    ] {
+        let read = |stops: &str| {
+            let dir = w.run_dir(&format!("exposure-{}-{stops}", r.stage));
+            r.with(&["--exposure", stops, "-q"]).succeed_in(&dir);
+            image::open(dir.join("out.png")).unwrap().to_rgb8().into_raw()
+        };
+        let (dark, bright) = (read("-1"), read("0"));
+        // One stop: twice the light, where neither sample is clipped or too coarse to tell.
+        let ratios: Vec<f64> = dark
+            .iter()
+            .zip(&bright)
+            .filter(|&(&d, &b)| d >= 60 && b <= 250)
+            .map(|(&d, &b)| linear(b) / linear(d))
+            .collect();
+        assert!(ratios.len() >= 20, "{}: {} usable samples", r.stage, ratios.len());
+        let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+        assert!((mean - 2.0).abs() < 0.03, "{}: one stop brightens {mean:.3}×", r.stage);
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Exit status
 
