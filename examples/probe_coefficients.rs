@@ -3,8 +3,7 @@
 //!
 //! `cargo run --release --example probe_coefficients -- OUT.md`
 
-use prtkit::envmap::EnvMap;
-use prtkit::io::image::read_image;
+use prtkit::envmap::{EnvMap, LoadOptions};
 use prtkit::progress::NoProgress;
 use prtkit::sh::project::project;
 use std::fmt::Write;
@@ -17,17 +16,21 @@ fn main() {
         eprintln!("skipping: {} is absent", dir.display());
         return;
     }
+    // Read as every stage reads an environment map: the layout from the aspect ratio (a
+    // directory is six faces), NaN, infinite and negative radiance refused.
+    let names = ["grace_latlong.exr", "grace128.hdr", "grace_probe_250.pfm", "uffizi_ict_latlong_256x128.hdr"]
+        .map(String::from)
+        .into_iter()
+        .chain(["grace", "rnl", "stpeters", "galileo"].map(|probe| format!("dxsdk_cubes/{probe}/")));
     let mut inputs: Vec<(String, EnvMap)> = Vec::new();
-    for name in ["grace_latlong.exr", "grace128.hdr", "grace_probe_250.pfm", "uffizi_ict_latlong_256x128.hdr"] {
-        let image = read_image(&dir.join(name)).expect("readable probe");
-        inputs.push((name.to_string(), EnvMap::detect(image).expect("layout")));
-    }
-    for probe in ["grace", "rnl", "stpeters", "galileo"] {
-        let faces = ["px", "nx", "py", "ny", "pz", "nz"]
-            .iter()
-            .map(|f| read_image(&dir.join(format!("dxsdk_cubes/{probe}/{f}.exr"))).expect("face"))
-            .collect();
-        inputs.push((format!("dxsdk_cubes/{probe}/"), EnvMap::from_faces(faces).expect("faces")));
+    for name in names {
+        match LoadOptions::default().load(&dir.join(&name)) {
+            Ok(loaded) => inputs.push((name, loaded.map)),
+            Err(e) => {
+                eprintln!("error: {e}");
+                std::process::exit(2);
+            }
+        }
     }
     let labels = ["L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22"];
     let mut md = String::from(

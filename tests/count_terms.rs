@@ -1,51 +1,58 @@
-//! `count-terms` end to end: JSON rows, the CI check's exit status, manifests, plots.
+//! `count-terms` end to end: JSON rows read back as the library's `Row`, the CI check's exit
+//! status, manifests, plots.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{cmd, parse};
 use predicates::prelude::*;
-use serde_json::Value;
+use prtkit::factor::count::Row;
+use prtkit::factor::predict::PredictionKind;
+use prtkit::factor::Domain;
 
-fn cmd() -> Command {
-    Command::cargo_bin("count-terms").unwrap()
-}
-
-fn rows(out: &[u8]) -> Vec<Value> {
-    serde_json::from_slice::<Value>(out).unwrap().as_array().unwrap().clone()
+fn count_terms() -> assert_cmd::Command {
+    cmd("count-terms")
 }
 
 #[test]
 fn json_rows_carry_prediction_and_measurement() {
-    let out = cmd()
+    let out = count_terms()
         .args(["--brdf", "phong:s=20", "--brdf", "torrance-sparrow:sigma=0.3", "--brdf", "kajiya-kay:s=4"])
         .args(["--resolution", "24", "--json"])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let rows = rows(&out.stdout);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let rows: Vec<Row> = parse(&out.stdout);
     assert_eq!(rows.len(), 3);
     for r in &rows {
-        for key in ["name", "brdf", "domain", "predicted_k", "measured_k", "l_star"] {
-            assert!(r.get(key).is_some(), "row lacks {key}: {r}");
-        }
-        assert_eq!(r["domain"], "hemisphere");
-        assert!(r["measured_k"].as_u64().unwrap() >= 1);
+        assert_eq!((r.domain, r.resolution, r.energy, r.cosine), (Domain::Hemisphere, 24, 0.99, false));
+        assert!(r.measured_k.is_some_and(|k| k >= 1), "{r:?}");
+        assert!(r.failures.is_empty() && r.budget.is_none(), "{r:?}");
     }
-    assert_eq!(rows[0]["prediction"], "reflection-lobe");
-    assert_eq!(rows[0]["paper_k"].as_f64().unwrap(), 50.0);
-    assert_eq!(rows[1]["prediction"], "half-angle");
-    // Anisotropic: measured only.
-    assert!(rows[2]["predicted_k"].is_null() && rows[2]["l_star"].is_null());
+    assert_eq!((rows[0].name.as_str(), rows[0].brdf.as_str()), ("phong:s=20", "phong:s=20"));
+    assert_eq!(rows[0].prediction, Some(PredictionKind::ReflectionLobe));
+    // Mahajan et al.: K ≈ 2.5 s on the hemisphere.
+    assert_eq!(rows[0].paper_k, Some(50.0));
+    assert_eq!(rows[1].prediction, Some(PredictionKind::HalfAngle));
+    // The relative difference is (predicted − measured)/measured of the row's own numbers.
+    for r in &rows[..2] {
+        let (p, m) = (r.predicted_k.unwrap() as f64, r.measured_k.unwrap() as f64);
+        assert!((r.relative_difference.unwrap() - (p - m) / m).abs() < 1e-12, "{r:?}");
+    }
+    // Anisotropic: measured only, and the rule says why.
+    assert!(rows[2].predicted_k.is_none() && rows[2].l_star.is_none() && rows[2].prediction.is_none());
+    assert!(!rows[2].rule.is_empty());
 }
 
 #[test]
 fn check_fails_naming_each_material_over_budget() {
-    cmd()
+    count_terms()
         .args(["--brdf", "phong:s=30", "--brdf", "lambert", "--brdf", "phong:s=2", "--max-terms", "10", "--check"])
         .args(["--resolution", "24"])
         .assert()
         .code(1)
         .stderr(predicate::str::contains("phong:s=30: measured K").and(predicate::str::contains("budget of 10")))
         .stderr(predicate::str::contains("lambert").not());
-    cmd()
+    count_terms()
         .args(["--brdf", "phong:s=30", "--brdf", "lambert", "--max-terms", "200", "--check", "--resolution", "40"])
         .assert()
         .success();
@@ -56,14 +63,17 @@ fn check_fails_when_the_prediction_misses_beyond_tolerance() {
     // Phong s = 1 on the hemisphere: prediction 5 vs measurement 6 (−17 %): passes at 25 %,
     // fails at 5 %.
     let args = ["--brdf", "phong:s=1", "--check", "--resolution", "40"];
-    cmd().args(args).assert().success();
-    cmd()
+    let out = count_terms().args(args).arg("--json").output().unwrap();
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let rows: Vec<Row> = parse(&out.stdout);
+    assert_eq!((rows[0].predicted_k, rows[0].measured_k), (Some(5), Some(6)));
+    count_terms()
         .args(args)
         .args(["--tolerance", "5%"])
         .assert()
         .code(1)
         .stderr(predicate::str::contains("phong:s=1: predicted K"));
-    cmd().args(args).args(["--tolerance", "abc"]).assert().code(2);
+    count_terms().args(args).args(["--tolerance", "abc"]).assert().code(2);
 }
 
 #[test]
@@ -71,36 +81,34 @@ fn manifest_errors_carry_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let m = dir.path().join("materials.txt");
     std::fs::write(&m, "# name spec budget\nshiny phong:s=30 80\nrough torrance-sparrow:sigma=-1 20\n").unwrap();
-    cmd()
+    count_terms()
         .arg("--manifest")
         .arg(&m)
         .assert()
         .code(2)
         .stderr(predicate::str::contains("materials.txt:3:7:").and(predicate::str::contains("sigma must be > 0")));
     std::fs::write(&m, "shiny phong:s=30 80\nmatte lambert -\n").unwrap();
-    let out = cmd().arg("--manifest").arg(&m).args(["--json", "--predict-only"]).output().unwrap();
+    let out = count_terms().arg("--manifest").arg(&m).args(["--json", "--predict-only"]).output().unwrap();
     assert!(out.status.success());
-    let rows = rows(&out.stdout);
-    assert_eq!(rows[0]["name"], "shiny");
-    assert_eq!(rows[0]["budget"], 80);
-    assert!(rows[0]["measured_k"].is_null());
-    assert!(rows[1]["budget"].is_null());
+    let rows: Vec<Row> = parse(&out.stdout);
+    assert_eq!((rows[0].name.as_str(), rows[0].budget, rows[0].measured_k), ("shiny", Some(80), None));
+    assert_eq!((rows[1].name.as_str(), rows[1].budget), ("matte", None));
 }
 
 #[test]
 fn plot_is_an_svg_and_bad_input_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let svg = dir.path().join("k.svg");
-    cmd().args(["--brdf", "phong:s=10", "--resolution", "16", "--plot"]).arg(&svg).assert().success();
+    count_terms().args(["--brdf", "phong:s=10", "--resolution", "16", "--plot"]).arg(&svg).assert().success();
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg") && text.contains("phong:s=10"));
     let bad = dir.path().join("bad.svg");
-    cmd()
+    count_terms()
         .args(["--brdf", "phong:s=x", "--plot"])
         .arg(&bad)
         .assert()
         .code(2)
         .stderr(predicate::str::contains("not a number"));
-    cmd().assert().code(2).stderr(predicate::str::contains("no material"));
+    count_terms().assert().code(2).stderr(predicate::str::contains("no material"));
     assert!(!bad.exists());
 }

@@ -1,45 +1,60 @@
-//! `factor-brdf` end to end: JSON document, factor maps, bad input (exit 2, no partial output).
+//! `factor-brdf` end to end: the document read back as the library's `FactorBody`, factor maps,
+//! bad input (exit 2, no partial output).
 
-use assert_cmd::Command;
+mod common;
+
+use common::{cmd as bin, parse, read};
 use predicates::prelude::*;
-use serde_json::Value;
+use prtkit::factor::document::FactorBody;
+use prtkit::factor::{Domain, Method};
+use prtkit::io::Document;
 
-fn cmd() -> Command {
-    Command::cargo_bin("factor-brdf").unwrap()
+fn cmd() -> assert_cmd::Command {
+    bin("factor-brdf")
 }
 
 #[test]
 fn writes_a_factor_document_with_consistent_energy() {
     let out = cmd().args(["phong:s=30", "--domain", "hemisphere", "--resolution", "40"]).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(doc["format"], "prtkit.factor");
-    assert_eq!(doc["method"], "fft");
-    let s: Vec<f64> = doc["singular_values"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let doc: Document<FactorBody> = parse(&out.stdout);
+    assert_eq!(doc.format, "prtkit.factor");
+    let b = &doc.body;
+    assert_eq!((b.domain, b.resolution, b.directions_per_side, b.method), (Domain::Hemisphere, 40, 1600, Method::Fft));
+    assert!(b.factors.is_none() && b.maps.is_none());
+    let s = &b.singular_values;
     assert_eq!(s.len(), 1600);
     assert!(s.windows(2).all(|w| w[0] >= w[1]));
+    // The FFT method labels each σ with its azimuthal frequency.
+    assert_eq!(b.azimuthal_frequency.len(), s.len());
     let total: f64 = s.iter().map(|x| x * x).sum();
-    assert!((total - doc["total_energy"].as_f64().unwrap()).abs() <= 1e-12 * total);
-    let k99 = doc["terms"]["99%"].as_u64().unwrap() as usize;
-    let cumulative = doc["cumulative_energy"].as_array().unwrap();
-    assert!(cumulative[k99 - 1].as_f64().unwrap() >= 0.99 && cumulative[k99 - 2].as_f64().unwrap() < 0.99);
+    assert!((total - b.total_energy).abs() <= 1e-12 * total);
+    let k99 = b.terms["99%"];
+    assert!(b.cumulative_energy[k99 - 1] >= 0.99 && b.cumulative_energy[k99 - 2] < 0.99);
     // The paper's Fig. 3A/6: K ≈ 2.5 s = 75 on the hemisphere for s = 30.
     assert!((68..=82).contains(&k99), "K99 = {k99}");
-    let k90 = doc["terms"]["90%"].as_u64().unwrap();
-    assert!(k90 < k99 as u64 && k99 as u64 <= doc["terms"]["99.9%"].as_u64().unwrap());
+    assert!(b.terms["90%"] < k99 && k99 <= b.terms["99.9%"]);
+    // Eckart–Young: the K-term error is √(1 − energy of K terms).
+    for r in &b.reconstruction {
+        assert!((r.relative_frobenius_error - (1.0 - r.energy).max(0.0).sqrt()).abs() < 1e-9, "K = {}", r.terms);
+    }
 }
 
 #[test]
 fn factor_maps_show_spherical_harmonics() {
     let dir = tempfile::tempdir().unwrap();
     let maps = dir.path().join("maps");
+    let doc = dir.path().join("f.json");
     cmd()
         .args(["phong:s=8", "--domain", "sphere", "--resolution", "48", "--terms", "4", "-o"])
-        .arg(dir.path().join("f.json"))
+        .arg(&doc)
         .arg("--maps")
         .arg(&maps)
         .assert()
         .success();
+    let doc: Document<FactorBody> = read(&doc);
+    assert_eq!(doc.body.maps.as_deref(), Some(maps.to_str().unwrap()));
+    assert!(doc.body.reconstruction.iter().any(|r| r.terms == 4), "the kept terms' error is listed");
     let bytes = std::fs::read(maps.join("factors.exr")).unwrap();
     let layers = prtkit::io::exr::decode_layers(&maps.join("factors.exr"), &bytes).unwrap();
     assert_eq!(layers.len(), 8);
@@ -72,6 +87,8 @@ fn bad_specs_are_errors_with_exit_2_and_no_output() {
         cmd().arg(spec).arg("-o").arg(&out).assert().code(2).stderr(predicate::str::contains(needle));
         assert!(!out.exists());
     }
+    // Malformed MERL files are in testdata/bad/cli (tests/conventions.rs).
+    cmd().arg("merl:/nonexistent/x.binary").assert().code(2).stderr(predicate::str::contains("x.binary"));
 }
 
 #[test]
@@ -92,55 +109,4 @@ fn absurd_resolutions_say_how_much_memory_they_need() {
         .stderr(predicate::str::contains("needs about").and(predicate::str::contains("--max-memory")));
     cmd().args(["phong:s=4", "--resolution", "1"]).assert().code(2).stderr(predicate::str::contains("at least 2"));
     assert!(!out.exists());
-}
-
-#[test]
-fn broken_merl_files_are_errors_naming_the_file() {
-    let dir = tempfile::tempdir().unwrap();
-    let truncated = dir.path().join("short.binary");
-    let mut bytes = Vec::new();
-    for d in [90i32, 90, 180] {
-        bytes.extend_from_slice(&d.to_le_bytes());
-    }
-    bytes.extend_from_slice(&[0u8; 800]);
-    std::fs::write(&truncated, &bytes).unwrap();
-    let wrong = dir.path().join("wrong.binary");
-    bytes[0..4].copy_from_slice(&64i32.to_le_bytes());
-    std::fs::write(&wrong, &bytes).unwrap();
-    let out = dir.path().join("f.json");
-    cmd()
-        .arg(format!("merl:{}", truncated.display()))
-        .arg("-o")
-        .arg(&out)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("short.binary").and(predicate::str::contains("truncated")));
-    cmd()
-        .arg(format!("merl:{}", wrong.display()))
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("wrong.binary").and(predicate::str::contains("64x90x180")));
-    cmd().arg("merl:/nonexistent/x.binary").assert().code(2).stderr(predicate::str::contains("x.binary"));
-    assert!(!out.exists());
-}
-
-#[test]
-fn output_is_identical_for_any_thread_count() {
-    // Everything but provenance (which records the command line) must be byte-identical.
-    let run = |threads: &str, method: &str, spec: &str| {
-        let out = cmd()
-            .env("RAYON_NUM_THREADS", threads)
-            .args([spec, "--resolution", "20", "--method", method])
-            .output()
-            .unwrap();
-        assert!(out.status.success());
-        let mut doc: Value = serde_json::from_slice(&out.stdout).unwrap();
-        doc.as_object_mut().unwrap().remove("provenance");
-        serde_json::to_string(&doc).unwrap()
-    };
-    for (method, spec) in
-        [("fft", "torrance-sparrow:sigma=0.3"), ("randomized", "kajiya-kay:s=8"), ("dense", "phong:s=5")]
-    {
-        assert_eq!(run("1", method, spec), run("3", method, spec), "{method}");
-    }
 }

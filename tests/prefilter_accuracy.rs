@@ -1,6 +1,9 @@
 //! Frequency-space prefiltering against the angular-domain reference on the same inputs
 //! (Ramamoorthi & Hanrahan 2002): relative RMS error within max(ε, 1 %).
 
+mod common;
+
+use common::sky;
 use glam::{DMat3, DVec3};
 use prtkit::brdf::Brdf;
 use prtkit::envmap::EnvMap;
@@ -12,18 +15,6 @@ use prtkit::progress::NoProgress;
 use prtkit::sh::convolve::convolve_zonal;
 use prtkit::sh::project::project;
 use prtkit::sh::synth::synthesize_latlong;
-
-/// A sky with a sun, a bright horizon band and a darker ground: all frequencies present.
-fn sky(w: usize, h: usize) -> EnvMap {
-    let sun = DVec3::new(0.4, 0.3, 0.6).normalize();
-    EnvMap::latlong(RgbImage::from_fn(w, h, |x, y| {
-        let d = prtkit::sphere::LatLong::new(w, h).texel_direction(x, y);
-        let s = 40.0 * d.dot(sun).max(0.0).powi(200);
-        let sky = if d.z > 0.0 { 1.0 + 0.5 * (1.0 - d.z) } else { 0.3 + 0.1 * (3.0 * d.x).sin().abs() };
-        [(sky + s) as f32, (sky * 0.9 + s) as f32, (sky * 0.8 + 0.9 * s) as f32]
-    }))
-    .unwrap()
-}
 
 use prtkit::metrics::relative_rms as rel_rms;
 

@@ -1,28 +1,27 @@
 //! Integration tests of `render`: furnace, irradiance and SHRM against the reference, factored
 //! convergence in K, and bad input.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{cmd as bin, latlong, write_exr, Chain};
 use glam::DVec3;
+use predicates::prelude::PredicateBooleanExt;
 use predicates::str::contains;
 use prtkit::io::image::{read_image, write_image};
 use prtkit::io::RgbImage;
 use prtkit::render::stage::Summary;
 use std::path::{Path, PathBuf};
 
-fn bin(name: &str) -> Command {
-    Command::cargo_bin(name).unwrap()
-}
-
-/// Writes a lat-long environment of `f(direction)`.
+/// Writes a lat-long environment of `f(direction)` (white light, tinted 1 : 0.9 : 0.8) as EXR.
 fn write_env(dir: &Path, name: &str, w: usize, h: usize, f: impl Fn(DVec3) -> f32) -> PathBuf {
-    let img = RgbImage::from_fn(w, h, |x, y| {
-        let d = prtkit::sphere::LatLong::new(w, h).texel_direction(x, y);
-        let v = f(d);
-        [v, 0.9 * v, 0.8 * v]
-    });
-    let p = dir.join(name);
-    write_image(&p, &img, 0.0).unwrap();
-    p
+    write_exr(
+        dir,
+        name,
+        &latlong(w, h, |d| {
+            let v = f(d);
+            [v, 0.9 * v, 0.8 * v]
+        }),
+    )
 }
 
 /// A smooth sky: bands ≤ 2 plus a wide warm blob (smooth enough for order-2 irradiance to be
@@ -48,7 +47,7 @@ fn centre(img: &RgbImage, r: usize) -> [f64; 3] {
 
 /// The `render --json` summary.
 fn summary(out: &[u8]) -> Summary {
-    serde_json::from_slice(out).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(out)))
+    common::parse(out)
 }
 
 /// Relative error of a `render --compare --json` run.
@@ -60,10 +59,13 @@ fn rel_error(out: &[u8]) -> f64 {
 fn render_white_furnace_gives_the_albedo_in_every_mode() {
     let dir = tempfile::tempdir().unwrap();
     let env = write_env(dir.path(), "white.exr", 64, 32, |_| 1.0);
+    // A white furnace looks the same from every normal: a coarse factorization and table suffice.
+    let factored = ["--shading", "factored", "--brdf", "lambert:albedo=0.5", "-K", "1", "--factor-resolution", "16"];
+    let factored = [&factored[..], &["--normal-table", "16x8"]].concat();
     let cases: [(&[&str], f64, f64); 4] = [
         (&["--shading", "irradiance", "--brdf", "lambert:albedo=0.5"], 0.5, 1e-3),
         (&["--shading", "reference", "--brdf", "lambert:albedo=0.5"], 0.5, 5e-3),
-        (&["--shading", "factored", "--brdf", "lambert:albedo=0.5", "-K", "1", "--factor-resolution", "16"], 0.5, 5e-3),
+        (&factored, 0.5, 5e-3),
         // Normalized Phong's lobe integrates to 1 over the sphere (the prefilter's ρ̂, §6.3).
         (&["--shading", "reference", "--brdf", "phong:s=16", "--integrand", "prefilter"], 1.0, 5e-3),
     ];
@@ -77,25 +79,9 @@ fn render_white_furnace_gives_the_albedo_in_every_mode() {
         }
     }
     // SHRM furnace: prefilter's Phong SHRM of the white map gives 1.
-    let shrm = dir.path().join("w.shrm.exr");
-    let doc = dir.path().join("w.shrm.json");
-    bin("prefilter")
-        .arg(&env)
-        .args(["--brdf", "phong:s=16", "-e", "0.001", "-q", "--shrm"])
-        .arg(&shrm)
-        .arg("-o")
-        .arg(&doc)
-        .assert()
-        .success();
+    let chain = Chain::prefilter(dir.path(), &env, "phong:s=16", "w.shrm", &["-e", "0.001"]);
     let out = dir.path().join("s.exr");
-    bin("render")
-        .arg(&env)
-        .args(["--shading", "shrm", "--brdf", "phong:s=16", "--res", "24x24", "-q", "--shrm"])
-        .arg(&doc)
-        .arg("-o")
-        .arg(&out)
-        .assert()
-        .success();
+    chain.render().args(["--res", "24x24", "-o"]).arg(&out).assert().success();
     let c = centre(&read_image(&out).unwrap(), 6);
     assert!((c[0] - 1.0).abs() < 2e-3, "shrm furnace {c:?}");
 }
@@ -135,20 +121,9 @@ fn render_shrm_matches_the_reference_within_the_prefilter_epsilon() {
         .arg(&reference)
         .assert()
         .success();
-    let doc = dir.path().join("p.shrm.json");
-    bin("prefilter")
-        .arg(&env)
-        .args(["--brdf", "phong:s=16", "-e", "0.01", "-q", "--shrm"])
-        .arg(dir.path().join("p.shrm.exr"))
-        .arg("-o")
-        .arg(&doc)
-        .assert()
-        .success();
-    let out = bin("render")
-        .arg(&env)
-        .args(["--shading", "shrm", "--brdf", "phong:s=16", "--res", "32x32", "-q", "--json", "--shrm"])
-        .arg(&doc)
-        .arg("--compare")
+    let out = Chain::prefilter(dir.path(), &env, "phong:s=16", "p.shrm", &["-e", "0.01"])
+        .render()
+        .args(["--res", "32x32", "--json", "--compare"])
         .arg(&reference)
         .assert()
         .success()
@@ -176,7 +151,7 @@ fn render_factored_error_falls_monotonically_with_k() {
         let out = bin("render")
             .arg(&env)
             .args(["--shading", "factored", "--brdf", "phong:s=8", "--factor-resolution", "32", "--res", "24x24"])
-            .args(["--normal-table", "64x32", "-q", "--json", "-K", &k.to_string(), "--compare"])
+            .args(["--normal-table", "32x16", "-q", "--json", "-K", &k.to_string(), "--compare"])
             .arg(&reference)
             .assert()
             .success()
@@ -216,17 +191,12 @@ fn render_obj_without_normals_is_shaded_with_computed_normals_and_says_so() {
     assert!((c[0] - 1.0).abs() < 1e-3, "{c:?}");
 }
 
-use predicates::prelude::PredicateBooleanExt;
-
 #[test]
 fn render_bad_input_exits_2_without_output() {
     let dir = tempfile::tempdir().unwrap();
     let env = write_env(dir.path(), "white.exr", 32, 16, |_| 1.0);
     let out = dir.path().join("never.exr");
-    // Unreadable OBJ.
-    let obj = dir.path().join("bad.obj");
-    std::fs::write(&obj, "v 0 0 zero\nf 1 2 3\n").unwrap();
-    bin("render").arg(&env).arg("--scene").arg(&obj).arg("-o").arg(&out).assert().code(2).stderr(contains("bad.obj"));
+    // Malformed files (OBJ, documents) are in testdata/bad/cli (tests/conventions.rs).
     bin("render")
         .arg(&env)
         .args(["--scene", "/nonexistent/x.obj", "-o"])
@@ -235,25 +205,18 @@ fn render_bad_input_exits_2_without_output() {
         .code(2)
         .stderr(contains("x.obj"));
     // An SHRM document for another BRDF, and one whose EXR has the wrong size.
-    let doc = dir.path().join("p.shrm.json");
-    bin("prefilter")
-        .arg(&env)
-        .args(["--brdf", "phong:s=8", "--order", "8,0", "-q", "--shrm"])
-        .arg(dir.path().join("p.shrm.exr"))
-        .arg("-o")
-        .arg(&doc)
-        .assert()
-        .success();
+    let chain = Chain::prefilter(dir.path(), &env, "phong:s=8", "p.shrm", &["--order", "8,0"]);
+    let doc = &chain.document;
     bin("render")
         .arg(&env)
         .args(["--shading", "shrm", "--brdf", "phong:s=30", "--shrm"])
-        .arg(&doc)
+        .arg(doc)
         .arg("-o")
         .arg(&out)
         .assert()
         .code(2)
         .stderr(contains("phong:s=8"));
-    let text = std::fs::read_to_string(&doc).unwrap().replace("\"width\": ", "\"width\": 1");
+    let text = std::fs::read_to_string(doc).unwrap().replace("\"width\": ", "\"width\": 1");
     let bad_doc = dir.path().join("bad.shrm.json");
     std::fs::write(&bad_doc, text).unwrap();
     bin("render")
@@ -266,19 +229,9 @@ fn render_bad_input_exits_2_without_output() {
         .code(2)
         .stderr(contains("does not match"));
     // An SHRM of another layout (a horizontal cross): render reads lat-long SHRMs.
-    let cross = dir.path().join("cross.shrm.json");
-    bin("prefilter")
-        .arg(&env)
-        .args(["--brdf", "phong:s=8", "--order", "8,0", "-q", "--output-layout", "cross-horizontal", "--shrm"])
-        .arg(dir.path().join("cross.shrm.exr"))
-        .arg("-o")
-        .arg(&cross)
-        .assert()
-        .success();
-    bin("render")
-        .arg(&env)
-        .args(["--shading", "shrm", "--brdf", "phong:s=8", "--shrm"])
-        .arg(&cross)
+    let args = ["--order", "8,0", "--output-layout", "cross-horizontal"];
+    Chain::prefilter(dir.path(), &env, "phong:s=8", "cross.shrm", &args)
+        .render()
         .arg("-o")
         .arg(&out)
         .assert()
@@ -318,7 +271,7 @@ fn render_factored_reads_factor_brdf_files_with_or_without_the_cosine_folded_in(
     let factored = |extra: &[&str]| -> f64 {
         let out = bin("render")
             .arg(&env)
-            .args(["--shading", "factored", "--brdf", "phong:s=8", "--res", "24x24", "--normal-table", "64x32"])
+            .args(["--shading", "factored", "--brdf", "phong:s=8", "--res", "24x24", "--normal-table", "32x16"])
             .args(["-q", "--json", "--compare"])
             .arg(&reference)
             .args(extra)
@@ -348,6 +301,7 @@ fn render_factored_reads_factor_brdf_files_with_or_without_the_cosine_folded_in(
     bin("render")
         .arg(&white)
         .args(["--shading", "factored", "--brdf", "lambert:albedo=0.5", "-K", "1", "--res", "24x24", "-q"])
+        .args(["--normal-table", "16x8"])
         .arg("--factors")
         .arg(&lambert)
         .arg("-o")
@@ -367,7 +321,18 @@ fn render_factored_rejects_a_factorization_that_does_not_fit() {
     let run = |brdf: &str, extra: &[&str], doc: &Path, needle: &str| {
         bin("render")
             .arg(&env)
-            .args(["--shading", "factored", "--brdf", brdf, "--res", "8x8", "-q", "--factors"])
+            .args([
+                "--shading",
+                "factored",
+                "--brdf",
+                brdf,
+                "--res",
+                "8x8",
+                "--normal-table",
+                "16x8",
+                "-q",
+                "--factors",
+            ])
             .arg(doc)
             .args(extra)
             .arg("-o")

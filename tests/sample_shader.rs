@@ -1,6 +1,11 @@
 //! Integration tests of the `sample-shader` binary (and its `prtkit sample-shader` form).
+//!
+//! The statistics are read as `serde_json::Value` until `shader::stage::Stats` and
+//! `CompareRow` derive `Deserialize`.
 
-use assert_cmd::Command;
+mod common;
+
+use common::cmd;
 use predicates::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -8,8 +13,8 @@ fn shader(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/shaders").join(format!("{name}.sl"))
 }
 
-fn bin() -> Command {
-    Command::cargo_bin("sample-shader").unwrap_or_else(|e| panic!("{e}"))
+fn bin() -> assert_cmd::Command {
+    cmd("sample-shader")
 }
 
 #[test]
@@ -137,7 +142,7 @@ fn latlong_sky_feeds_sh_project() {
         s / (64 * rows.len()) as f64
     };
     assert!(mean(2..10) > 2.0 * mean(22..30));
-    Command::cargo_bin("sh-project").unwrap_or_else(|e| panic!("{e}")).arg(&sky).assert().success();
+    cmd("sh-project").arg(&sky).assert().success();
 }
 
 #[test]
@@ -151,8 +156,7 @@ fn umbrella_and_thread_count_give_identical_bytes_and_verify_passes() {
         .assert()
         .success()
         .stderr(predicate::str::contains(", 0 outside their bounds"));
-    Command::cargo_bin("prtkit")
-        .unwrap_or_else(|e| panic!("{e}"))
+    cmd("prtkit")
         .arg("sample-shader")
         .arg(shader("marble"))
         .args(["--res", "32x32", "--threads", "2", "-q", "-o"])

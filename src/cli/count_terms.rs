@@ -64,7 +64,15 @@ impl Stage for Args {
         &self.run
     }
     fn run(self, ctx: &Context) -> Result<Outcome> {
-        check_writable(self.plot.iter().chain([&Output::Stdout]))?;
+        // The table (or the --json rows) goes to stdout unless the plot claims it (`--plot -`).
+        let table = match &self.plot {
+            Some(Output::Stdout) if self.json => {
+                anyhow::bail!("--json prints the rows on stdout: give the plot a file with --plot FILE.svg")
+            }
+            Some(Output::Stdout) => None,
+            _ => Some(Output::Stdout),
+        };
+        check_writable(self.plot.iter().chain(&table))?;
         let config = CountConfig::try_from(&self)?;
         let out = count::run(&config, self.materials()?, ctx.progress())?;
 
@@ -79,10 +87,10 @@ impl Stage for Args {
             let svg = plot::count_plot(&title, &out.rows, &out.spectra).map_err(anyhow::Error::msg)?;
             outputs.bytes(plot_out, svg.into_bytes())?;
         }
-        if self.json {
-            outputs.json(&Output::Stdout, &out.rows)?;
-        } else {
-            outputs.bytes(&Output::Stdout, count::markdown_table(&out.rows).into_bytes())?;
+        match (&table, self.json) {
+            (Some(o), true) => outputs.json(o, &out.rows)?,
+            (Some(o), false) => outputs.bytes(o, count::markdown_table(&out.rows).into_bytes())?,
+            (None, _) => {}
         }
         outputs.commit()?;
         let failing: Vec<_> = out.failing().collect();

@@ -122,7 +122,6 @@ impl Stage for Args {
             outputs.image(o, &out.frame.image, stops)?;
         }
         if let Some((doc, error_image)) = &out.comparison {
-            ctx.note(format!("vs {}: {}", doc.body.reference, doc.body.metrics));
             if let Some(o) = &self.error_image {
                 outputs.image(o, error_image, stops)?;
             }
@@ -137,6 +136,9 @@ impl Stage for Args {
             outputs.json(o, &out.summary)?;
         }
         outputs.commit()?;
+        if let Some((doc, _)) = &out.comparison {
+            ctx.note(format!("vs {}: {}", doc.body.reference, doc.body.metrics));
+        }
         Ok(Outcome::Success)
     }
 }

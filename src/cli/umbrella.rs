@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 /// prtkit bakes assets for real-time rendering and measures how accurate each bake is.
 #[derive(Debug, Parser)]
-#[command(name = "prtkit", version, about, long_about = None, propagate_version = true)]
+#[command(name = "prtkit", version, propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
     stage: StageArgs,

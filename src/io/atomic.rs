@@ -52,6 +52,7 @@ impl Output {
         if is_special(path) {
             return Ok(());
         }
+        refuse_directory(path)?;
         let dir = parent_dir(path);
         if !dir.is_dir() {
             return Err(IoError::os(
@@ -149,6 +150,9 @@ impl OutputSet {
                         std::io::Error::new(std::io::ErrorKind::AlreadyExists, "given twice as an output"),
                     ));
                 }
+                // Checked here, not left to the rename: a rename failing at commit would come
+                // after the other outputs of the set were already in place.
+                refuse_directory(path)?;
                 let temp = stage_file(path, &bytes)?;
                 self.staged.push(Staged::Renamed { temp, dest: path.clone() });
             }
@@ -213,6 +217,14 @@ impl Drop for OutputSet {
             let _ = std::fs::remove_dir(dir);
         }
     }
+}
+
+/// A file output cannot replace a directory.
+fn refuse_directory(path: &Path) -> Result<(), IoError> {
+    if path.is_dir() {
+        return Err(IoError::os(path, std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory")));
+    }
+    Ok(())
 }
 
 /// Writes `bytes` to a registered temporary file beside `dest`, with the mode `dest` will have.
@@ -303,6 +315,39 @@ mod tests {
         set.commit().unwrap();
         assert_eq!((std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap()), (b"new".to_vec(), b"too".to_vec()));
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    #[test]
+    fn a_directory_in_the_way_fails_before_anything_is_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.txt"), dir.path().join("b"));
+        std::fs::write(&a, b"old").unwrap();
+        std::fs::create_dir(&b).unwrap();
+        let err = Output::File(b.clone()).check_writable().unwrap_err().to_string();
+        assert!(err.contains("is a directory"), "{err}");
+        let mut set = OutputSet::new();
+        set.add(&Output::File(a.clone()), b"new".to_vec()).unwrap();
+        assert!(set.add(&Output::File(b.clone()), b"x".to_vec()).is_err());
+        drop(set);
+        assert_eq!(std::fs::read(&a).unwrap(), b"old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "no temporary file left");
+    }
+
+    #[test]
+    fn directories_made_for_a_set_that_fails_are_removed_and_kept_when_it_commits() {
+        let dir = tempfile::tempdir().unwrap();
+        let maps = dir.path().join("maps/k8");
+        let mut set = OutputSet::new();
+        set.create_dir(&maps).unwrap();
+        set.add(&Output::File(maps.join("a.exr")), b"a".to_vec()).unwrap();
+        drop(set);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "maps/ and maps/k8/ are removed");
+
+        let mut set = OutputSet::new();
+        set.create_dir(&maps).unwrap();
+        set.add(&Output::File(maps.join("a.exr")), b"a".to_vec()).unwrap();
+        set.commit().unwrap();
+        assert_eq!(std::fs::read(maps.join("a.exr")).unwrap(), b"a");
     }
 
     #[cfg(unix)]

@@ -46,7 +46,8 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
-    /// Write an SVG plot: singular values vs predicted F_l, and K vs (l*)² (`-`: stdout).
+    /// Write an SVG plot: singular values vs predicted F_l, and K vs (l*)² (`-`: stdout, in place
+    /// of the table).
     #[arg(long, value_name = "FILE.svg", value_parser = parse_output)]
     pub plot: Option<Output>,
 

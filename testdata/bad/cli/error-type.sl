@@ -1,0 +1,4 @@
+shader s(float k = 1) {
+    color c = P;
+    Ci = c;
+}
