@@ -154,7 +154,10 @@ pub fn prefilter(
         (Some(rest), _) => {
             let order = match (settings.orders, settings.rule) {
                 (Some((f, _)), _) => f,
-                (None, OrderRule::Texel) => resolvable_order(rest),
+                // The output grid holds bands up to (W − 2)/2 (synthesis needs W ≥ 2F + 2).
+                (None, OrderRule::Texel) => {
+                    resolvable_order(rest).min(settings.size.map_or(usize::MAX, |(w, _)| w.saturating_sub(2) / 2))
+                }
                 (None, OrderRule::Energy) => 0,
             };
             Some(project(rest, order, progress)?)
@@ -172,6 +175,14 @@ pub fn prefilter(
             let full = model.coefficients(l_max, max_p);
             let mean = mean_reflected(&full, light, &bright);
             let orders = texel_orders(model, &full, &light.band_energy_rgb(), mean, settings.epsilon, max_p);
+            if let Lighting::Coefficients(c) = lighting {
+                // A map is cut at its own resolution, but given coefficients were cut by the
+                // caller: they must at least hold what the BRDF's energy rule needs.
+                let need = brdf_coefficients(model, Orders::Epsilon { epsilon: settings.epsilon, max_p })?.f;
+                if c.order < need {
+                    return Err(PrefilterError::LightingOrder { have: c.order, need });
+                }
+            }
             (full.truncated(orders.f_b, orders.p_b), Some(orders))
         }
         (None, OrderRule::Texel, None) => unreachable!("the texel rule always has the lighting"),
