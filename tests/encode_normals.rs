@@ -5,7 +5,7 @@ use predicates::prelude::*;
 use prtkit::cli::encode_normals::EncodeReport;
 use prtkit::io::document::parse_document;
 use prtkit::normals::table::Row;
-use prtkit::normals::{bounds, sources, Scheme};
+use prtkit::normals::{sources, Codec, Scheme};
 use std::path::Path;
 
 fn cmd() -> Command {
@@ -62,7 +62,7 @@ fn encode_raw_writes_codes_report_and_decoded_normals() {
         parse_document::<EncodeReport>(&std::fs::read_to_string(&report).unwrap(), "prtkit.normal-codes", 1).unwrap();
     let r = doc.body;
     assert_eq!((r.scheme, r.bits, r.count), (Scheme::OnvRange, 24, normals.len() as u64));
-    assert_eq!(r.bound, bounds::bound(Scheme::OnvRange, 24));
+    assert_eq!(r.bound, Codec::new(Scheme::OnvRange, 24).unwrap().bound());
     assert!(r.error.max > 0.0 && r.error.max <= r.bound * 1.0001, "{} vs {}", r.error.max, r.bound);
     assert!(r.error.mean < r.error.rms && r.error.rms <= r.error.max);
     assert_eq!(r.histogram.counts.iter().sum::<u64>(), normals.len() as u64);
@@ -128,7 +128,9 @@ fn json_report_on_stdout_deserializes() {
     let doc =
         parse_document::<EncodeReport>(std::str::from_utf8(&out.stdout).unwrap(), "prtkit.normal-codes", 1).unwrap();
     assert_eq!(doc.body.scheme, Scheme::Sc);
-    assert_eq!(doc.body.layout.fields.iter().map(|f| f.width).sum::<u32>(), 16);
+    // The mixed-radix digits use the whole budget: at most 2^16 codes, and more than half of them.
+    let used: u64 = doc.body.layout.digits.iter().map(|d| d.radix).product();
+    assert!(used <= 1 << 16 && used > 1 << 15, "{used}");
     assert!(doc.body.error.max <= doc.body.bound * (1.0 + 1e-9));
 }
 
@@ -195,7 +197,7 @@ fn exr_unorm_normal_map_round_trips() {
     assert_eq!(doc.body.count, 64);
     let back = prtkit::io::image::read_image(&decoded).unwrap();
     assert_eq!((back.width, back.height), (8, 8));
-    let bound = bounds::bound(Scheme::OnvDomain, 16);
+    let bound = Codec::new(Scheme::OnvDomain, 16).unwrap().bound();
     for (p, n) in back.pixels.iter().zip(&normals) {
         // The unorm round trip (2c-1 of f32 input) adds ~1e-7 of its own.
         assert!(angle(p.map(|c| 2.0 * c - 1.0), *n) <= bound + 1e-6);

@@ -8,7 +8,7 @@ use crate::normals::metrics::{self, ErrorStats, Histogram};
 use crate::normals::shader::{self, Language};
 use crate::normals::sources::{self, NormalSource, SourceFormat};
 use crate::normals::table::{self, Row, TableConfig};
-use crate::normals::{bounds, pack, prepare, Codec, Field, InvalidPolicy, NormalsError, Scheme};
+use crate::normals::{pack, prepare, Codec, Digit, InvalidPolicy, NormalsError, Scheme};
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use serde::{Deserialize, Serialize};
@@ -133,8 +133,8 @@ pub struct CodeLayout {
     pub stream: String,
     /// Bytes per word (`words` only).
     pub word_bytes: Option<usize>,
-    /// Bit fields of one code, lowest first.
-    pub fields: Vec<Field>,
+    /// Digits of one code, lowest first.
+    pub digits: Vec<Digit>,
 }
 
 /// Error statistics in a report.
@@ -228,7 +228,7 @@ fn run_encode(args: &Args, codec: &Codec, input: &Path) -> Result<Outcome> {
     codec.decode_all(&codes, &mut decoded);
     let errors = metrics::errors(&dirs, &decoded);
     let stats: ErrorStats = metrics::stats(&errors);
-    let bound = bounds::bound(codec.scheme(), codec.bits());
+    let bound = codec.bound();
     let histogram = metrics::histogram(&errors, bound.max(stats.max), args.bins as usize);
 
     if let Some(out) = &output {
@@ -251,7 +251,7 @@ fn run_encode(args: &Args, codec: &Codec, input: &Path) -> Result<Outcome> {
         layout: CodeLayout {
             stream: if args.packed { "packed" } else { "words" }.to_string(),
             word_bytes: (!args.packed).then(|| pack::word_bytes(codec.bits())),
-            fields: codec.fields(),
+            digits: codec.digits(),
         },
         codes: output.as_ref().map(Output::display),
         decoded: args.decoded.as_ref().map(|p| p.display().to_string()),
@@ -263,7 +263,7 @@ fn run_encode(args: &Args, codec: &Codec, input: &Path) -> Result<Outcome> {
             max_over_bound: stats.max / bound,
         },
         bound,
-        spacing: bounds::spacing(codec.scheme(), codec.bits()),
+        spacing: codec.spacing(),
         histogram,
         replaced: Replaced { count: replaced.len() as u64, indices: replaced.iter().copied().take(100).collect() },
     };

@@ -11,11 +11,10 @@
 //!   its edges and diagonals, and its centre (the maximum over the cell of the distance to the
 //!   nearest of four corners sits at one of these).
 
-use super::fixed::{snorm_max, snorm_round, snorm_value};
-use super::sc::ScLayout;
-use super::sextant::FaceLayout;
+use super::fixed::{snorm_max, snorm_round, snorm_value, symmetric_round};
+use super::radix::GridLayout;
 use super::vec::{cross, dot, normalize, Dir};
-use super::{onv, pp::PpLayout, sc, Scheme};
+use super::{onv, sc, Codec, Layout, Scheme};
 use std::f64::consts::{FRAC_1_SQRT_2, SQRT_2};
 
 /// Relative nudge from a cell centre towards a corner: small enough to stay at the peak, large
@@ -24,15 +23,21 @@ const NUDGE: f64 = 1e-6;
 /// Cells examined on each side of a worst-case location.
 const RADIUS: i64 = 2;
 
-/// Adversarial unit directions for `scheme` at `bits`.
-pub fn directions(scheme: Scheme, bits: u32) -> Vec<Dir> {
-    match scheme {
-        Scheme::OnvRange | Scheme::OnvDomain => onv_directions(bits),
-        Scheme::Sc => sc_directions(bits),
-        Scheme::Pp => pp_directions(bits),
-        Scheme::Spp => spp_directions(bits),
-        Scheme::Cm => cm_directions(bits),
+/// Adversarial unit directions for `codec`.
+pub fn directions(codec: &Codec) -> Vec<Dir> {
+    match (codec.scheme(), codec.layout()) {
+        (_, Layout::Onv(l)) => onv_directions(l),
+        (Scheme::Sc, Layout::Grid(l)) => sc_directions(l),
+        (Scheme::Pp, Layout::Grid(l)) => pp_directions(l),
+        (Scheme::Spp, Layout::Grid(l)) => spp_directions(l),
+        (_, Layout::Grid(l)) => cm_directions(l),
     }
+}
+
+/// Half the number of steps `h = (N-1)/2` of an odd symmetric lattice: its points are `s/h` for
+/// integers `-h <= s <= h`.
+fn half_count(radix: u64) -> i64 {
+    ((radix - 1) / 2) as i64
 }
 
 /// Candidate points of a parameter cell `[a0,a1]×[b0,b1]` mapped by `to_dir`.
@@ -77,8 +82,7 @@ fn cell_candidates(a: (f64, f64), b: (f64, f64), to_dir: &dyn Fn(f64, f64) -> Op
     }
 }
 
-fn onv_directions(bits: u32) -> Vec<Dir> {
-    let layout = onv::OnvLayout::new(bits);
+fn onv_directions(layout: onv::OnvLayout) -> Vec<Dir> {
     let (ku, kv) = (layout.u_bits, layout.v_bits);
     let mut out = Vec::new();
     let to_dir =
@@ -112,10 +116,8 @@ fn onv_directions(bits: u32) -> Vec<Dir> {
     out
 }
 
-fn sc_directions(bits: u32) -> Vec<Dir> {
-    let layout = ScLayout::new(bits);
-    let kt = layout.theta_bits;
-    let n_phi = (1u64 << layout.phi_bits) as f64;
+fn sc_directions(l: GridLayout) -> Vec<Dir> {
+    let (ht, n_phi) = (half_count(l.b), l.a as f64);
     let mut out = Vec::new();
     let to_dir = |t: f64, turns: f64| -> Option<Dir> { (t.abs() <= 1.0).then(|| sc::dir_from_params(t, turns)) };
     // The equator (t = 0) at a spread of longitudes: eq. 5's worst case.
@@ -124,10 +126,10 @@ fn sc_directions(bits: u32) -> Vec<Dir> {
         for dj in -1..=0 {
             let j = j0 + dj as f64;
             for st in -RADIUS..RADIUS {
-                if st < -snorm_max(kt) || st + 1 > snorm_max(kt) {
+                if st < -ht || st + 1 > ht {
                     continue;
                 }
-                let a = (snorm_value(st, kt), snorm_value(st + 1, kt));
+                let a = (st as f64 / ht as f64, (st + 1) as f64 / ht as f64);
                 let b = (j / n_phi, (j + 1.0) / n_phi);
                 cell_candidates(a, b, &to_dir, &mut out);
             }
@@ -136,24 +138,22 @@ fn sc_directions(bits: u32) -> Vec<Dir> {
     out
 }
 
-fn pp_directions(bits: u32) -> Vec<Dir> {
+fn pp_directions(l: GridLayout) -> Vec<Dir> {
     // Eq. 6: a lattice point on (or just outside) the unit circle, reached from half a cell
     // inwards along the cell diagonal, where z = sqrt(1 - x² - y²) is steepest.
-    let layout = PpLayout::new(bits);
-    let (kx, ky) = (layout.x_bits, layout.y_bits);
-    let (qx, qy) = (snorm_max(kx), snorm_max(ky));
-    let (ex, ey) = (1.0 / qx as f64, 1.0 / qy as f64);
+    let (hx, hy) = (half_count(l.a), half_count(l.b));
+    let (ex, ey) = (1.0 / hx as f64, 1.0 / hy as f64);
     let mut out = Vec::new();
     // The half-cell diagonal (ex, ey)/2 is radial where (cos ψ, sin ψ) ∝ (ex, ey).
-    let centre = snorm_round(ex / ex.hypot(ey), kx);
-    let span = 4096.min(qx);
-    for i in (centre - span).max(1)..=(centre + span).min(qx) {
-        let x = snorm_value(i, kx);
+    let centre = symmetric_round(ex / ex.hypot(ey), l.a) as i64 - hx;
+    let span = 4096.min(hx);
+    for i in (centre - span).max(1)..=(centre + span).min(hx) {
+        let x = i as f64 / hx as f64;
         // Smallest y lattice value with x² + y² >= 1.
         let y_needed = (1.0 - x * x).max(0.0).sqrt();
-        let j = ((y_needed * qy as f64).ceil() as i64).min(qy);
+        let j = ((y_needed * hy as f64).ceil() as i64).min(hy);
         for j in [j - 1, j] {
-            let y = snorm_value(j, ky);
+            let y = j as f64 / hy as f64;
             let (px, py) = (x - 0.5 * ex * (1.0 - NUDGE), y - 0.5 * ey * (1.0 - NUDGE));
             let r2 = px * px + py * py;
             if r2 <= 1.0 && px >= 0.0 && py >= 0.0 {
@@ -167,13 +167,12 @@ fn pp_directions(bits: u32) -> Vec<Dir> {
     out
 }
 
-fn spp_directions(bits: u32) -> Vec<Dir> {
+fn spp_directions(l: GridLayout) -> Vec<Dir> {
     // Eq. 7: the cube diagonal, where the rebuilt largest component m = sqrt(1-a²-b²) is
-    // smallest and steepest.
-    let layout = FaceLayout::new(bits);
-    let (ka, kb) = (layout.a_bits, layout.b_bits);
+    // smallest and steepest; the worst lattice points lie just outside it (`bounds::spp_split`).
+    let (ha, hb) = (half_count(l.a), half_count(l.b));
     let d = SQRT_2 / 3f64.sqrt();
-    let (ia, ib) = (snorm_round(d, ka), snorm_round(d, kb));
+    let (ia, ib) = (symmetric_round(d, l.a) as i64 - ha, symmetric_round(d, l.b) as i64 - hb);
     let mut out = Vec::new();
     let to_dir = |ta: f64, tb: f64| -> Option<Dir> {
         let (a, b) = (ta * FRAC_1_SQRT_2, tb * FRAC_1_SQRT_2);
@@ -183,27 +182,26 @@ fn spp_directions(bits: u32) -> Vec<Dir> {
     for di in -RADIUS - 1..RADIUS {
         for dj in -RADIUS - 1..RADIUS {
             let (a0, b0) = (ia + di, ib + dj);
-            if a0 + 1 > snorm_max(ka) || b0 + 1 > snorm_max(kb) {
+            if a0 + 1 > ha || b0 + 1 > hb {
                 continue;
             }
-            let a = (snorm_value(a0, ka), snorm_value(a0 + 1, ka));
-            let b = (snorm_value(b0, kb), snorm_value(b0 + 1, kb));
+            let a = (a0 as f64 / ha as f64, (a0 + 1) as f64 / ha as f64);
+            let b = (b0 as f64 / hb as f64, (b0 + 1) as f64 / hb as f64);
             cell_candidates(a, b, &to_dir, &mut out);
         }
     }
     mirror_and_rotate(out)
 }
 
-fn cm_directions(bits: u32) -> Vec<Dir> {
+fn cm_directions(l: GridLayout) -> Vec<Dir> {
     // Eq. 8: the face centre, where the cube is closest to the sphere and the lattice coarsest.
-    let layout = FaceLayout::new(bits);
-    let (ka, kb) = (layout.a_bits, layout.b_bits);
+    let (ha, hb) = (half_count(l.a) as f64, half_count(l.b) as f64);
     let mut out = Vec::new();
     let to_dir = |s: f64, t: f64| -> Option<Dir> { Some(normalize([s, t, 1.0])) };
     for di in -RADIUS..RADIUS {
         for dj in -RADIUS..RADIUS {
-            let a = (snorm_value(di, ka), snorm_value(di + 1, ka));
-            let b = (snorm_value(dj, kb), snorm_value(dj + 1, kb));
+            let a = (di as f64 / ha, (di + 1) as f64 / ha);
+            let b = (dj as f64 / hb, (dj + 1) as f64 / hb);
             cell_candidates(a, b, &to_dir, &mut out);
         }
     }

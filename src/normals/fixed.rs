@@ -65,6 +65,23 @@ pub fn snorm_value(s: i64, bits: u32) -> f64 {
     (s as f64 / snorm_max(bits) as f64).max(-1.0)
 }
 
+/// The digit `d < N` of the symmetric lattice point nearest to `t` in `[-1, 1]` (odd `N = 2h+1`,
+/// value `(d - h)/h`; `radix.rs`): ties to even like [`snorm_round`], so `t ↦ -t` mirrors the
+/// digit about `h`.
+#[inline]
+pub fn symmetric_round(t: f64, radix: u64) -> u64 {
+    let h = ((radix - 1) / 2) as f64;
+    (round_ties_even(t * h).clamp(-h, h) + h) as u64
+}
+
+/// The value `(d - h)/h` of digit `d` of an odd symmetric lattice of `N = 2h+1` points. Division
+/// (not a reciprocal multiply) keeps `±1` and `0` exact.
+#[inline]
+pub fn symmetric_value(d: u64, radix: u64) -> f64 {
+    let h = (radix - 1) / 2;
+    (d as i64 - h as i64) as f64 / h as f64
+}
+
 /// Stores a signed integer in a `bits`-wide two's-complement field.
 #[inline]
 pub fn to_field(s: i64, bits: u32) -> u64 {

@@ -27,7 +27,8 @@ pub struct Row {
     pub scheme: String,
     /// Total bits per normal (three floats for `fpnv`).
     pub bits: u32,
-    /// How the bits are split, e.g. `u:24 v:24` or `3 x binary16 (m=10)`.
+    /// How the bits are split ([`Codec::split_text`]), e.g. `v:2^24 u:2^24 = 24+24 bits` or
+    /// `3 x binary16 (m=10)`.
     pub split: String,
     /// Sample spacing `ε` in the paper's units (`bounds::spacing`; for `fpnv` the cell size
     /// `2^(-m-1)` at `[1/2, 1)`).
@@ -76,11 +77,6 @@ pub struct TableConfig {
     pub seed: u64,
 }
 
-/// Human-readable split of a codec's fields.
-pub fn split_text(codec: &Codec) -> String {
-    codec.fields().iter().map(|f| format!("{}:{}", f.name, f.width)).collect::<Vec<_>>().join(" ")
-}
-
 /// Computes the table for one budget.
 pub fn table(config: TableConfig, progress: &dyn Progress) -> Result<Vec<Row>, NormalsError> {
     let codecs: Vec<Codec> = Scheme::ALL.iter().map(|&s| Codec::new(s, config.bits)).collect::<Result<_, _>>()?;
@@ -125,15 +121,15 @@ pub fn table(config: TableConfig, progress: &dyn Progress) -> Result<Vec<Row>, N
 
     let mut rows = Vec::new();
     for (codec, stats) in codecs.iter().zip(&scheme_stats) {
-        let adv = adversarial::directions(codec.scheme(), config.bits);
+        let adv = adversarial::directions(codec);
         let adv_max = max_error(codec, &adv);
-        let bound = bounds::bound(codec.scheme(), config.bits);
+        let bound = codec.bound();
         let max = stats.max.max(adv_max);
         rows.push(Row {
             scheme: codec.scheme().name().to_string(),
             bits: config.bits,
-            split: split_text(codec),
-            spacing: bounds::spacing(codec.scheme(), config.bits),
+            split: codec.split_text(),
+            spacing: codec.spacing(),
             bound,
             max_error: max,
             mean_error: stats.mean(),
@@ -196,7 +192,7 @@ fn fpnv_row(format: FloatFormat, stats: &ErrorStats, seed: u64) -> Result<Row, N
 /// ONV_range's measured maximum at `bits`: adversarial directions plus 2^20 random ones.
 fn onv_range_max(bits: u32, seed: u64) -> Result<f64, NormalsError> {
     let codec = Codec::new(Scheme::OnvRange, bits)?;
-    let adv = max_error(&codec, &adversarial::directions(Scheme::OnvRange, bits));
+    let adv = max_error(&codec, &adversarial::directions(&codec));
     let random: f64 = (0..16u64)
         .into_par_iter()
         .map(|chunk| {
