@@ -39,6 +39,15 @@ pub fn round_ties_even(x: f64) -> f64 {
     (x + ROUNDING_MAGIC) - ROUNDING_MAGIC
 }
 
+/// The `bits`-wide two's-complement field (`bits <= 32`) of an integer-valued `s` with
+/// `|s| < 2^31`, read from the mantissa of `s + 1.5·2^52`, whose low 32 bits are `s` in two's
+/// complement: no float-to-integer conversion, which baseline x86-64 has no SIMD form of for
+/// 64-bit integers, so batch loops stay vectorized.
+#[inline(always)]
+pub fn integer_to_field(s: f64, bits: u32) -> u64 {
+    (s + ROUNDING_MAGIC).to_bits() & mask(bits)
+}
+
 /// `floor(x)` for `|x| < 2^51` without a libm call (see [`round_ties_even`]).
 #[inline]
 pub fn floor_small(x: f64) -> f64 {

@@ -222,6 +222,22 @@ fn f32_block_encoder_gives_the_scalar_codes() {
 }
 
 #[test]
+fn f32_block_decoder_gives_the_scalar_normals() {
+    // The batch decoder may run with other SIMD widths (AVX2 dispatch): bit-identical results.
+    let mut state = 4u64;
+    for bits in [8, 15, 16, 24, 31, 32] {
+        let codec = Codec::new(Scheme::OnvRange, bits).unwrap();
+        let layout = super::onv::OnvLayout::new(bits);
+        let codes: Vec<u64> = (0..10_007).map(|_| next_u64(&mut state) & super::fixed::mask(bits)).collect();
+        let mut normals = vec![[0f32; 3]; codes.len()];
+        codec.decode_all_f32(&codes, &mut normals);
+        for (c, n) in codes.iter().zip(&normals) {
+            assert_eq!(super::onv::decode_f32(*c, layout).map(f32::to_bits), n.map(f32::to_bits), "{bits} {c:#x}");
+        }
+    }
+}
+
+#[test]
 fn batch_encode_is_independent_of_chunking() {
     let mut state = 1u64;
     let dirs: Vec<Dir> = (0..50_000).map(|_| uniform_direction(&mut state)).collect();
