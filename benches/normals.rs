@@ -4,8 +4,9 @@
 //!
 //! Run: `cargo bench --bench normals` (env `NORMALS_BENCH_COUNT` changes the count).
 
+use glam::DVec3;
+use prtkit::normals::metrics::angle_between;
 use prtkit::normals::rng::{chunk_state, uniform_direction};
-use prtkit::normals::vec::angle_between;
 use prtkit::normals::{Codec, Scheme};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -43,9 +44,12 @@ fn best_of(reps: usize, mut f: impl FnMut()) -> Timing {
     Timing { wall: best, cpu: (cpu_seconds() - cpu0) / reps as f64 }
 }
 
+fn vec(v: &[f32; 3]) -> DVec3 {
+    DVec3::from(v.map(f64::from))
+}
+
 fn max_error_f32(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, f64) {
-    let errs: Vec<f64> =
-        a.par_iter().zip(b.par_iter()).map(|(x, y)| angle_between(x.map(f64::from), y.map(f64::from))).collect();
+    let errs: Vec<f64> = a.par_iter().zip(b.par_iter()).map(|(x, y)| angle_between(vec(x), vec(y))).collect();
     let max = errs.iter().copied().fold(0.0, f64::max);
     (max, errs.iter().sum::<f64>() / errs.len() as f64)
 }

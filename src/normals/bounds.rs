@@ -307,7 +307,7 @@ mod tests {
         // box's corners; none exceeds spp_split, and the diagonal corner reaches it.
         let p = |x: f64, y: f64| {
             let m = (1.0 - x * x - y * y).max(0.0).sqrt();
-            crate::normals::vec::normalize([x, y, m])
+            glam::DVec3::new(x, y, m).normalize()
         };
         for (a, b) in [(0.05, 0.05), (0.05, 0.02), (1e-3, 2e-3)] {
             let bound = spp_split(a, b);
@@ -321,7 +321,7 @@ mod tests {
                         continue;
                     }
                     for (sa, sb) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
-                        let e = crate::normals::vec::angle_between(p(x, y), p(x + sa * a, y + sb * b));
+                        let e = crate::normals::metrics::angle_between(p(x, y), p(x + sa * a, y + sb * b));
                         worst = worst.max(e);
                         assert!(e <= bound * (1.0 + 1e-12), "{a} {b} at ({x}, {y}): {e} > {bound}");
                     }

@@ -7,7 +7,7 @@ use super::bounds::objective;
 use super::fixed::{symmetric_round, symmetric_value};
 use super::radix::GridLayout;
 use super::sextant::{face_from_index, face_index, face_of, minor_axes};
-use super::vec::{normalize, Dir};
+use glam::DVec3;
 
 /// The split of a `bits`-bit budget.
 pub fn layout(bits: u32) -> GridLayout {
@@ -16,7 +16,7 @@ pub fn layout(bits: u32) -> GridLayout {
 
 /// Rounds the two cube-face coordinates in the domain.
 #[inline]
-pub fn encode(n: Dir, l: GridLayout) -> u64 {
+pub fn encode(n: DVec3, l: GridLayout) -> u64 {
     let (axis, negative) = face_of(n);
     let (i, j) = minor_axes(axis);
     let inv = 1.0 / n[axis].abs();
@@ -27,13 +27,13 @@ pub fn encode(n: Dir, l: GridLayout) -> u64 {
 
 /// Decodes any code to a unit direction.
 #[inline]
-pub fn decode(code: u64, l: GridLayout) -> Dir {
+pub fn decode(code: u64, l: GridLayout) -> DVec3 {
     let (face, a, b) = l.unpack(code);
     let (axis, negative) = face_from_index(face);
     let (i, j) = minor_axes(axis);
-    let mut n = [0.0; 3];
+    let mut n = DVec3::ZERO;
     n[axis] = if negative { -1.0 } else { 1.0 };
     n[i] = symmetric_value(a, l.a);
     n[j] = symmetric_value(b, l.b);
-    normalize(n)
+    n.normalize()
 }

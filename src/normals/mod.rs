@@ -20,6 +20,8 @@
 pub mod adversarial;
 pub mod bounds;
 pub mod cm;
+pub mod decode;
+pub mod encode;
 pub mod fixed;
 pub mod fpnv;
 pub mod metrics;
@@ -29,6 +31,7 @@ pub mod pp;
 #[cfg(test)]
 mod properties;
 pub mod radix;
+pub mod report;
 pub mod rng;
 pub mod sc;
 pub mod sextant;
@@ -36,14 +39,14 @@ pub mod shader;
 pub mod sources;
 pub mod spp;
 pub mod table;
-pub mod vec;
+mod vec;
 
+use glam::DVec3;
 use radix::GridLayout;
 pub use radix::{Digit, DigitKind};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
-pub use vec::Dir;
 
 /// Smallest supported budget.
 pub const MIN_BITS: u32 = 8;
@@ -107,6 +110,21 @@ pub enum NormalsError {
     /// The bit budget is outside 8..=64.
     #[error("bit budget {0} is outside {MIN_BITS}..={MAX_BITS}")]
     Bits(u32),
+    /// Nothing to encode or decode.
+    #[error("no {0}")]
+    Empty(&'static str),
+    /// A code file in the word layout whose length is not a whole number of words.
+    #[error(
+        "length {len} is not a multiple of the {word_bytes}-byte word of a {bits}-bit code (a bit-packed stream?)"
+    )]
+    StreamLength {
+        /// Length in bytes.
+        len: usize,
+        /// Bytes per word.
+        word_bytes: usize,
+        /// Bits per code.
+        bits: u32,
+    },
     /// A normal that cannot be encoded: zero length, NaN or infinite.
     #[error("normal #{index} is {what}: ({x}, {y}, {z})")]
     Invalid {
@@ -235,7 +253,7 @@ impl Codec {
 
     /// Encodes a unit direction (callers normalize first; see [`prepare`]).
     #[inline]
-    pub fn encode(&self, n: Dir) -> u64 {
+    pub fn encode(&self, n: DVec3) -> u64 {
         match (self.scheme, self.layout) {
             (Scheme::OnvRange, Layout::Onv(l)) => onv::encode_range(n, l),
             (_, Layout::Onv(l)) => onv::encode_domain(n, l),
@@ -248,7 +266,7 @@ impl Codec {
 
     /// Decodes the low `bits` bits of `code` to a unit direction (total: every code decodes).
     #[inline]
-    pub fn decode(&self, code: u64) -> Dir {
+    pub fn decode(&self, code: u64) -> DVec3 {
         let code = code & fixed::mask(self.bits);
         match (self.scheme, self.layout) {
             (_, Layout::Onv(l)) => onv::decode(code, l),
@@ -260,7 +278,7 @@ impl Codec {
     }
 
     /// Encodes a batch in parallel (order preserved; identical for any thread count).
-    pub fn encode_all(&self, normals: &[Dir], codes: &mut [u64]) {
+    pub fn encode_all(&self, normals: &[DVec3], codes: &mut [u64]) {
         normals.par_chunks(1 << 14).zip(codes.par_chunks_mut(1 << 14)).for_each(|(n, c)| {
             for (n, c) in n.iter().zip(c.iter_mut()) {
                 *c = self.encode(*n);
@@ -280,13 +298,13 @@ impl Codec {
         }
         normals.par_chunks(1 << 14).zip(codes.par_chunks_mut(1 << 14)).for_each(|(n, c)| {
             for (n, c) in n.iter().zip(c.iter_mut()) {
-                *c = self.encode([n[0] as f64, n[1] as f64, n[2] as f64]);
+                *c = self.encode(DVec3::from(n.map(f64::from)));
             }
         });
     }
 
     /// Decodes a batch in parallel.
-    pub fn decode_all(&self, codes: &[u64], normals: &mut [Dir]) {
+    pub fn decode_all(&self, codes: &[u64], normals: &mut [DVec3]) {
         codes.par_chunks(1 << 14).zip(normals.par_chunks_mut(1 << 14)).for_each(|(c, n)| {
             for (c, n) in c.iter().zip(n.iter_mut()) {
                 *n = self.decode(*c);
@@ -305,8 +323,7 @@ impl Codec {
         }
         codes.par_chunks(1 << 14).zip(normals.par_chunks_mut(1 << 14)).for_each(|(c, n)| {
             for (c, n) in c.iter().zip(n.iter_mut()) {
-                let d = self.decode(*c);
-                *n = [d[0] as f32, d[1] as f32, d[2] as f32];
+                *n = self.decode(*c).as_vec3().to_array();
             }
         });
     }
@@ -322,9 +339,20 @@ pub enum InvalidPolicy {
     Replace,
 }
 
+impl std::str::FromStr for InvalidPolicy {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "error" => Ok(InvalidPolicy::Error),
+            "replace" => Ok(InvalidPolicy::Replace),
+            _ => Err(format!("expected error or replace, got {s:?}")),
+        }
+    }
+}
+
 /// Checks and normalizes input normals (f32 as read) to unit f64 directions. Returns the
 /// directions and the indices that were replaced under [`InvalidPolicy::Replace`].
-pub fn prepare(raw: &[[f32; 3]], policy: InvalidPolicy) -> Result<(Vec<Dir>, Vec<usize>), NormalsError> {
+pub fn prepare(raw: &[[f32; 3]], policy: InvalidPolicy) -> Result<(Vec<DVec3>, Vec<usize>), NormalsError> {
     let mut out = Vec::with_capacity(raw.len());
     let mut replaced = Vec::new();
     for (index, &[x, y, z]) in raw.iter().enumerate() {
@@ -340,14 +368,13 @@ pub fn prepare(raw: &[[f32; 3]], policy: InvalidPolicy) -> Result<(Vec<Dir>, Vec
         match (what, policy) {
             (None, _) => {
                 // Scale first so that tiny or huge f32 vectors do not under/overflow in f64.
-                let d = [x as f64, y as f64, z as f64];
-                let m = d[0].abs().max(d[1].abs()).max(d[2].abs());
-                out.push(vec::normalize([d[0] / m, d[1] / m, d[2] / m]));
+                let d = DVec3::new(x.into(), y.into(), z.into());
+                out.push((d / d.abs().max_element()).normalize());
             }
             (Some(what), InvalidPolicy::Error) => return Err(NormalsError::Invalid { index, what, x, y, z }),
             (Some(_), InvalidPolicy::Replace) => {
                 replaced.push(index);
-                out.push([0.0, 0.0, 1.0]);
+                out.push(DVec3::Z);
             }
         }
     }

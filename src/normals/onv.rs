@@ -19,7 +19,7 @@
 //! fold edges apart; both unfold the same octahedron, ours keeps rounding across the fold local.
 
 use super::fixed::{field, floor_small, from_field, integer_to_field, round_ties_even, snorm_max, snorm_value};
-use super::vec::{normalize, sign_not_zero, Dir};
+use glam::DVec3;
 
 /// Field widths of an ONV code: `u` in the low `u_bits`, `v` in the next `v_bits`
 /// (`u_bits = ⌈b/2⌉`, `v_bits = ⌊b/2⌋`).
@@ -38,29 +38,39 @@ impl OnvLayout {
     }
 }
 
+/// `σ(t)` of Meyer et al. eq. 9: `+1` for `t >= 0` (including `-0.0`), `-1` otherwise.
+#[inline]
+pub fn sign_not_zero(t: f64) -> f64 {
+    if t >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
 /// The point `[u, v]` of the unfolded octahedron for a nonzero direction (need not be unit).
 #[inline]
-pub fn oct_from_dir(n: Dir) -> [f64; 2] {
-    let (u, v) = oct_lane(n[0], n[1], n[2]);
+pub fn oct_from_dir(n: DVec3) -> [f64; 2] {
+    let (u, v) = oct_lane(n.x, n.y, n.z);
     [u, v]
 }
 
 /// The point on the octahedron for `[u, v]` in `[-1,1]^2` (eq. 9 with the continuous fold).
 #[inline]
-pub fn octahedron_from_oct(p: [f64; 2]) -> Dir {
+pub fn octahedron_from_oct(p: [f64; 2]) -> DVec3 {
     let (u, v) = (p[0], p[1]);
     let z = 1.0 - u.abs() - v.abs();
     if z < 0.0 {
-        [(1.0 - v.abs()) * sign_not_zero(u), (1.0 - u.abs()) * sign_not_zero(v), z]
+        DVec3::new((1.0 - v.abs()) * sign_not_zero(u), (1.0 - u.abs()) * sign_not_zero(v), z)
     } else {
-        [u, v, z]
+        DVec3::new(u, v, z)
     }
 }
 
 /// The unit normal for `[u, v]` (eq. 9, then 2-norm normalization).
 #[inline]
-pub fn dir_from_oct(p: [f64; 2]) -> Dir {
-    normalize(octahedron_from_oct(p))
+pub fn dir_from_oct(p: [f64; 2]) -> DVec3 {
+    octahedron_from_oct(p).normalize()
 }
 
 /// The lattice integers `(s_u, s_v)` stored in a code.
@@ -166,9 +176,9 @@ fn range_lane(x: f64, y: f64, z: f64, k: Consts) -> (f64, f64) {
 
 /// ONV_domain: rounds `u` and `v` to the nearest lattice values.
 #[inline]
-pub fn encode_domain(n: Dir, layout: OnvLayout) -> u64 {
+pub fn encode_domain(n: DVec3, layout: OnvLayout) -> u64 {
     let k = Consts::new(layout);
-    let (su, sv) = domain_lane(n[0], n[1], n[2], k);
+    let (su, sv) = domain_lane(n.x, n.y, n.z, k);
     k.pack(su, sv)
 }
 
@@ -176,9 +186,9 @@ pub fn encode_domain(n: Dir, layout: OnvLayout) -> u64 {
 /// decoded normal is nearest on the sphere. `n` need not be unit length (the `sin²` comparison
 /// scales out).
 #[inline]
-pub fn encode_range(n: Dir, layout: OnvLayout) -> u64 {
+pub fn encode_range(n: DVec3, layout: OnvLayout) -> u64 {
     let k = Consts::new(layout);
-    let (su, sv) = range_lane(n[0], n[1], n[2], k);
+    let (su, sv) = range_lane(n.x, n.y, n.z, k);
     k.pack(su, sv)
 }
 
@@ -339,7 +349,7 @@ fn decode_block(c: &[u64; LANES], n: &mut [[f32; 3]; LANES], k: DecodeConsts) {
 
 /// Decodes any code to a unit normal.
 #[inline]
-pub fn decode(code: u64, layout: OnvLayout) -> Dir {
+pub fn decode(code: u64, layout: OnvLayout) -> DVec3 {
     let (su, sv) = unpack(code, layout);
     dir_from_oct([snorm_value(su, layout.u_bits), snorm_value(sv, layout.v_bits)])
 }
@@ -347,7 +357,13 @@ pub fn decode(code: u64, layout: OnvLayout) -> Dir {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::normals::fixed::to_field;
+    use crate::normals::fixed::{mask, snorm_floor, to_field};
+    use crate::normals::metrics::angle_between;
+    use crate::normals::rng::{next_u64, uniform_direction};
+
+    fn random_direction(state: &mut u64) -> DVec3 {
+        DVec3::from(uniform_direction(state))
+    }
 
     #[test]
     fn fold_is_continuous() {
@@ -356,8 +372,8 @@ mod tests {
             let u = -1.0 + i as f64 / 32.0;
             for sv in [-1.0, 1.0] {
                 let v = sv * (1.0 - u.abs());
-                let upper = [u, v, 0.0];
-                let lower = [(1.0 - v.abs()) * sign_not_zero(u), (1.0 - u.abs()) * sign_not_zero(v), 0.0];
+                let upper = DVec3::new(u, v, 0.0);
+                let lower = DVec3::new((1.0 - v.abs()) * sign_not_zero(u), (1.0 - u.abs()) * sign_not_zero(v), 0.0);
                 assert_eq!(upper, lower, "u {u} v {v}");
             }
         }
@@ -373,10 +389,10 @@ mod tests {
     fn inverse_on_the_octahedron() {
         let mut state = 7u64;
         for _ in 0..10_000 {
-            let n = crate::normals::rng::uniform_direction(&mut state);
+            let n = random_direction(&mut state);
             let p = oct_from_dir(n);
             let m = dir_from_oct(p);
-            assert!(crate::normals::vec::distance_squared(n, m) < 1e-28, "{n:?}");
+            assert!(n.distance_squared(m) < 1e-28, "{n:?}");
         }
     }
 
@@ -386,10 +402,10 @@ mod tests {
         for bits in 8..=32 {
             let layout = OnvLayout::new(bits);
             for _ in 0..20_000 {
-                let code = crate::normals::rng::next_u64(&mut state) & crate::normals::fixed::mask(bits);
+                let code = next_u64(&mut state) & mask(bits);
                 let a = decode(code, layout);
-                let b = decode_f32(code, layout).map(f64::from);
-                assert!(crate::normals::vec::angle_between(a, b) < 3e-7, "{bits} {code:#x}");
+                let b = DVec3::from(decode_f32(code, layout).map(f64::from));
+                assert!(angle_between(a, b) < 3e-7, "{bits} {code:#x}");
             }
         }
     }
@@ -401,20 +417,17 @@ mod tests {
         for bits in [8, 16, 24, 32, 48, 64] {
             let layout = OnvLayout::new(bits);
             for _ in 0..20_000 {
-                let n = crate::normals::rng::uniform_direction(&mut state);
+                let n = random_direction(&mut state);
                 let p = oct_from_dir(n);
-                let (u0, v0) = (
-                    crate::normals::fixed::snorm_floor(p[0], layout.u_bits),
-                    crate::normals::fixed::snorm_floor(p[1], layout.v_bits),
-                );
+                let (u0, v0) = (snorm_floor(p[0], layout.u_bits), snorm_floor(p[1], layout.v_bits));
                 let best = [(u0, v0), (u0 + 1, v0), (u0, v0 + 1), (u0 + 1, v0 + 1)]
                     .into_iter()
                     .map(|(su, sv)| {
                         let q = dir_from_oct([snorm_value(su, layout.u_bits), snorm_value(sv, layout.v_bits)]);
-                        crate::normals::vec::distance_squared(n, q)
+                        n.distance_squared(q)
                     })
                     .fold(f64::INFINITY, f64::min);
-                let got = crate::normals::vec::distance_squared(n, decode(encode_range(n, layout), layout));
+                let got = n.distance_squared(decode(encode_range(n, layout), layout));
                 assert!(got <= best * (1.0 + 1e-6) + 1e-30, "{bits}: {got:e} vs {best:e}");
             }
         }
@@ -426,7 +439,7 @@ mod tests {
             let layout = OnvLayout::new(bits);
             for axis in 0..3 {
                 for sign in [1.0, -1.0] {
-                    let mut n = [0.0; 3];
+                    let mut n = DVec3::ZERO;
                     n[axis] = sign;
                     assert_eq!(decode(encode_domain(n, layout), layout), n, "bits {bits} axis {n:?}");
                     assert_eq!(decode(encode_range(n, layout), layout), n, "bits {bits} axis {n:?}");
@@ -437,7 +450,7 @@ mod tests {
             for (a, b) in [(q, q), (-q, q), (q, -q), (-q, -q)] {
                 let c = to_field(a, layout.u_bits)
                     | (to_field(b * snorm_max(layout.v_bits) / q, layout.v_bits) << layout.u_bits);
-                assert_eq!(decode(c, layout), [0.0, 0.0, -1.0]);
+                assert_eq!(decode(c, layout), DVec3::NEG_Z);
             }
         }
     }

@@ -11,7 +11,7 @@
 use super::bounds::objective;
 use super::fixed::{symmetric_round, symmetric_value};
 use super::radix::{best_split, GridLayout, RadixRule};
-use super::vec::{normalize, Dir};
+use glam::DVec3;
 
 /// The split of a `bits`-bit budget: `N_a = N_x`, `N_b = N_y`.
 pub fn layout(bits: u32) -> GridLayout {
@@ -22,20 +22,20 @@ pub fn layout(bits: u32) -> GridLayout {
 
 /// Rounds `x` and `y` of the unit direction in the domain.
 #[inline]
-pub fn encode(n: Dir, l: GridLayout) -> u64 {
-    let negative = u64::from(n[2] < 0.0);
-    l.pack(negative, symmetric_round(n[0], l.a), symmetric_round(n[1], l.b))
+pub fn encode(n: DVec3, l: GridLayout) -> u64 {
+    let negative = u64::from(n.z < 0.0);
+    l.pack(negative, symmetric_round(n.x, l.a), symmetric_round(n.y, l.b))
 }
 
 /// Decodes any code to a unit direction.
 #[inline]
-pub fn decode(code: u64, l: GridLayout) -> Dir {
+pub fn decode(code: u64, l: GridLayout) -> DVec3 {
     let (negative, dx, dy) = l.unpack(code);
     let (x, y) = (symmetric_value(dx, l.a), symmetric_value(dy, l.b));
     if x == 0.0 && y == 0.0 {
         // Exactly a pole (z = ±1 exactly, no rounding through sqrt).
-        return [0.0, 0.0, if negative == 1 { -1.0 } else { 1.0 }];
+        return DVec3::new(0.0, 0.0, if negative == 1 { -1.0 } else { 1.0 });
     }
     let z = (1.0 - x * x - y * y).max(0.0).sqrt();
-    normalize([x, y, if negative == 1 { -z } else { z }])
+    DVec3::new(x, y, if negative == 1 { -z } else { z }).normalize()
 }

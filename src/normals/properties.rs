@@ -1,8 +1,9 @@
 //! Property tests over every scheme and every budget 8..=64 (Meyer et al. 2010, §§4–5).
 
+use super::metrics::angle_between;
 use super::rng::{next_u64, uniform_direction};
-use super::vec::{angle_between, length, Dir};
 use super::{adversarial, Codec, Scheme, MAX_BITS, MIN_BITS};
+use glam::DVec3;
 
 /// The closed-form bound plus slack: `bound·(1 + slack) + 1e-15` rad. The absolute term covers
 /// f64 rounding of the round trip (~1e-16 rad); the relative term covers the higher-order terms
@@ -14,6 +15,10 @@ use super::{adversarial, Codec, Scheme, MAX_BITS, MIN_BITS};
 ///   5 × 7 points per face of 8 bits are too coarse for: +6.6 % there (`0.53·ε²`), never
 ///   exceeded from 9 bits on; we allow `ε²`;
 /// - ONV_range (eq. 11's leading term), SC, PP, CM: never exceeded; a tiny `1e-12` only.
+fn random_direction(state: &mut u64) -> DVec3 {
+    DVec3::from(uniform_direction(state))
+}
+
 fn allowed(codec: &Codec) -> f64 {
     codec.bound() * (1.0 + slack(codec)) + 1e-15
 }
@@ -26,8 +31,8 @@ fn slack(codec: &Codec) -> f64 {
     }
 }
 
-fn worst(codec: &Codec, dirs: &[Dir]) -> (f64, Dir) {
-    let mut w = (0.0, [0.0; 3]);
+fn worst(codec: &Codec, dirs: &[DVec3]) -> (f64, DVec3) {
+    let mut w = (0.0, DVec3::ZERO);
     for &d in dirs {
         let e = angle_between(d, codec.decode(codec.encode(d)));
         if e > w.0 {
@@ -40,7 +45,7 @@ fn worst(codec: &Codec, dirs: &[Dir]) -> (f64, Dir) {
 #[test]
 fn round_trip_error_within_closed_form_bound_all_schemes_all_budgets() {
     let mut state = 42u64;
-    let random: Vec<Dir> = (0..3000).map(|_| uniform_direction(&mut state)).collect();
+    let random: Vec<DVec3> = (0..3000).map(|_| random_direction(&mut state)).collect();
     let mut report = String::new();
     for scheme in Scheme::ALL {
         let mut worst_ratio: (f64, u32) = (0.0, 0);
@@ -82,7 +87,7 @@ fn range_rounding_never_worse_than_domain_rounding() {
     for bits in MIN_BITS..=MAX_BITS {
         let range = Codec::new(Scheme::OnvRange, bits).unwrap();
         let domain = Codec::new(Scheme::OnvDomain, bits).unwrap();
-        let mut dirs: Vec<Dir> = (0..2000).map(|_| uniform_direction(&mut state)).collect();
+        let mut dirs: Vec<DVec3> = (0..2000).map(|_| random_direction(&mut state)).collect();
         dirs.extend(adversarial::directions(&domain));
         for d in dirs {
             let er = angle_between(d, range.decode(range.encode(d)));
@@ -120,8 +125,8 @@ fn every_code_decodes_to_a_unit_vector() {
             codes.extend([place as u64, (place as u64).wrapping_add(1), u64::MAX >> (64 - bits)]);
             for c in codes {
                 let n = codec.decode(c);
-                assert!(n.iter().all(|x| x.is_finite()), "{scheme} {bits}: code {c:#x} -> {n:?}");
-                assert!((length(n) - 1.0).abs() <= 4e-16, "{scheme} {bits}: code {c:#x} -> |n| = {}", length(n));
+                assert!(n.is_finite(), "{scheme} {bits}: code {c:#x} -> {n:?}");
+                assert!((n.length() - 1.0).abs() <= 4e-16, "{scheme} {bits}: code {c:#x} -> |n| = {}", n.length());
             }
         }
     }
@@ -134,7 +139,7 @@ fn axes_decode_exactly_and_signed_zeros_do_not_matter() {
             let codec = Codec::new(scheme, bits).unwrap();
             for axis in 0..3 {
                 for sign in [1.0, -1.0] {
-                    let mut n = [0.0; 3];
+                    let mut n = DVec3::ZERO;
                     n[axis] = sign;
                     let code = codec.encode(n);
                     assert_eq!(codec.decode(code), n, "{scheme} {bits}: axis {n:?}");
@@ -163,11 +168,11 @@ fn diagonals_are_mirror_symmetric() {
             let codec = Codec::new(scheme, bits).unwrap();
             let errors: Vec<f64> = (0..8)
                 .map(|k| {
-                    let d = [
+                    let d = DVec3::new(
                         if k & 1 == 0 { s } else { -s },
                         if k & 2 == 0 { s } else { -s },
                         if k & 4 == 0 { s } else { -s },
-                    ];
+                    );
                     angle_between(d, codec.decode(codec.encode(d)))
                 })
                 .collect();
@@ -190,10 +195,10 @@ fn octahedron_fold_is_handled() {
             for _ in 0..2000 {
                 let phi = std::f64::consts::TAU * super::rng::next_f64(&mut state);
                 let (y, x) = phi.sin_cos();
-                assert_eq!(codec.encode([x, y, 0.0]), codec.encode([x, y, -0.0]));
+                assert_eq!(codec.encode(DVec3::new(x, y, 0.0)), codec.encode(DVec3::new(x, y, -0.0)));
                 let tiny = 1e-12;
-                let up = super::vec::normalize([x, y, tiny]);
-                let down = super::vec::normalize([x, y, -tiny]);
+                let up = DVec3::new(x, y, tiny).normalize();
+                let down = DVec3::new(x, y, -tiny).normalize();
                 let (eu, ed) = (
                     angle_between(up, codec.decode(codec.encode(up))),
                     angle_between(down, codec.decode(codec.encode(down))),
@@ -207,7 +212,7 @@ fn octahedron_fold_is_handled() {
 #[test]
 fn f32_block_encoder_gives_the_scalar_codes() {
     let mut state = 8u64;
-    let mut normals: Vec<[f32; 3]> = (0..20_000).map(|_| uniform_direction(&mut state).map(|c| c as f32)).collect();
+    let mut normals: Vec<[f32; 3]> = (0..20_000).map(|_| random_direction(&mut state).as_vec3().to_array()).collect();
     normals.extend([[0.0, 0.0, -1.0], [-0.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.5, -0.5, 0.0], [-0.0, -0.0, -1.0]]);
     for scheme in [Scheme::OnvDomain, Scheme::OnvRange] {
         for bits in [8, 15, 16, 32, 47, 64] {
@@ -215,7 +220,7 @@ fn f32_block_encoder_gives_the_scalar_codes() {
             let mut codes = vec![0; normals.len()];
             codec.encode_all_f32(&normals, &mut codes);
             for (n, c) in normals.iter().zip(&codes) {
-                assert_eq!(codec.encode(n.map(f64::from)), *c, "{scheme} {bits} {n:?}");
+                assert_eq!(codec.encode(DVec3::from(n.map(f64::from))), *c, "{scheme} {bits} {n:?}");
             }
         }
     }
@@ -240,7 +245,7 @@ fn f32_block_decoder_gives_the_scalar_normals() {
 #[test]
 fn batch_encode_is_independent_of_chunking() {
     let mut state = 1u64;
-    let dirs: Vec<Dir> = (0..50_000).map(|_| uniform_direction(&mut state)).collect();
+    let dirs: Vec<DVec3> = (0..50_000).map(|_| random_direction(&mut state)).collect();
     let codec = Codec::new(Scheme::OnvRange, 32).unwrap();
     let mut codes = vec![0; dirs.len()];
     codec.encode_all(&dirs, &mut codes);
@@ -262,17 +267,16 @@ fn choosing_range_candidates_by_f32_dot_product_breaks_where_ours_does_not() {
         let codec = Codec::new(Scheme::OnvRange, bits).unwrap();
         let mut dirs = adversarial::directions(&codec);
         let mut state = 21u64;
-        dirs.extend((0..20_000).map(|_| uniform_direction(&mut state)));
+        dirs.extend((0..20_000).map(|_| random_direction(&mut state)));
         let (mut naive, mut ours) = (0f64, 0f64);
         for n in dirs {
             let p = oct_from_dir(n);
             let (u0, v0) = (snorm_floor(p[0], layout.u_bits), snorm_floor(p[1], layout.v_bits));
-            let nf = n.map(|c| c as f32);
-            let mut best = (f32::NEG_INFINITY, [0.0; 3]);
+            let nf = n.as_vec3();
+            let mut best = (f32::NEG_INFINITY, DVec3::ZERO);
             for (su, sv) in [(u0, v0), (u0 + 1, v0), (u0, v0 + 1), (u0 + 1, v0 + 1)] {
                 let q = dir_from_oct([snorm_value(su, layout.u_bits), snorm_value(sv, layout.v_bits)]);
-                let qf = q.map(|c| c as f32);
-                let d = nf[0] * qf[0] + nf[1] * qf[1] + nf[2] * qf[2];
+                let d = nf.dot(q.as_vec3());
                 if d > best.0 {
                     best = (d, q);
                 }

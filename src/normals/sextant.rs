@@ -8,12 +8,12 @@
 //! largest magnitudes go to the lower axis (x before y before z).
 
 use super::radix::{best_split, GridLayout, RadixRule};
-use super::vec::Dir;
+use glam::DVec3;
 
 /// The dominant axis of `n` and whether that component is negative.
 #[inline]
-pub fn face_of(n: Dir) -> (usize, bool) {
-    let (ax, ay, az) = (n[0].abs(), n[1].abs(), n[2].abs());
+pub fn face_of(n: DVec3) -> (usize, bool) {
+    let (ax, ay, az) = (n.x.abs(), n.y.abs(), n.z.abs());
     let axis = if ax >= ay && ax >= az {
         0
     } else if ay >= az {

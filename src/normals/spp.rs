@@ -9,7 +9,7 @@ use super::bounds::objective;
 use super::fixed::{symmetric_round, symmetric_value};
 use super::radix::GridLayout;
 use super::sextant::{face_from_index, face_index, face_of, minor_axes};
-use super::vec::{normalize, Dir};
+use glam::DVec3;
 use std::f64::consts::{FRAC_1_SQRT_2, SQRT_2};
 
 /// The split of a `bits`-bit budget.
@@ -19,7 +19,7 @@ pub fn layout(bits: u32) -> GridLayout {
 
 /// Rounds the two minor components of the unit direction in the domain.
 #[inline]
-pub fn encode(n: Dir, l: GridLayout) -> u64 {
+pub fn encode(n: DVec3, l: GridLayout) -> u64 {
     let (axis, negative) = face_of(n);
     let (i, j) = minor_axes(axis);
     let a = symmetric_round((n[i] * SQRT_2).clamp(-1.0, 1.0), l.a);
@@ -29,13 +29,13 @@ pub fn encode(n: Dir, l: GridLayout) -> u64 {
 
 /// Decodes any code to a unit direction.
 #[inline]
-pub fn decode(code: u64, l: GridLayout) -> Dir {
+pub fn decode(code: u64, l: GridLayout) -> DVec3 {
     let (face, da, db) = l.unpack(code);
     let (axis, negative) = face_from_index(face);
     let (i, j) = minor_axes(axis);
     let a = FRAC_1_SQRT_2 * symmetric_value(da, l.a);
     let b = FRAC_1_SQRT_2 * symmetric_value(db, l.b);
-    let mut n = [0.0; 3];
+    let mut n = DVec3::ZERO;
     if a == 0.0 && b == 0.0 {
         n[axis] = if negative { -1.0 } else { 1.0 };
         return n;
@@ -44,5 +44,5 @@ pub fn decode(code: u64, l: GridLayout) -> Dir {
     n[axis] = if negative { -m } else { m };
     n[i] = a;
     n[j] = b;
-    normalize(n)
+    n.normalize()
 }
