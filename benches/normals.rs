@@ -1,6 +1,8 @@
 //! Encode/decode throughput of octahedron normal vectors (Meyer et al. 2010) at 32 bits on 10^7
 //! normals, all cores, plus a cross-check against meshoptimizer's octahedral filter (the
-//! `meshopt` crate) in the same run: error and speed.
+//! `meshopt` crate, its C++ compiled by `cc` with default flags) on the same normals and the same
+//! threads in the same run: error and speed. prtkit's kernels dispatch to AVX2 where the CPU has
+//! it (`normals::onv::kernel_isa`, printed).
 //!
 //! Run: `cargo bench --bench normals` (env `NORMALS_BENCH_COUNT` changes the count).
 
@@ -59,7 +61,8 @@ fn main() {
     let threads = rayon::current_num_threads();
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!(
-        "normals bench: {n} random unit normals, {threads} threads, best of 5; load average at start: {}",
+        "normals bench: {n} random unit normals, {threads} threads, best of 5, prtkit kernels: {}; load average at start: {}",
+        prtkit::normals::onv::kernel_isa(),
         load.trim()
     );
     let normals: Vec<[f32; 3]> = (0..n.div_ceil(1 << 16))

@@ -6,7 +6,7 @@ use prtkit::normals::report::{self, EncodeReport};
 use prtkit::normals::table::Row;
 use prtkit::normals::{encode, pack::Stream, sources, Codec, InvalidPolicy, Scheme};
 use prtkit::progress::NoProgress;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 fn cmd() -> Command {
     Command::cargo_bin("encode-normals").unwrap()
@@ -37,25 +37,31 @@ fn angle(a: [f32; 3], b: [f32; 3]) -> f64 {
     (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt().atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
 }
 
+/// Paths of one encode run's files.
+struct Run {
+    input: PathBuf,
+    codes: PathBuf,
+    report: PathBuf,
+    decoded: PathBuf,
+}
+
+/// Writes `normals` as raw f32 into `dir` and encodes them with `args`, writing codes, report and
+/// decoded normals.
+fn encode_to_files(dir: &Path, normals: &[[f32; 3]], args: &[&str]) -> Run {
+    let [input, codes, report, decoded] = ["n.f32", "codes.bin", "report.json", "decoded.f32"].map(|f| dir.join(f));
+    write_raw(&input, normals);
+    let mut c = cmd();
+    c.arg(&input).args(args).arg("-o").arg(&codes).arg("--report").arg(&report).arg("--decoded").arg(&decoded);
+    c.assert().success();
+    Run { input, codes, report, decoded }
+}
+
 #[test]
 fn encode_raw_writes_codes_report_and_decoded_normals() {
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("n.f32");
     let normals = spiral(2000);
-    write_raw(&input, &normals);
-    let codes = dir.path().join("codes.bin");
-    let report = dir.path().join("report.json");
-    let decoded = dir.path().join("decoded.f32");
-    cmd()
-        .arg(&input)
-        .args(["--scheme", "onv-range", "--bits", "24", "-o"])
-        .arg(&codes)
-        .arg("--report")
-        .arg(&report)
-        .arg("--decoded")
-        .arg(&decoded)
-        .assert()
-        .success();
+    let Run { codes, report, decoded, .. } =
+        encode_to_files(dir.path(), &normals, &["--scheme", "onv-range", "--bits", "24"]);
     // 24 bits -> one u32 word per normal.
     assert_eq!(std::fs::read(&codes).unwrap().len(), normals.len() * 4);
     let doc = report::parse(&std::fs::read_to_string(&report).unwrap()).unwrap();
@@ -117,19 +123,24 @@ fn packed_codes_decode_to_the_same_normals() {
     assert_eq!(text.lines().filter(|l| l.starts_with("vn ")).count(), 783);
 }
 
-#[test]
-fn json_report_on_stdout_deserializes() {
+/// The `--json` report of encoding `spiral(n)` with `args`.
+fn json_report(n: usize, args: &[&str]) -> EncodeReport {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("n.raw");
-    write_raw(&input, &spiral(300));
-    let out = cmd().arg(&input).args(["--scheme", "sc", "--bits", "16", "--json"]).output().unwrap();
-    assert!(out.status.success());
-    let doc = report::parse(std::str::from_utf8(&out.stdout).unwrap()).unwrap();
-    assert_eq!(doc.body.scheme, Scheme::Sc);
+    write_raw(&input, &spiral(n));
+    let out = cmd().arg(&input).args(args).arg("--json").output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    report::parse(std::str::from_utf8(&out.stdout).unwrap()).unwrap().body
+}
+
+#[test]
+fn json_report_on_stdout_deserializes() {
+    let r = json_report(300, &["--scheme", "sc", "--bits", "16"]);
+    assert_eq!(r.scheme, Scheme::Sc);
     // The mixed-radix digits use the whole budget: at most 2^16 codes, and more than half of them.
-    let used: u64 = doc.body.layout.digits.iter().map(|d| d.radix).product();
+    let used: u64 = r.layout.digits.iter().map(|d| d.radix).product();
     assert!(used <= 1 << 16 && used > 1 << 15, "{used}");
-    assert!(doc.body.error.max <= doc.body.bound * (1.0 + 1e-9));
+    assert!(r.error.max <= r.bound * (1.0 + 1e-9));
 }
 
 #[test]
@@ -279,20 +290,9 @@ fn emit_decoder_prints_a_function_for_each_language() {
 #[test]
 fn library_entry_point_and_binary_give_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("n.raw");
     let normals = spiral(1000);
-    write_raw(&input, &normals);
-    let (codes, report, decoded) = (dir.path().join("c.bits"), dir.path().join("r.json"), dir.path().join("d.raw"));
-    cmd()
-        .arg(&input)
-        .args(["--scheme", "spp", "--bits", "40", "--packed", "--bins", "8", "-o"])
-        .arg(&codes)
-        .arg("--report")
-        .arg(&report)
-        .arg("--decoded")
-        .arg(&decoded)
-        .assert()
-        .success();
+    let Run { input, codes, report, decoded } =
+        encode_to_files(dir.path(), &normals, &["--scheme", "spp", "--bits", "40", "--packed", "--bins", "8"]);
     let config = encode::Config {
         scheme: Scheme::Spp,
         bits: 40,
@@ -313,14 +313,9 @@ fn library_entry_point_and_binary_give_the_same_bytes() {
 fn mixed_radix_codes_use_the_whole_budget_and_stay_below_it() {
     // 48-bit CM codes: 6 faces x N_a x N_b <= 2^48 and more than 2^48 / 1.0001 of them used, where
     // three whole face bits would leave a quarter of the code space unused.
-    let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("n.raw");
-    write_raw(&input, &spiral(50));
-    let out = cmd().arg(&input).args(["--scheme", "cm", "--bits", "48", "--json"]).output().unwrap();
-    assert!(out.status.success());
-    let doc = report::parse(std::str::from_utf8(&out.stdout).unwrap()).unwrap();
-    let used: u128 = doc.body.layout.digits.iter().map(|d| d.radix as u128).product();
+    let r = json_report(50, &["--scheme", "cm", "--bits", "48"]);
+    let used: u128 = r.layout.digits.iter().map(|d| d.radix as u128).product();
     assert!(used <= 1 << 48 && used as f64 > (1u64 << 48) as f64 / 1.0001, "{used}");
-    assert_eq!(doc.body.layout.digits.last().map(|d| d.radix), Some(6));
-    assert!(doc.body.bound <= 2.38e-7, "Meyer et al.'s Table 1: {}", doc.body.bound);
+    assert_eq!(r.layout.digits.last().map(|d| d.radix), Some(6));
+    assert!(r.bound <= 2.38e-7, "Meyer et al.'s Table 1: {}", r.bound);
 }

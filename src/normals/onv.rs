@@ -206,6 +206,15 @@ pub fn encode_range(n: DVec3, layout: OnvLayout) -> u64 {
 /// 15.2 to 8.2 ns per normal, domain encoding from 2.9 to 1.9 and decoding from 2.6 to 1.5.
 const LANES: usize = 16;
 
+/// The instruction set the batch kernels run with on this CPU: `avx2` (the dispatched path) or
+/// `baseline` (SSE2 on x86-64).
+pub fn kernel_isa() -> &'static str {
+    match pulp::Arch::new() {
+        pulp::Arch::Scalar => "baseline",
+        _ => "avx2",
+    }
+}
+
 /// Batch encoder for f32 normals (nonzero, finite; need not be unit): the same lane functions
 /// as [`encode_domain`] / [`encode_range`] in f64, so the codes are identical.
 pub fn encode_batch_f32(normals: &[[f32; 3]], codes: &mut [u64], layout: OnvLayout, range: bool) {
