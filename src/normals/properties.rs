@@ -290,3 +290,25 @@ fn choosing_range_candidates_by_f32_dot_product_breaks_where_ours_does_not() {
         assert!(naive > 1.05 * bound, "{bits}: f32 dot products stayed within the bound ({naive:e} vs {bound:e})");
     }
 }
+
+#[test]
+fn splits_are_the_documented_code_format() {
+    // The radices are part of the file format (docs/formats/normal-codes.md lists these): a
+    // change to the split search must show up here, not silently in users' files.
+    let radices = |scheme, bits| -> Vec<u64> {
+        Codec::new(scheme, bits).unwrap().digits().iter().rev().map(|d| d.radix).collect()
+    };
+    for (scheme, expected) in [
+        (Scheme::Sc, [[360, 181], [92680, 46341], [23721256, 11865939]]),
+        (Scheme::Pp, [[181, 181], [46271, 46411], [11863283, 11863283]]),
+        (Scheme::Spp, [[103, 105], [26707, 26803], [6847421, 6851119]]),
+        (Scheme::Cm, [[103, 105], [26707, 26803], [6847421, 6851119]]),
+    ] {
+        for (bits, want) in [16, 32, 48].into_iter().zip(expected) {
+            let got = radices(scheme, bits);
+            // Most significant first: faces (PP: 2, SPP/CM: 6; SC has none), then a, then b.
+            assert_eq!(&got[got.len() - 2..], &want, "{scheme} {bits}");
+        }
+    }
+    assert_eq!(radices(Scheme::OnvRange, 48), vec![1 << 24, 1 << 24]);
+}
