@@ -102,7 +102,7 @@ pub fn fpnv_equivalent_bits(mantissa_bits: u32) -> u32 {
 ///   nearest-of-four-corners error peaks at their circumradius `ℓ3/√3`,
 ///   `ℓ3² = ℓu² + ℓv² - ℓu·ℓv` (or at half the longer side if the triangle is obtuse):
 ///   `√2·ε` for equal steps;
-/// - SC (eq. 5): [`sc`] with the steps `π/(N_θ-1)` and `2π/N_φ`;
+/// - SC (eq. 5): [`sc()`] with the steps `π/(N_θ-1)` and `2π/N_φ`;
 /// - PP (eq. 6): [`pp_split`];
 /// - SPP (eq. 7): [`spp_split`];
 /// - CM (eq. 8): [`cm_split`].

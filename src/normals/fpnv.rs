@@ -2,7 +2,7 @@
 //! rounded to nearest. Their worst angular error is eq. 3, reached by *direction* vectors whose
 //! cell sits at the lower-left corner of a diagonal block (`c = (1/2+ε/2)(1,1,1)`, `ε = 2^(-m-1)`).
 //! Unit-length vectors cannot sit there (a unit vector has no three components near 1/2), so
-//! they stay below eq. 3: [`measure`] reports both.
+//! they stay below eq. 3: `--table` reports both (`table.rs`).
 
 use super::metrics::angle_between;
 use glam::DVec3;

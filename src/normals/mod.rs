@@ -16,6 +16,10 @@
 //! that use the whole budget (6 faces cost log2 6 bits, not 3). Every code of `bits` bits (higher
 //! bits ignored) decodes to a unit vector. Layouts are in each module and in
 //! `docs/formats/normal-codes.md`.
+//!
+//! The `encode-normals` stage is one library call per mode: [`encode::run`] (normals → codes,
+//! decoded normals and the [`report`] document), [`decode::run`] and [`table::run`] (Meyer et
+//! al.'s Table 1); `shader::decoder` prints the matching GLSL/HLSL/WGSL.
 
 pub mod adversarial;
 pub mod bounds;

@@ -306,7 +306,7 @@ fn decode_lane_f32(code: u32, k: DecodeConsts) -> [f32; 3] {
     [x * inv, y * inv, z * inv]
 }
 
-/// [`decode_lane_f32`] for one code (`layout` of at most 32 bits).
+/// The batch path's f32 decoder for one code (`layout` of at most 32 bits).
 #[inline]
 pub fn decode_f32(code: u64, layout: OnvLayout) -> [f32; 3] {
     decode_lane_f32(code as u32, DecodeConsts::new(layout))
