@@ -39,6 +39,15 @@ pub fn round_ties_even(x: f64) -> f64 {
     (x + ROUNDING_MAGIC) - ROUNDING_MAGIC
 }
 
+/// The `bits`-wide two's-complement field (`bits <= 32`) of an integer-valued `s` with
+/// `|s| < 2^31`, read from the mantissa of `s + 1.5·2^52`, whose low 32 bits are `s` in two's
+/// complement: no float-to-integer conversion, which baseline x86-64 has no SIMD form of for
+/// 64-bit integers, so batch loops stay vectorized.
+#[inline(always)]
+pub fn integer_to_field(s: f64, bits: u32) -> u64 {
+    (s + ROUNDING_MAGIC).to_bits() & mask(bits)
+}
+
 /// `floor(x)` for `|x| < 2^51` without a libm call (see [`round_ties_even`]).
 #[inline]
 pub fn floor_small(x: f64) -> f64 {
@@ -63,6 +72,23 @@ pub fn snorm_floor(t: f64, bits: u32) -> i64 {
 #[inline]
 pub fn snorm_value(s: i64, bits: u32) -> f64 {
     (s as f64 / snorm_max(bits) as f64).max(-1.0)
+}
+
+/// The digit `d < N` of the symmetric lattice point nearest to `t` in `[-1, 1]` (odd `N = 2h+1`,
+/// value `(d - h)/h`; `radix.rs`): ties to even like [`snorm_round`], so `t ↦ -t` mirrors the
+/// digit about `h`.
+#[inline]
+pub fn symmetric_round(t: f64, radix: u64) -> u64 {
+    let h = ((radix - 1) / 2) as f64;
+    (round_ties_even(t * h).clamp(-h, h) + h) as u64
+}
+
+/// The value `(d - h)/h` of digit `d` of an odd symmetric lattice of `N = 2h+1` points. Division
+/// (not a reciprocal multiply) keeps `±1` and `0` exact.
+#[inline]
+pub fn symmetric_value(d: u64, radix: u64) -> f64 {
+    let h = (radix - 1) / 2;
+    (d as i64 - h as i64) as f64 / h as f64
 }
 
 /// Stores a signed integer in a `bits`-wide two's-complement field.

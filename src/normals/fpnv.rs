@@ -2,9 +2,10 @@
 //! rounded to nearest. Their worst angular error is eq. 3, reached by *direction* vectors whose
 //! cell sits at the lower-left corner of a diagonal block (`c = (1/2+ε/2)(1,1,1)`, `ε = 2^(-m-1)`).
 //! Unit-length vectors cannot sit there (a unit vector has no three components near 1/2), so
-//! they stay below eq. 3: [`measure`] reports both.
+//! they stay below eq. 3: `--table` reports both (`table.rs`).
 
-use super::vec::{angle_between, Dir};
+use super::metrics::angle_between;
+use glam::DVec3;
 
 /// A float format by mantissa width. The exponent range is taken as unbounded (the paper's
 /// model); for binary16 and wider formats subnormal steps are far below the mantissa step at 1/2,
@@ -60,14 +61,14 @@ pub fn round_to_mantissa(x: f64, m: u32) -> f64 {
 
 /// Rounds each component of a direction.
 #[inline]
-pub fn round_dir(n: Dir, m: u32) -> Dir {
-    [round_to_mantissa(n[0], m), round_to_mantissa(n[1], m), round_to_mantissa(n[2], m)]
+pub fn round_dir(n: DVec3, m: u32) -> DVec3 {
+    DVec3::new(round_to_mantissa(n.x, m), round_to_mantissa(n.y, m), round_to_mantissa(n.z, m))
 }
 
 /// The angular error of storing direction `n` with `m`-bit mantissas (for `m = 23` the cast to
 /// `f32` itself is used).
 #[inline]
-pub fn error(n: Dir, m: u32) -> f64 {
+pub fn error(n: DVec3, m: u32) -> f64 {
     let q = if m == 23 { n.map(|c| c as f32 as f64) } else { round_dir(n, m) };
     angle_between(n, q)
 }
@@ -76,20 +77,19 @@ pub fn error(n: Dir, m: u32) -> f64 {
 /// `c = (1/2+ε/2)(1,1,1)` of the lower-left cell of the diagonal block, nudged towards each of
 /// the vertices `(1/2+ε, 1/2, 1/2)` (and permutations) so rounding picks that vertex; also the
 /// same cells scaled by powers of two and mirrored (the error is invariant under both).
-pub fn adversarial_directions(m: u32) -> Vec<Dir> {
+pub fn adversarial_directions(m: u32) -> Vec<DVec3> {
     let eps = (-(m as f64) - 1.0).exp2();
     let mut out = Vec::new();
     for scale in [1.0, 0.25, 8.0] {
         for axis in 0..3 {
             for sign in [1.0, -1.0] {
-                let c = 0.5 + 0.5 * eps;
-                let mut v = [0.5, 0.5, 0.5];
+                let c = DVec3::splat(0.5 + 0.5 * eps);
+                let mut v = DVec3::splat(0.5);
                 v[axis] = 0.5 + eps;
                 // 1e-6 of a cell towards v (representable in f64 for m <= 30): rounding goes to
                 // v and the error is eq. 3's to within ~1e-6 relative.
                 let t = if m <= 30 { 1e-6 } else { 1e-3 };
-                let p = [c + t * (v[0] - c), c + t * (v[1] - c), c + t * (v[2] - c)];
-                out.push(p.map(|x| sign * scale * x));
+                out.push(sign * scale * (c + t * (v - c)));
             }
         }
     }

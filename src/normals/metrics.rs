@@ -1,9 +1,17 @@
-//! Error metrics: angular error `atan2(|a×b|, a·b)` (see [`super::vec::angle_between`]) and
-//! its statistics, reduced in a fixed order so results do not depend on the thread count.
+//! Error metrics: the angular error [`angle_between`] and its statistics, reduced in a fixed
+//! order so results do not depend on the thread count.
 
-use super::vec::{angle_between, Dir};
+use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+
+/// The angle between two directions of any length, `atan2(|a×b|, a·b)`: accurate for tiny
+/// angles where `acos(a·b)` (and glam's `angle_between`, which uses it) loses everything (at
+/// 1e-7 rad, `acos` of a rounded cosine is off by 100 % in f32 and ~1e-9 rad in f64).
+#[inline]
+pub fn angle_between(a: DVec3, b: DVec3) -> f64 {
+    a.cross(b).length().atan2(a.dot(b))
+}
 
 /// Max, mean and RMS of a set of angular errors (radians).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -69,7 +77,7 @@ impl ErrorStats {
 }
 
 /// Angular errors between originals and decoded normals, element by element.
-pub fn errors(original: &[Dir], decoded: &[Dir]) -> Vec<f64> {
+pub fn errors(original: &[DVec3], decoded: &[DVec3]) -> Vec<f64> {
     original.par_iter().zip(decoded.par_iter()).map(|(a, b)| angle_between(*a, *b)).collect()
 }
 
@@ -117,6 +125,19 @@ pub fn histogram(errors: &[f64], upper: f64, bins: usize) -> Histogram {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn atan2_angle_is_accurate_where_acos_fails() {
+        let a = DVec3::X;
+        for k in [1e-3f64, 1e-7, 1e-9, 1e-12] {
+            let b = DVec3::new(k.cos(), k.sin(), 0.0);
+            assert!((angle_between(a, b) - k).abs() <= 1e-15 * k + 1e-30, "{k}");
+        }
+        // acos of the f64 dot product at 1e-9 rad is visibly wrong: the reason for atan2.
+        let b = DVec3::new(1e-9f64.cos(), 1e-9f64.sin(), 0.0);
+        assert!((a.dot(b).acos() - 1e-9).abs() > 1e-10);
+        assert!((a.angle_between(b) - 1e-9).abs() > 1e-10, "glam's angle_between is acos-based");
+    }
 
     #[test]
     fn stats_match_direct_sums() {

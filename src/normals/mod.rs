@@ -9,15 +9,23 @@
 //! | `onv-domain` | [`onv`] | nearest in `[u, v]` | eq. 10 |
 //! | `sc` | [`sc`] | nearest in `(θ, φ)` | eq. 5 |
 //! | `pp` | [`pp`] | nearest in `(x, y)` + sign of z | eq. 6 |
-//! | `spp` | [`spp`] | nearest minor components + 3 face bits | eq. 7 |
-//! | `cm` | [`cm`] | nearest face coordinates + 3 face bits | eq. 8 |
+//! | `spp` | [`spp`] | nearest minor components + face digit | eq. 7 |
+//! | `cm` | [`cm`] | nearest face coordinates + face digit | eq. 8 |
 //!
-//! Every code of `bits` bits (higher bits ignored) decodes to a unit vector. Bit layouts are in
-//! each module and in `docs/formats/normal-codes.md`.
+//! ONV codes are two SNORM bit fields; the other schemes are mixed-radix numbers ([`radix`])
+//! that use the whole budget (6 faces cost log2 6 bits, not 3). Every code of `bits` bits (higher
+//! bits ignored) decodes to a unit vector. Layouts are in each module and in
+//! `docs/formats/normal-codes.md`.
+//!
+//! The `encode-normals` stage is one library call per mode: [`encode::run`] (normals → codes,
+//! decoded normals and the [`report`] document), [`decode::run`] and [`table::run`] (Meyer et
+//! al.'s Table 1); `shader::decoder` prints the matching GLSL/HLSL/WGSL.
 
 pub mod adversarial;
 pub mod bounds;
 pub mod cm;
+pub mod decode;
+pub mod encode;
 pub mod fixed;
 pub mod fpnv;
 pub mod metrics;
@@ -26,6 +34,8 @@ pub mod pack;
 pub mod pp;
 #[cfg(test)]
 mod properties;
+pub mod radix;
+pub mod report;
 pub mod rng;
 pub mod sc;
 pub mod sextant;
@@ -33,11 +43,14 @@ pub mod shader;
 pub mod sources;
 pub mod spp;
 pub mod table;
-pub mod vec;
+mod vec;
 
+use glam::DVec3;
+use radix::GridLayout;
+pub use radix::{Digit, DigitKind};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-pub use vec::Dir;
+use std::sync::OnceLock;
 
 /// Smallest supported budget.
 pub const MIN_BITS: u32 = 8;
@@ -101,6 +114,21 @@ pub enum NormalsError {
     /// The bit budget is outside 8..=64.
     #[error("bit budget {0} is outside {MIN_BITS}..={MAX_BITS}")]
     Bits(u32),
+    /// Nothing to encode or decode.
+    #[error("no {0}")]
+    Empty(&'static str),
+    /// A code file in the word layout whose length is not a whole number of words.
+    #[error(
+        "length {len} is not a multiple of the {word_bytes}-byte word of a {bits}-bit code (a bit-packed stream?)"
+    )]
+    StreamLength {
+        /// Length in bytes.
+        len: usize,
+        /// Bytes per word.
+        word_bytes: usize,
+        /// Bits per code.
+        bits: u32,
+    },
     /// A normal that cannot be encoded: zero length, NaN or infinite.
     #[error("normal #{index} is {what}: ({x}, {y}, {z})")]
     Invalid {
@@ -117,12 +145,13 @@ pub enum NormalsError {
     },
 }
 
+/// How a codec's integers are laid out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Layout {
+pub(crate) enum Layout {
+    /// Two SNORM bit fields (ONV).
     Onv(onv::OnvLayout),
-    Sc(sc::ScLayout),
-    Pp(pp::PpLayout),
-    Face(sextant::FaceLayout),
+    /// A mixed-radix number (SC, PP, SPP, CM).
+    Grid(GridLayout),
 }
 
 /// A scheme at a bit budget: encodes unit directions to codes and decodes any code.
@@ -133,6 +162,19 @@ pub struct Codec {
     layout: Layout,
 }
 
+/// The mixed-radix splits, searched once per scheme and budget (`radix::best_split`).
+fn grid_layout(scheme: Scheme, bits: u32) -> GridLayout {
+    const BUDGETS: usize = (MAX_BITS - MIN_BITS + 1) as usize;
+    static SPLITS: [[OnceLock<GridLayout>; BUDGETS]; 4] = [const { [const { OnceLock::new() }; BUDGETS] }; 4];
+    let (row, search): (usize, fn(u32) -> GridLayout) = match scheme {
+        Scheme::Sc => (0, sc::layout),
+        Scheme::Pp => (1, pp::layout),
+        Scheme::Spp => (2, spp::layout),
+        _ => (3, cm::layout),
+    };
+    *SPLITS[row][(bits - MIN_BITS) as usize].get_or_init(|| search(bits))
+}
+
 impl Codec {
     /// `scheme` at `bits` bits (8..=64).
     pub fn new(scheme: Scheme, bits: u32) -> Result<Codec, NormalsError> {
@@ -141,9 +183,7 @@ impl Codec {
         }
         let layout = match scheme {
             Scheme::OnvRange | Scheme::OnvDomain => Layout::Onv(onv::OnvLayout::new(bits)),
-            Scheme::Sc => Layout::Sc(sc::ScLayout::new(bits)),
-            Scheme::Pp => Layout::Pp(pp::PpLayout::new(bits)),
-            Scheme::Spp | Scheme::Cm => Layout::Face(sextant::FaceLayout::new(bits)),
+            _ => Layout::Grid(grid_layout(scheme, bits)),
         };
         Ok(Codec { scheme, bits, layout })
     }
@@ -158,63 +198,91 @@ impl Codec {
         self.bits
     }
 
-    /// The named bit fields of a code, lowest first: `(name, offset, width, kind)`.
-    pub fn fields(&self) -> Vec<Field> {
-        let f = |name: &str, offset: u32, width: u32, kind: FieldKind| Field {
-            name: name.to_string(),
-            offset,
-            width,
-            kind,
-        };
-        match self.layout {
-            Layout::Onv(l) => {
-                vec![f("u", 0, l.u_bits, FieldKind::Snorm), f("v", l.u_bits, l.v_bits, FieldKind::Snorm)]
+    pub(crate) fn layout(&self) -> Layout {
+        self.layout
+    }
+
+    /// The closed-form maximum angular error for this split (radians, [`bounds::bound`]).
+    pub fn bound(&self) -> f64 {
+        bounds::bound(self)
+    }
+
+    /// The sample spacing `ε` in the paper's units ([`bounds::spacing`]).
+    pub fn spacing(&self) -> f64 {
+        bounds::spacing(self)
+    }
+
+    /// The digits of a code, lowest first: `code = Σ d_i · Π_{j<i} N_j` (`radix.rs`). For ONV
+    /// the radices are powers of two, i.e. bit fields.
+    pub fn digits(&self) -> Vec<Digit> {
+        let d = |name: &str, radix: u64, kind: DigitKind| Digit { name: name.to_string(), radix, kind };
+        match (self.scheme, self.layout) {
+            (_, Layout::Onv(l)) => {
+                vec![d("u", 1 << l.u_bits, DigitKind::Snorm), d("v", 1 << l.v_bits, DigitKind::Snorm)]
             }
-            Layout::Sc(l) => vec![
-                f("theta", 0, l.theta_bits, FieldKind::Snorm),
-                f("phi", l.theta_bits, l.phi_bits, FieldKind::Unsigned),
+            (Scheme::Sc, Layout::Grid(l)) => {
+                vec![d("theta", l.b, DigitKind::Symmetric), d("phi", l.a, DigitKind::Turns)]
+            }
+            (Scheme::Pp, Layout::Grid(l)) => vec![
+                d("y", l.b, DigitKind::Symmetric),
+                d("x", l.a, DigitKind::Symmetric),
+                d("z_negative", l.faces, DigitKind::Index),
             ],
-            Layout::Pp(l) => vec![
-                f("z_negative", 0, 1, FieldKind::Unsigned),
-                f("x", 1, l.x_bits, FieldKind::Snorm),
-                f("y", 1 + l.x_bits, l.y_bits, FieldKind::Snorm),
-            ],
-            Layout::Face(l) => vec![
-                f("face", 0, 3, FieldKind::Unsigned),
-                f("a", 3, l.a_bits, FieldKind::Snorm),
-                f("b", 3 + l.a_bits, l.b_bits, FieldKind::Snorm),
+            (_, Layout::Grid(l)) => vec![
+                d("b", l.b, DigitKind::Symmetric),
+                d("a", l.a, DigitKind::Symmetric),
+                d("face", l.faces, DigitKind::Index),
             ],
         }
     }
 
+    /// The split in words, most significant digit first, with each digit's share of the budget
+    /// in bits: `v:2^24 u:2^24 = 24+24 bits`, or for mixed radix
+    /// `face:6 a:6843017 b:6843011 = 2.585+22.706+22.706 bits`.
+    pub fn split_text(&self) -> String {
+        let digits: Vec<Digit> = self.digits().into_iter().rev().collect();
+        let radix =
+            |r: u64| if r.is_power_of_two() && r >= 256 { format!("2^{}", r.trailing_zeros()) } else { r.to_string() };
+        let bits = |r: u64| {
+            if r.is_power_of_two() {
+                r.trailing_zeros().to_string()
+            } else {
+                format!("{:.3}", (r as f64).log2())
+            }
+        };
+        let names: Vec<String> = digits.iter().map(|d| format!("{}:{}", d.name, radix(d.radix))).collect();
+        let shares: Vec<String> = digits.iter().map(|d| bits(d.radix)).collect();
+        format!("{} = {} bits", names.join(" "), shares.join("+"))
+    }
+
     /// Encodes a unit direction (callers normalize first; see [`prepare`]).
     #[inline]
-    pub fn encode(&self, n: Dir) -> u64 {
+    pub fn encode(&self, n: DVec3) -> u64 {
         match (self.scheme, self.layout) {
             (Scheme::OnvRange, Layout::Onv(l)) => onv::encode_range(n, l),
             (_, Layout::Onv(l)) => onv::encode_domain(n, l),
-            (_, Layout::Sc(l)) => sc::encode(n, l),
-            (_, Layout::Pp(l)) => pp::encode(n, l),
-            (Scheme::Spp, Layout::Face(l)) => spp::encode(n, l),
-            (_, Layout::Face(l)) => cm::encode(n, l),
+            (Scheme::Sc, Layout::Grid(l)) => sc::encode(n, l),
+            (Scheme::Pp, Layout::Grid(l)) => pp::encode(n, l),
+            (Scheme::Spp, Layout::Grid(l)) => spp::encode(n, l),
+            (_, Layout::Grid(l)) => cm::encode(n, l),
         }
     }
 
     /// Decodes the low `bits` bits of `code` to a unit direction (total: every code decodes).
     #[inline]
-    pub fn decode(&self, code: u64) -> Dir {
+    pub fn decode(&self, code: u64) -> DVec3 {
         let code = code & fixed::mask(self.bits);
-        match self.layout {
-            Layout::Onv(l) => onv::decode(code, l),
-            Layout::Sc(l) => sc::decode(code, l),
-            Layout::Pp(l) => pp::decode(code, l),
-            Layout::Face(l) if self.scheme == Scheme::Spp => spp::decode(code, l),
-            Layout::Face(l) => cm::decode(code, l),
+        match (self.scheme, self.layout) {
+            (_, Layout::Onv(l)) => onv::decode(code, l),
+            (Scheme::Sc, Layout::Grid(l)) => sc::decode(code, l),
+            (Scheme::Pp, Layout::Grid(l)) => pp::decode(code, l),
+            (Scheme::Spp, Layout::Grid(l)) => spp::decode(code, l),
+            (_, Layout::Grid(l)) => cm::decode(code, l),
         }
     }
 
     /// Encodes a batch in parallel (order preserved; identical for any thread count).
-    pub fn encode_all(&self, normals: &[Dir], codes: &mut [u64]) {
+    pub fn encode_all(&self, normals: &[DVec3], codes: &mut [u64]) {
         normals.par_chunks(1 << 14).zip(codes.par_chunks_mut(1 << 14)).for_each(|(n, c)| {
             for (n, c) in n.iter().zip(c.iter_mut()) {
                 *c = self.encode(*n);
@@ -228,19 +296,19 @@ impl Codec {
         if let Layout::Onv(l) = self.layout {
             let range = self.scheme == Scheme::OnvRange;
             normals.par_chunks(1 << 14).zip(codes.par_chunks_mut(1 << 14)).for_each(|(n, c)| {
-                onv::encode_block_f32(n, c, l, range);
+                onv::encode_batch_f32(n, c, l, range);
             });
             return;
         }
         normals.par_chunks(1 << 14).zip(codes.par_chunks_mut(1 << 14)).for_each(|(n, c)| {
             for (n, c) in n.iter().zip(c.iter_mut()) {
-                *c = self.encode([n[0] as f64, n[1] as f64, n[2] as f64]);
+                *c = self.encode(DVec3::from(n.map(f64::from)));
             }
         });
     }
 
     /// Decodes a batch in parallel.
-    pub fn decode_all(&self, codes: &[u64], normals: &mut [Dir]) {
+    pub fn decode_all(&self, codes: &[u64], normals: &mut [DVec3]) {
         codes.par_chunks(1 << 14).zip(normals.par_chunks_mut(1 << 14)).for_each(|(c, n)| {
             for (c, n) in c.iter().zip(n.iter_mut()) {
                 *n = self.decode(*c);
@@ -249,57 +317,20 @@ impl Codec {
     }
 
     /// Decodes a batch to f32 normals in parallel. ONV codes of at most 32 bits take the
-    /// branch-free f32 path ([`onv::decode_f32`], within 3e-7 rad of the f64 decoder).
+    /// vectorized branch-free f32 path ([`onv::decode_f32`], within 3e-7 rad of the f64 decoder).
     pub fn decode_all_f32(&self, codes: &[u64], normals: &mut [[f32; 3]]) {
         if let (Layout::Onv(l), true) = (self.layout, self.bits <= 32) {
             codes.par_chunks(1 << 14).zip(normals.par_chunks_mut(1 << 14)).for_each(|(c, n)| {
-                // Blocks of 64 in structure-of-arrays form so the arithmetic vectorizes; the
-                // interleaving into xyz is a separate pass.
-                for (c, n) in c.chunks(64).zip(n.chunks_mut(64)) {
-                    let mut block = [[0f32; 64]; 3];
-                    for (i, &code) in c.iter().enumerate() {
-                        let d = onv::decode_f32(code, l);
-                        block[0][i] = d[0];
-                        block[1][i] = d[1];
-                        block[2][i] = d[2];
-                    }
-                    for (i, n) in n.iter_mut().enumerate() {
-                        *n = [block[0][i], block[1][i], block[2][i]];
-                    }
-                }
+                onv::decode_batch_f32(c, n, l);
             });
             return;
         }
         codes.par_chunks(1 << 14).zip(normals.par_chunks_mut(1 << 14)).for_each(|(c, n)| {
             for (c, n) in c.iter().zip(n.iter_mut()) {
-                let d = self.decode(*c);
-                *n = [d[0] as f32, d[1] as f32, d[2] as f32];
+                *n = self.decode(*c).as_vec3().to_array();
             }
         });
     }
-}
-
-/// How a field's integer is read.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum FieldKind {
-    /// Two's complement, value `max(s/(2^(k-1)-1), -1)`.
-    Snorm,
-    /// Plain unsigned integer.
-    Unsigned,
-}
-
-/// One bit field of a code.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Field {
-    /// Field name (`u`, `v`, `theta`, `phi`, `face`, …).
-    pub name: String,
-    /// Offset of the lowest bit.
-    pub offset: u32,
-    /// Width in bits.
-    pub width: u32,
-    /// How the integer is read.
-    pub kind: FieldKind,
 }
 
 /// What to do with a zero-length, NaN or infinite input normal.
@@ -312,9 +343,20 @@ pub enum InvalidPolicy {
     Replace,
 }
 
+impl std::str::FromStr for InvalidPolicy {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "error" => Ok(InvalidPolicy::Error),
+            "replace" => Ok(InvalidPolicy::Replace),
+            _ => Err(format!("expected error or replace, got {s:?}")),
+        }
+    }
+}
+
 /// Checks and normalizes input normals (f32 as read) to unit f64 directions. Returns the
 /// directions and the indices that were replaced under [`InvalidPolicy::Replace`].
-pub fn prepare(raw: &[[f32; 3]], policy: InvalidPolicy) -> Result<(Vec<Dir>, Vec<usize>), NormalsError> {
+pub fn prepare(raw: &[[f32; 3]], policy: InvalidPolicy) -> Result<(Vec<DVec3>, Vec<usize>), NormalsError> {
     let mut out = Vec::with_capacity(raw.len());
     let mut replaced = Vec::new();
     for (index, &[x, y, z]) in raw.iter().enumerate() {
@@ -330,14 +372,13 @@ pub fn prepare(raw: &[[f32; 3]], policy: InvalidPolicy) -> Result<(Vec<Dir>, Vec
         match (what, policy) {
             (None, _) => {
                 // Scale first so that tiny or huge f32 vectors do not under/overflow in f64.
-                let d = [x as f64, y as f64, z as f64];
-                let m = d[0].abs().max(d[1].abs()).max(d[2].abs());
-                out.push(vec::normalize([d[0] / m, d[1] / m, d[2] / m]));
+                let d = DVec3::new(x.into(), y.into(), z.into());
+                out.push((d / d.abs().max_element()).normalize());
             }
             (Some(what), InvalidPolicy::Error) => return Err(NormalsError::Invalid { index, what, x, y, z }),
             (Some(_), InvalidPolicy::Replace) => {
                 replaced.push(index);
-                out.push([0.0, 0.0, 1.0]);
+                out.push(DVec3::Z);
             }
         }
     }

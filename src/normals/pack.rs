@@ -7,6 +7,41 @@
 //!   is zero-padded, so the count is `⌊8·len/b⌋` (padding is under 8 ≤ b bits).
 
 use super::fixed::mask;
+use super::NormalsError;
+use serde::{Deserialize, Serialize};
+
+/// How codes are laid out in a file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Stream {
+    /// One little-endian u16/u32/u64 word per code ([`word_bytes`]).
+    Words,
+    /// A little-endian bit stream, `bits` per code.
+    Packed,
+}
+
+impl Stream {
+    /// The bytes of `codes` of `bits` bits.
+    pub fn to_bytes(self, codes: &[u64], bits: u32) -> Vec<u8> {
+        match self {
+            Stream::Words => to_words(codes, bits),
+            Stream::Packed => to_packed(codes, bits),
+        }
+    }
+
+    /// The codes in `bytes`: every whole code of a bit stream, or every word (the length must
+    /// be a multiple of the word size).
+    pub fn from_bytes(self, bytes: &[u8], bits: u32) -> Result<Vec<u64>, NormalsError> {
+        match self {
+            Stream::Words => from_words(bytes, bits).ok_or(NormalsError::StreamLength {
+                len: bytes.len(),
+                word_bytes: word_bytes(bits),
+                bits,
+            }),
+            Stream::Packed => Ok(from_packed(bytes, bits)),
+        }
+    }
+}
 
 /// Bytes per code in the word layout.
 pub fn word_bytes(bits: u32) -> usize {

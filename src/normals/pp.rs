@@ -1,49 +1,41 @@
 //! Parallel projection with a sign bit (Meyer et al. 2010, §4, eq. 6): store `x` and `y`,
-//! rebuild `|z| = sqrt(1 - x² - y²)`, and keep the sign of `z` in one bit. Unstable near the
-//! equator (`‖∇z‖ → ∞`), which is why its error is `O(√ε)`.
+//! rebuild `|z| = sqrt(1 - x² - y²)`, and keep the sign of `z`. Unstable near the equator
+//! (`‖∇z‖ → ∞`), which is why its error is `O(√ε)`.
 //!
-//! Layout: bit 0 is the sign of `z` (1 = negative; `-0.0` counts as positive), then `x` as a
-//! SNORM field of `⌈(b-1)/2⌉` bits, then `y` of `⌊(b-1)/2⌋` bits. Lattice points outside the unit
-//! disk decode to `z = 0` and are renormalized, so every code decodes to a unit vector.
+//! Mixed-radix code (`radix.rs`): `code = (negative·N_x + x)·N_y + y` with 2 "faces" (the sign of
+//! `z`, 1 = negative; `-0.0` counts as positive) and odd symmetric lattices for `x` and `y`, whose
+//! radices minimize eq. 6 for the split (`bounds::pp_split`), `2·N_x·N_y ≤ 2^b`: the budget is
+//! not cut into whole bits for each coordinate. Lattice points outside the unit disk decode to
+//! `z = 0` and are renormalized, so every code decodes to a unit vector.
 
-use super::fixed::{field, from_field, snorm_round, snorm_value, to_field};
-use super::vec::{normalize, Dir};
+use super::bounds::objective;
+use super::fixed::{symmetric_round, symmetric_value};
+use super::radix::{best_split, GridLayout, RadixRule};
+use glam::DVec3;
 
-/// Field widths of a PP code.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct PpLayout {
-    /// Width of the `x` field (after the sign bit).
-    pub x_bits: u32,
-    /// Width of the `y` field (after `x`).
-    pub y_bits: u32,
-}
-
-impl PpLayout {
-    /// The split of a `bits`-bit budget.
-    pub fn new(bits: u32) -> Self {
-        PpLayout { x_bits: (bits - 1).div_ceil(2), y_bits: (bits - 1) / 2 }
-    }
+/// The split of a `bits`-bit budget: `N_a = N_x`, `N_b = N_y`.
+pub fn layout(bits: u32) -> GridLayout {
+    let balance = (0.5 * (bits as f64).exp2()).sqrt();
+    let (nx, ny) = best_split(bits, 2, RadixRule::Odd, RadixRule::Odd, balance, objective::cm_pp);
+    GridLayout { faces: 2, a: nx, b: ny }
 }
 
 /// Rounds `x` and `y` of the unit direction in the domain.
 #[inline]
-pub fn encode(n: Dir, layout: PpLayout) -> u64 {
-    let negative = u64::from(n[2] < 0.0);
-    let sx = snorm_round(n[0], layout.x_bits);
-    let sy = snorm_round(n[1], layout.y_bits);
-    negative | (to_field(sx, layout.x_bits) << 1) | (to_field(sy, layout.y_bits) << (1 + layout.x_bits))
+pub fn encode(n: DVec3, l: GridLayout) -> u64 {
+    let negative = u64::from(n.z < 0.0);
+    l.pack(negative, symmetric_round(n.x, l.a), symmetric_round(n.y, l.b))
 }
 
 /// Decodes any code to a unit direction.
 #[inline]
-pub fn decode(code: u64, layout: PpLayout) -> Dir {
-    let x = snorm_value(from_field(field(code, 1, layout.x_bits), layout.x_bits), layout.x_bits);
-    let y = snorm_value(from_field(field(code, 1 + layout.x_bits, layout.y_bits), layout.y_bits), layout.y_bits);
-    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
-    let z = if code & 1 == 1 { -z } else { z };
+pub fn decode(code: u64, l: GridLayout) -> DVec3 {
+    let (negative, dx, dy) = l.unpack(code);
+    let (x, y) = (symmetric_value(dx, l.a), symmetric_value(dy, l.b));
     if x == 0.0 && y == 0.0 {
         // Exactly a pole (z = ±1 exactly, no rounding through sqrt).
-        return [0.0, 0.0, if code & 1 == 1 { -1.0 } else { 1.0 }];
+        return DVec3::new(0.0, 0.0, if negative == 1 { -1.0 } else { 1.0 });
     }
-    normalize([x, y, z])
+    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    DVec3::new(x, y, if negative == 1 { -z } else { z }).normalize()
 }

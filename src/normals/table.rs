@@ -9,11 +9,12 @@
 
 use super::bounds;
 use super::fpnv::{self, FloatFormat};
+use super::metrics::angle_between;
 use super::metrics::ErrorStats;
 use super::rng::{chunk_state, uniform_direction};
-use super::vec::{angle_between, Dir};
 use super::{adversarial, Codec, NormalsError, Scheme};
 use crate::progress::Progress;
+use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -27,7 +28,8 @@ pub struct Row {
     pub scheme: String,
     /// Total bits per normal (three floats for `fpnv`).
     pub bits: u32,
-    /// How the bits are split, e.g. `u:24 v:24` or `3 x binary16 (m=10)`.
+    /// How the bits are split ([`Codec::split_text`]), e.g. `v:2^24 u:2^24 = 24+24 bits` or
+    /// `3 x binary16 (m=10)`.
     pub split: String,
     /// Sample spacing `ε` in the paper's units (`bounds::spacing`; for `fpnv` the cell size
     /// `2^(-m-1)` at `[1/2, 1)`).
@@ -76,13 +78,23 @@ pub struct TableConfig {
     pub seed: u64,
 }
 
-/// Human-readable split of a codec's fields.
-pub fn split_text(codec: &Codec) -> String {
-    codec.fields().iter().map(|f| format!("{}:{}", f.name, f.width)).collect::<Vec<_>>().join(" ")
+/// Meyer et al. 2010, Table 1, row 3: the printed `Δmax(48)` of each scheme (`fpnv`: three
+/// binary16 values).
+pub fn paper_48(scheme: &str) -> Option<f64> {
+    Some(match scheme {
+        "fpnv" => 4.60e-4,
+        "pp" => 4.88e-4,
+        "spp" => 2.92e-7,
+        "sc" => 3.74e-7,
+        "cm" => 2.38e-7,
+        "onv-domain" => 2.53e-7,
+        "onv-range" => 1.69e-7,
+        _ => return None,
+    })
 }
 
-/// Computes the table for one budget.
-pub fn table(config: TableConfig, progress: &dyn Progress) -> Result<Vec<Row>, NormalsError> {
+/// Computes the table for one budget (the `--table` mode of `encode-normals`).
+pub fn run(config: &TableConfig, progress: &dyn Progress) -> Result<Vec<Row>, NormalsError> {
     let codecs: Vec<Codec> = Scheme::ALL.iter().map(|&s| Codec::new(s, config.bits)).collect::<Result<_, _>>()?;
     let mut formats: Vec<FloatFormat> = fpnv::format_for_budget(config.bits).into_iter().collect();
     if !formats.contains(&fpnv::BINARY32) {
@@ -94,7 +106,7 @@ pub fn table(config: TableConfig, progress: &dyn Progress) -> Result<Vec<Row>, N
         .into_par_iter()
         .map(|chunk| {
             let mut state = chunk_state(config.seed, chunk);
-            let dirs: Vec<Dir> = (0..CHUNK).map(|_| uniform_direction(&mut state)).collect();
+            let dirs: Vec<DVec3> = (0..CHUNK).map(|_| DVec3::from(uniform_direction(&mut state))).collect();
             let base = chunk * CHUNK;
             let schemes = codecs.iter().map(|codec| measure(codec, &dirs, base)).collect();
             let floats = formats
@@ -125,15 +137,15 @@ pub fn table(config: TableConfig, progress: &dyn Progress) -> Result<Vec<Row>, N
 
     let mut rows = Vec::new();
     for (codec, stats) in codecs.iter().zip(&scheme_stats) {
-        let adv = adversarial::directions(codec.scheme(), config.bits);
+        let adv = adversarial::directions(codec);
         let adv_max = max_error(codec, &adv);
-        let bound = bounds::bound(codec.scheme(), config.bits);
+        let bound = codec.bound();
         let max = stats.max.max(adv_max);
         rows.push(Row {
             scheme: codec.scheme().name().to_string(),
             bits: config.bits,
-            split: split_text(codec),
-            spacing: bounds::spacing(codec.scheme(), config.bits),
+            split: codec.split_text(),
+            spacing: codec.spacing(),
             bound,
             max_error: max,
             mean_error: stats.mean(),
@@ -196,12 +208,12 @@ fn fpnv_row(format: FloatFormat, stats: &ErrorStats, seed: u64) -> Result<Row, N
 /// ONV_range's measured maximum at `bits`: adversarial directions plus 2^20 random ones.
 fn onv_range_max(bits: u32, seed: u64) -> Result<f64, NormalsError> {
     let codec = Codec::new(Scheme::OnvRange, bits)?;
-    let adv = max_error(&codec, &adversarial::directions(Scheme::OnvRange, bits));
+    let adv = max_error(&codec, &adversarial::directions(&codec));
     let random: f64 = (0..16u64)
         .into_par_iter()
         .map(|chunk| {
             let mut state = chunk_state(seed ^ 0x5151, chunk);
-            let dirs: Vec<Dir> = (0..CHUNK).map(|_| uniform_direction(&mut state)).collect();
+            let dirs: Vec<DVec3> = (0..CHUNK).map(|_| DVec3::from(uniform_direction(&mut state))).collect();
             max_error(&codec, &dirs)
         })
         .collect::<Vec<f64>>()
@@ -210,8 +222,71 @@ fn onv_range_max(bits: u32, seed: u64) -> Result<f64, NormalsError> {
     Ok(adv.max(random))
 }
 
+/// The table as Markdown: one row per scheme (with the paper's `Δmax(48)` at 48 bits), then a
+/// paragraph per FPNV row on eq. 3 and eq. 4.
+pub fn markdown(rows: &[Row], config: &TableConfig) -> String {
+    let paper_col = config.bits == 48;
+    let mut s = format!(
+        "### {} bits ({} random directions, seed {}, plus adversarial directions)\n\n",
+        config.bits,
+        rows.first().map_or(0, |r| r.samples),
+        config.seed
+    );
+    s += "| scheme | bits | split | ε | closed-form Δmax | measured max | max / bound | random only / bound | mean | rms |";
+    s += if paper_col { " paper Δmax(48) |\n" } else { "\n" };
+    s += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |";
+    s += if paper_col { " --- |\n" } else { "\n" };
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {:.4e} | {:.4e} | {:.4e} | {:.6} | {:.4} | {:.4e} | {:.4e} |",
+            r.scheme,
+            r.bits,
+            r.split,
+            r.spacing,
+            r.bound,
+            r.max_error,
+            r.max_over_bound,
+            r.random_max_error / r.bound,
+            r.mean_error,
+            r.rms_error
+        );
+        if paper_col {
+            s += &match paper_48(&r.scheme).filter(|_| r.bits == 48) {
+                Some(p) => format!(" {p:.2e} |"),
+                None => " |".to_string(),
+            };
+        }
+        s += "\n";
+    }
+    for r in rows.iter().filter(|r| r.scheme == "fpnv") {
+        s += &format!(
+            "\nFPNV {} ({} bits): eq. 3 bound {:.4e}; adversarial direction vectors reach {:.4e}; random unit vectors {:.4e}.",
+            r.split,
+            r.bits,
+            r.bound,
+            r.adversarial_max_error,
+            r.unit_vector_max_error.unwrap_or(0.0)
+        );
+        if let (Some(eq), Some(need)) = (r.equivalent_bits, r.onv_range_bits_needed) {
+            s +=
+                &format!(" Eq. 4: a uniform discretization needs {eq} bits; ONV_range's closed form needs {need} bits");
+            if let Some(m) = &r.onv_range_measured {
+                let parts: Vec<String> = m
+                    .iter()
+                    .map(|(b, e)| format!("{b} bits: {e:.4e} ({})", if *e <= r.bound { "≤ FPNV" } else { "> FPNV" }))
+                    .collect();
+                s += &format!("; measured ONV_range max: {}", parts.join(", "));
+            }
+            s += ".";
+        }
+        s += "\n";
+    }
+    s += "\n";
+    s
+}
+
 /// Error statistics of encoding then decoding `dirs` (indices start at `base`).
-pub fn measure(codec: &Codec, dirs: &[Dir], base: u64) -> ErrorStats {
+pub fn measure(codec: &Codec, dirs: &[DVec3], base: u64) -> ErrorStats {
     let mut s = ErrorStats::default();
     for (i, d) in dirs.iter().enumerate() {
         s.add(base + i as u64, angle_between(*d, codec.decode(codec.encode(*d))));
@@ -220,6 +295,6 @@ pub fn measure(codec: &Codec, dirs: &[Dir], base: u64) -> ErrorStats {
 }
 
 /// The largest round-trip error over `dirs`.
-pub fn max_error(codec: &Codec, dirs: &[Dir]) -> f64 {
+pub fn max_error(codec: &Codec, dirs: &[DVec3]) -> f64 {
     dirs.iter().map(|d| angle_between(*d, codec.decode(codec.encode(*d)))).fold(0.0, f64::max)
 }

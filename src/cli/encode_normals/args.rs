@@ -1,0 +1,60 @@
+//! The flags of `encode-normals` (clap declarations only; their help text is the user's reference).
+
+use crate::cli::options::{parse_size, Execution};
+use crate::normals::{shader, InvalidPolicy, Scheme};
+use clap::Parser;
+use std::path::PathBuf;
+
+/// Encode normal vectors at a bit budget and measure the exact angular error.
+///
+/// Modes: encode INPUT (default), `--decode CODES`, `--emit-decoder LANG`, `--table`. INPUT by
+/// extension: .exr, .obj (vn), .ply (nx ny nz), anything else raw little-endian f32 xyz.
+#[derive(Debug, Parser)]
+#[command(name = "encode-normals", version)]
+pub struct Args {
+    /// Input normals (encode) or codes (--decode).
+    pub input: Option<PathBuf>,
+    /// Parameterization: onv-range, onv-domain, sc, pp, spp, cm.
+    #[arg(long, default_value = "onv-range", value_parser = |s: &str| s.parse::<Scheme>())]
+    pub scheme: Scheme,
+    /// Bits per normal, 8..=64 [default: 32; with --table: 48, the paper's Table 1].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(8..=64))]
+    pub bits: Option<u32>,
+    #[arg(short, long, help = "Codes output (encode) or normals output (--decode); `-` is stdout.")]
+    pub output: Option<String>,
+    #[arg(long, help = "Codes are a bit-packed little-endian stream instead of one u16/u32/u64 word per normal.")]
+    pub packed: bool,
+    #[arg(long, help = "Write the JSON report (prtkit.normal-codes) to this file; `-` is stdout.")]
+    pub report: Option<String>,
+    #[arg(long, help = "Print the JSON report (or the --table rows as a JSON array) on stdout.")]
+    pub json: bool,
+    #[arg(long, help = "Write the decoded normals here, in the input's format (EXR/OBJ/PLY/raw).")]
+    pub decoded: Option<PathBuf>,
+    #[arg(long, help = "EXR values are in [0, 1] (n = 2c - 1) instead of [-1, 1]; applies to reading and writing.")]
+    pub unorm: bool,
+    /// Zero-length, NaN or infinite normals: `error` (exit 2 naming the first) or `replace` (+Z).
+    #[arg(long, default_value = "error", value_parser = |s: &str| s.parse::<InvalidPolicy>())]
+    pub on_invalid: InvalidPolicy,
+    /// Decode INPUT (codes) to normals written to --output (format by its extension).
+    #[arg(long, conflicts_with_all = ["table", "emit_decoder", "decoded", "report"])]
+    pub decode: bool,
+    /// With --decode: scheme, bits and stream layout from this report of the encode run.
+    #[arg(long, requires = "decode")]
+    pub header: Option<PathBuf>,
+    #[arg(long, value_parser = parse_size, help = "Image size for --decode to .exr.")]
+    pub size: Option<(usize, usize)>,
+    /// Print a shader decode function for --scheme/--bits: glsl, hlsl or wgsl.
+    #[arg(long, value_parser = |s: &str| s.parse::<shader::Language>(), conflicts_with_all = ["table", "decode"])]
+    pub emit_decoder: Option<shader::Language>,
+    #[arg(long, help = "Reproduce Meyer et al. 2010, Table 1 at --bits: random + adversarial directions.")]
+    pub table: bool,
+    #[arg(long, default_value_t = 10_000_000, help = "Random directions for --table.")]
+    pub samples: u64,
+    #[arg(long, default_value_t = 1, help = "Seed of the random directions for --table.")]
+    pub seed: u64,
+    /// Histogram bins in the report (over [0, max(bound, max error)]).
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub bins: u32,
+    #[command(flatten)]
+    pub run: Execution,
+}
