@@ -24,6 +24,7 @@ impl TryFrom<&Args> for Config {
             reconstruction: !args.reconstruct.is_empty(),
             irradiance: !args.irradiance.is_empty(),
             size: args.size,
+            window: args.window,
             source: args.input.name(),
             args: std::env::args().collect(),
         })

@@ -7,14 +7,15 @@
 //! its colour is kept), the bright part is the excess L − min(L, T), kept as a list of texels
 //! (direction, solid angle, excess radiance). Remainder + excess = the map, texel for texel.
 //!
+//! Any layout: texels are weighed by their solid angles.
+//!
 //! The threshold (`docs/prefilter.md`, "Bright sources apart"): with Y the luminance
 //! (the mean of RGB) and Q the value above which the brightest [`AREA_FRACTION`] of the sphere's
 //! solid angle lies, T = max(Q, [`MEAN_MULTIPLE`] × mean Y). Q bounds the number of texels the
 //! angular pass visits; the mean multiple keeps maps without compact sources (an overcast sky,
 //! a white furnace) whole.
 
-use super::{EnvMap, Layout};
-use crate::sphere::LatLong;
+use super::EnvMap;
 use glam::DVec3;
 
 /// The brightest share of the sphere that may be moved to the angular pass.
@@ -69,12 +70,10 @@ fn luminance(rgb: [f32; 3]) -> f64 {
     (rgb[0] as f64 + rgb[1] as f64 + rgb[2] as f64) / 3.0
 }
 
-/// The threshold of [`BrightRule::Auto`] for a lat-long map: max(Q, MEAN_MULTIPLE × mean).
+/// The threshold of [`BrightRule::Auto`]: max(Q, MEAN_MULTIPLE × mean).
 pub fn auto_threshold(map: &EnvMap) -> f64 {
-    let img = map.image();
-    let grid = LatLong::new(img.width, img.height);
-    let mut texels: Vec<(f64, f64)> =
-        img.pixels.iter().enumerate().map(|(i, &p)| (luminance(p), grid.row_solid_angle(i / img.width))).collect();
+    let mut texels: Vec<(f64, f64)> = Vec::with_capacity(map.texel_count());
+    map.for_each_texel(|t| texels.push((luminance(t.rgb), t.solid_angle)));
     let total_area: f64 = texels.iter().map(|t| t.1).sum();
     let mean = texels.iter().map(|t| t.0 * t.1).sum::<f64>() / total_area;
     texels.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -90,39 +89,33 @@ pub fn auto_threshold(map: &EnvMap) -> f64 {
     q.max(MEAN_MULTIPLE * mean)
 }
 
-/// Splits a lat-long map into the remainder (clipped at the threshold) and the bright texels.
-/// Other layouts, [`BrightRule::Off`] and maps with nothing above the threshold come back whole
-/// with an empty bright part.
+/// Splits a map into the remainder (clipped at the threshold) and the bright texels, in any
+/// layout. [`BrightRule::Off`] and maps with nothing above the threshold come back whole with an
+/// empty bright part.
 pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
-    let none = || (map.clone(), BrightSources { threshold: f64::INFINITY, ..Default::default() });
-    if map.layout() != Layout::LatLong {
-        return none();
-    }
     let threshold = match rule {
-        BrightRule::Off => return none(),
+        BrightRule::Off => return (map.clone(), BrightSources { threshold: f64::INFINITY, ..Default::default() }),
         BrightRule::Auto => auto_threshold(map),
         BrightRule::Threshold(t) => t,
     };
     let mut remainder = map.clone();
-    let img = &mut remainder.images_mut()[0];
-    let (w, h) = (img.width, img.height);
-    let grid = LatLong::new(w, h);
     let (mut total, mut total2, mut bright, mut bright2) = (0.0, 0.0, 0.0, 0.0);
     let mut texels = Vec::new();
-    for (i, px) in img.pixels.iter_mut().enumerate() {
-        let (x, y) = (i % w, i / w);
-        let omega = grid.row_solid_angle(y);
-        let l = luminance(*px);
-        total += l * omega;
-        total2 += l * l * omega;
-        if l > threshold {
-            let keep = threshold / l;
-            let excess = px.map(|c| c as f64 * (1.0 - keep));
-            *px = px.map(|c| (c as f64 * keep) as f32);
-            let e = (excess[0] + excess[1] + excess[2]) / 3.0;
-            bright += e * omega;
-            bright2 += (l * l - threshold * threshold) * omega;
-            texels.push(BrightTexel { dir: grid.texel_direction(x, y), solid_angle: omega, excess });
+    for (face, img) in remainder.images_mut().iter_mut().enumerate() {
+        let w = img.width;
+        for (i, px) in img.pixels.iter_mut().enumerate() {
+            let Some((dir, omega)) = map.texel_geometry(face, i % w, i / w) else { continue };
+            let l = luminance(*px);
+            total += l * omega;
+            total2 += l * l * omega;
+            if l > threshold {
+                let keep = threshold / l;
+                let excess = px.map(|c| c as f64 * (1.0 - keep));
+                *px = px.map(|c| (c as f64 * keep) as f32);
+                bright += (excess[0] + excess[1] + excess[2]) / 3.0 * omega;
+                bright2 += (l * l - threshold * threshold) * omega;
+                texels.push(BrightTexel { dir, solid_angle: omega, excess });
+            }
         }
     }
     let fraction = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
@@ -150,6 +143,8 @@ mod tests {
         }))
         .unwrap()
     }
+
+    use crate::sphere::LatLong;
 
     #[test]
     fn remainder_plus_excess_is_the_map_and_the_sun_goes_apart() {

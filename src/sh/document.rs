@@ -34,6 +34,28 @@ pub struct OrderSelection {
     pub epsilon: Option<f64>,
     /// 1 − (energy in bands 0..=order)/(total energy of the map): the ε actually achieved.
     pub epsilon_achieved: f64,
+    /// With `"epsilon"`: the luminance at which compact bright sources were clipped before ε was
+    /// measured (`docs/sh-project.md`), and the ε achieved on that clipped map.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clipped_at: Option<f64>,
+    /// The ε achieved on the clipped map.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub epsilon_achieved_clipped: Option<f64>,
+}
+
+/// How the images written beside the document were synthesized from the (raw) coefficients.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Synthesis {
+    /// The window applied to the bands: none, hann, lanczos, sigma or nonneg.
+    pub window: crate::sh::window::Window,
+    /// Lat-long size [W, H].
+    pub size: [usize; 2],
+    /// For `nonneg`: the heat parameter t of exp(−t·l(l+1)) the reconstruction needed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reconstruction_t: Option<f64>,
+    /// For `nonneg`: the t the irradiance map needed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub irradiance_t: Option<f64>,
 }
 
 /// Body of a `prtkit.sh` document.
@@ -51,6 +73,9 @@ pub struct ShBody {
     pub selection: OrderSelection,
     /// The input map.
     pub source: SourceMap,
+    /// How the reconstruction and irradiance images were made, when written.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub synthesis: Option<Synthesis>,
 }
 
 impl ShBody {

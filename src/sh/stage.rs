@@ -1,11 +1,25 @@
 //! The `sh-project` stage as one library call: project an environment map onto spherical
 //! harmonics (Ramamoorthi & Hanrahan 2002, §6.1, App. C step 1), choosing the order from a
 //! tolerance (§5.1) if asked, and synthesize the reconstruction and the irradiance map.
+//!
+//! **Choosing the order from ε.** R&H's criterion keeps 1 − ε of the map's energy. A sun 10⁴×
+//! brighter than the sky holds most of an HDR map's energy in a few texels, and its energy spreads
+//! over every band: ε = 1 % then asks for orders in the hundreds (order 246 and a 5.9 MB
+//! document for the demo sky), which no display or shader wants, and which still rings. So ε is
+//! measured on the map with its compact bright sources clipped (the threshold of
+//! [`crate::envmap::bright`]): the order is that of the map's smooth part. The coefficients
+//! written are those of the whole map; the document records the clipping level and both ε.
+//!
+//! **Synthesis.** Reconstructions and irradiance maps are synthesized with a window
+//! ([`super::window`]); the default `nonneg` leaves a non-negative map alone and otherwise
+//! applies the gentlest heat window that makes it non-negative. The coefficients stay raw.
 
-use super::convolve;
-use super::document::{OrderSelection, ShBody, SourceMap, FORMAT, VERSION};
+use super::document::{OrderSelection, ShBody, SourceMap, Synthesis, FORMAT, VERSION};
 use super::project::{project_choosing_order, OrderChoice, SelectError};
 use super::synth::{synthesize_latlong, SynthError};
+use super::window::{self, Window};
+use super::{convolve, ShCoeffs};
+use crate::envmap::bright::{split, BrightRule};
 use crate::envmap::{EnvMap, Layout};
 use crate::io::{Document, Provenance, RgbImage};
 use crate::progress::Progress;
@@ -29,6 +43,8 @@ pub struct Config {
     /// Size of the lat-long images; `None`: the input's size for a lat-long input, else 2S × S
     /// with S ≈ √(texels/2).
     pub size: Option<(usize, usize)>,
+    /// The window applied at synthesis (the coefficients written stay raw).
+    pub window: Window,
     /// The input's name, for the document.
     pub source: String,
     /// The command line, for the document's provenance.
@@ -42,6 +58,7 @@ impl Default for Config {
             reconstruction: false,
             irradiance: false,
             size: None,
+            window: Window::Nonneg,
             source: String::new(),
             args: Vec::new(),
         }
@@ -109,19 +126,39 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
         }
     }
     let start = Instant::now();
-    let projection = project_choosing_order(map, config.order, progress)
-        .map_err(|error| Error::Select { source_name: config.source.clone(), error })?;
+    let select = |error| Error::Select { source_name: config.source.clone(), error };
+    // ε is measured on the map with its compact bright sources clipped (module docs): the order
+    // is then that of the map's smooth part, and the coefficients are those of the whole map.
+    let (clipped, bright) = split(map, BrightRule::Auto);
+    let (projection, clipped_selection) = match config.order {
+        OrderChoice::Order(_) => (project_choosing_order(map, config.order, progress).map_err(select)?, None),
+        OrderChoice::Epsilon { .. } => {
+            let smooth = project_choosing_order(&clipped, config.order, progress).map_err(select)?;
+            let full =
+                project_choosing_order(map, OrderChoice::Order(smooth.coeffs.order), progress).map_err(select)?;
+            (full, Some((bright.threshold, smooth.epsilon_achieved)))
+        }
+    };
     let project_seconds = start.elapsed().as_secs_f64();
     let coeffs = &projection.coeffs;
 
     let (mut reconstruction, mut irradiance) = (None, None);
+    let mut synthesis = None;
     if config.reconstruction || config.irradiance {
         let (w, h) = image_size(map, coeffs.order, config.size);
-        if config.reconstruction {
-            reconstruction = Some(synthesize_latlong(coeffs, w, h)?);
+        synthesis = Some(Synthesis { window: config.window, size: [w, h], reconstruction_t: None, irradiance_t: None });
+        let kernels: [(&mut Option<(RgbImage, Option<f64>)>, bool, Vec<f64>); 2] = [
+            (&mut reconstruction, config.reconstruction, vec![1.0; coeffs.order + 1]),
+            (&mut irradiance, config.irradiance, (0..=coeffs.order).map(convolve::clamped_cosine).collect()),
+        ];
+        for (slot, wanted, kernel) in kernels {
+            if wanted {
+                *slot = Some(windowed_synthesis(coeffs, &kernel, config.window, w, h)?);
+            }
         }
-        if config.irradiance {
-            irradiance = Some(synthesize_latlong(&convolve::irradiance(coeffs), w, h)?);
+        if let Some(s) = &mut synthesis {
+            s.reconstruction_t = reconstruction.as_ref().and_then(|r| r.1);
+            s.irradiance_t = irradiance.as_ref().and_then(|r| r.1);
         }
     }
 
@@ -135,7 +172,13 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
         coefficients: coeffs.rgb.clone(),
         band_energy: coeffs.band_energy(),
         total_energy: projection.total_energy,
-        selection: OrderSelection { method: method.into(), epsilon, epsilon_achieved: projection.epsilon_achieved },
+        selection: OrderSelection {
+            method: method.into(),
+            epsilon,
+            epsilon_achieved: projection.epsilon_achieved,
+            clipped_at: clipped_selection.map(|c| c.0),
+            epsilon_achieved_clipped: clipped_selection.map(|c| c.1),
+        },
         source: SourceMap {
             path: config.source.clone(),
             layout: map.layout().name().to_string(),
@@ -143,6 +186,7 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
             height: img.height,
             max_order: map.max_order(),
         },
+        synthesis,
     };
     let provenance = Provenance::new("sh-project", &config.args, vec![config.source.clone()]);
     let summary = Summary {
@@ -155,7 +199,36 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
         total_energy: projection.total_energy,
         project_seconds,
     };
+    let (reconstruction, irradiance) = (reconstruction.map(|r| r.0), irradiance.map(|r| r.0));
     Ok(Output { document: Document::new(FORMAT, VERSION, provenance, body), reconstruction, irradiance, summary })
+}
+
+/// Synthesizes `coeffs` convolved with the zonal `kernel` (Â_l for irradiance, 1 for a
+/// reconstruction) under `window`; for `nonneg`, also the heat parameter t it needed.
+fn windowed_synthesis(
+    coeffs: &ShCoeffs,
+    kernel: &[f64],
+    kind: Window,
+    w: usize,
+    h: usize,
+) -> Result<(RgbImage, Option<f64>), SynthError> {
+    let convolved = convolve::convolve_zonal(coeffs, |l| kernel[l]);
+    if kind != Window::Nonneg {
+        return Ok((synthesize_latlong(&window::apply(&convolved, &kind.factors(coeffs.order)), w, h)?, None));
+    }
+    // Synthesis cannot fail past the first call (same size and order), so the search may unwrap
+    // into an empty image on an impossible error without hiding one.
+    let first = synthesize_latlong(&convolved, w, h)?;
+    let min = |img: &RgbImage| img.pixels.iter().flatten().fold(0.0f64, |m, &v| m.min(v as f64));
+    if min(&first) >= 0.0 {
+        return Ok((first, Some(0.0)));
+    }
+    let found = window::nonneg(
+        kernel,
+        |f| synthesize_latlong(&window::apply(&convolved, f), w, h).unwrap_or_else(|_| RgbImage::new(w, h)),
+        min,
+    );
+    Ok((found.map, Some(found.t)))
 }
 
 /// The lat-long image size: as asked, else the input's for a lat-long input wide enough for the

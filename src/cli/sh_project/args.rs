@@ -2,6 +2,7 @@
 
 use crate::cli::options::{parse_output, parse_size, EnvArgs, Execution, Exposure};
 use crate::io::Output;
+use crate::sh::window::Window;
 use clap::Parser;
 
 /// Project an environment map onto real spherical harmonics.
@@ -19,9 +20,17 @@ pub struct Args {
     #[arg(short = 'F', long, conflicts_with = "epsilon")]
     pub order: Option<usize>,
 
-    /// Choose the smallest order capturing 1 - EPSILON of the map's energy (searched up to 256).
+    /// Choose the smallest order capturing 1 - EPSILON of the energy of the map with its compact
+    /// bright sources clipped (searched up to 256). Unclipped, a sun holds most of an HDR map's
+    /// energy in every band and ε = 0.01 asks for orders in the hundreds (docs/sh-project.md).
     #[arg(short = 'e', long)]
     pub epsilon: Option<f64>,
+
+    /// Window applied to the bands of --reconstruct and --irradiance images (the coefficients
+    /// written stay raw): none, hann, lanczos, sigma, or nonneg (none unless a texel would be
+    /// negative; then the gentlest heat window that makes every texel non-negative).
+    #[arg(long, value_enum, default_value_t = Window::Nonneg)]
+    pub window: Window,
 
     /// Output JSON document (`-` for stdout).
     #[arg(short, long, default_value = "-", value_parser = parse_output)]
