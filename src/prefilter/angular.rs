@@ -73,6 +73,8 @@ pub struct ConeIntegrator {
     sin_phi: Vec<f64>,
     /// Weights in φ of the n sub-columns.
     phi_weights: Vec<f64>,
+    /// For the one-node rule, the node direction of every texel (row-major); else empty.
+    single_nodes: Vec<DVec3>,
 }
 
 /// The texel centres of one source row within θ* of an output row's reflection vectors: |Δφ| of
@@ -109,8 +111,19 @@ impl ConeIntegrator {
                 sin_phi.push(s);
             }
         }
+        let sub_rows: Vec<SubRow> = (0..grid.height).flat_map(|y| rule.sub_rows(grid, y)).collect();
+        let single_nodes = if rule.subsamples() == 1 {
+            let row_node = |y: usize| (sub_rows[y].sin_theta, sub_rows[y].z);
+            (0..grid.height)
+                .flat_map(|y| (0..grid.width).map(move |x| (x, y)))
+                .map(|(x, y)| DVec3::new(row_node(y).0 * cos_phi[x], row_node(y).0 * sin_phi[x], row_node(y).1))
+                .collect()
+        } else {
+            Vec::new()
+        };
         ConeIntegrator {
-            sub_rows: (0..grid.height).flat_map(|y| rule.sub_rows(grid, y)).collect(),
+            single_nodes,
+            sub_rows,
             phi_weights: columns.iter().map(|c| c.1).collect(),
             cos_phi,
             sin_phi,
@@ -204,6 +217,20 @@ impl ConeIntegrator {
     /// Σ over the windows' texels whose centre is within θ* of `r` of L_t ∫_t f dω.
     fn sum(&self, r: DVec3, windows: &[Window], theta_star: f64, mut f: impl FnMut(DVec3) -> [f64; 3]) -> [f64; 3] {
         let mut acc = [0.0; 3];
+        if !self.single_nodes.is_empty() {
+            // One node per texel: its direction and weight from the tables, nothing else.
+            let (w, n) = (self.source.grid.width, &self.single_nodes);
+            self.for_each_in_cone(r, windows, theta_star, |x, y| {
+                let t = y * w + x;
+                let v = f(n[t]);
+                let l = self.source.radiance[t];
+                let wt = self.sub_rows[y].weight * self.phi_weights[0];
+                for k in 0..3 {
+                    acc[k] += l[k] * wt * v[k];
+                }
+            });
+            return acc;
+        }
         self.for_each_in_cone(r, windows, theta_star, |x, y| {
             let texel = self.texel_integral(x, y, &mut f);
             let l = self.source.radiance[y * self.source.grid.width + x];
