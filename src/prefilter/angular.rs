@@ -447,11 +447,25 @@ pub fn radial_map(
     height: usize,
     progress: &dyn Progress,
 ) -> Result<RgbImage, AngularError> {
-    let theta_star = theta_star.clamp(1e-9, PI);
     if width == env.grid().width {
-        let map = zonal::zonal_filter(&env.source.image, u, theta_star, &env.rule, height, progress)?;
+        let map = zonal::zonal_filter(&env.source.image, u, theta_star.clamp(1e-9, PI), &env.rule, height, progress)?;
         return Ok(map.to_image());
     }
+    Ok(radial_cone_sum(env, u, theta_star, width, height, progress))
+}
+
+/// The same map as [`radial_map`] by the cone sum, whatever the width: per output texel, the
+/// texels of the cone one by one (the paper's angular method, App. D, with exact texel
+/// integrals). [`radial_map`] takes it for outputs narrower or wider than the environment.
+pub fn radial_cone_sum(
+    env: &ConeIntegrator,
+    u: impl Fn(f64) -> f64 + Sync,
+    theta_star: f64,
+    width: usize,
+    height: usize,
+    progress: &dyn Progress,
+) -> RgbImage {
+    let theta_star = theta_star.clamp(1e-9, PI);
     let out_grid = LatLong::new(width, height);
     progress.start("angular", height as u64);
     let mut image = RgbImage::new(width, height);
@@ -465,13 +479,13 @@ pub fn radial_map(
         progress.advance(1);
     });
     progress.finish();
-    Ok(image)
+    image
 }
 
-/// Angular reflection map for a distant viewer in direction `view`, in f64: for each reflection
-/// vector R, B̃(R) = Σ_{cone(θ*(θ_o))} L_t ∫_t ρ̂(ω, view) dω with cos θ_o = R·view. The normal
-/// and its frame are computed once per output texel, the φ windows once per output row and θ*.
-pub fn view_map_f64(
+/// Angular reflection map for a distant viewer in direction `view`: for each reflection vector
+/// R, B̃(R) = Σ_{cone(θ*(θ_o))} L_t ∫_t ρ̂(ω, view) dω with cos θ_o = R·view. The normal and its
+/// frame are computed once per output texel, the φ windows once per output row and θ*.
+pub fn view_map(
     env: &ConeIntegrator,
     model: &super::model::Model,
     cutoff: &CutoffTable,
@@ -479,10 +493,10 @@ pub fn view_map_f64(
     width: usize,
     height: usize,
     progress: &dyn Progress,
-) -> Vec<[f64; 3]> {
+) -> RgbImage {
     let out_grid = LatLong::new(width, height);
-    let mut pixels = vec![[0.0; 3]; width * height];
-    pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+    let mut image = RgbImage::new(width, height);
+    image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
         let theta_r = out_grid.row_theta(y);
         // θ* takes few distinct values (the table's bins): windows per value.
         let mut cache: Vec<(f64, Vec<Window>)> = Vec::new();
@@ -497,25 +511,12 @@ pub fn view_map_f64(
                     cache.len() - 1
                 }
             };
-            *px = env.sum(r, &cache[i].1, theta_star, |l| model.rho_hat_prepared(&prepared, l));
+            let v = env.sum(r, &cache[i].1, theta_star, |l| model.rho_hat_prepared(&prepared, l));
+            *px = [v[0] as f32, v[1] as f32, v[2] as f32];
         }
         progress.advance(1);
     });
-    pixels
-}
-
-/// [`view_map_f64`] as an image.
-pub fn view_map(
-    env: &ConeIntegrator,
-    model: &super::model::Model,
-    cutoff: &CutoffTable,
-    view: DVec3,
-    width: usize,
-    height: usize,
-    progress: &dyn Progress,
-) -> RgbImage {
-    let pixels = view_map_f64(env, model, cutoff, view, width, height, progress);
-    RgbImage { width, height, pixels: pixels.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect() }
+    image
 }
 
 #[cfg(test)]
@@ -628,10 +629,10 @@ mod tests {
         let view = DVec3::new(0.3, -0.5, 0.4).normalize();
         let run = |threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| view_map_f64(&env, &model, &cutoff, view, 24, 12, &NoProgress))
+            pool.install(|| view_map(&env, &model, &cutoff, view, 24, 12, &NoProgress))
         };
         let one = run(1);
-        assert!(one.iter().flatten().any(|v| *v > 0.0));
+        assert!(one.pixels.iter().flatten().any(|v| *v > 0.0));
         assert_eq!(run(2), one);
         assert_eq!(run(3), one);
     }
