@@ -9,6 +9,7 @@ mod load;
 mod probe;
 mod resample;
 pub mod stage;
+pub mod zonal;
 
 pub use cube::{Face, FACES};
 pub use layout::Layout;

@@ -163,8 +163,92 @@ pub fn frequency(
     })
 }
 
-/// The angular reference: for radially symmetric BRDFs one map (views ignored), otherwise one
-/// reflection map per view. The BRDF is truncated at ε (App. D).
+/// How the angular reference computed its maps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AngularPath {
+    /// A radially symmetric lobe on an output as wide as the input: FFT convolutions in φ
+    /// ([`crate::envmap::zonal`]).
+    Zonal,
+    /// The cone sum per output texel (3-D BRDFs, or other output widths).
+    ConeSum,
+}
+
+/// What the angular reference used: no SH orders, only the truncation and the texel rule.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct AngularReport {
+    /// The requested truncation ε.
+    pub epsilon: f64,
+    /// The largest share of the lobe's weight a cone leaves out (≤ ε).
+    pub epsilon_achieved: f64,
+    /// The widest cone half-angle θ* used, in radians.
+    pub cone_angle: f64,
+    /// Sub-samples per texel axis of the texel integrals (n; n² per texel).
+    pub subsamples: usize,
+    /// The measured share of the lobe's weight the texel rule misplaces (≤ ε/10 unless the
+    /// largest rule was needed).
+    pub quadrature_error: f64,
+    /// Zonal FFT or cone sum.
+    pub path: AngularPath,
+}
+
+/// The angular reference's maps and what it used.
+pub struct AngularMaps {
+    /// One map per view (one map in all for radially symmetric BRDFs).
+    pub maps: Vec<RgbImage>,
+    /// Truncation and texel rule.
+    pub report: AngularReport,
+}
+
+/// The angular reference (App. D): for radially symmetric BRDFs one map (views ignored),
+/// otherwise one reflection map per view, on a `width`×`height` lat-long grid. The lobe is
+/// truncated at ε, and its texel integrals use the smallest Gauss–Legendre rule that misplaces
+/// at most ε/10 of its weight ([`angular`]). No spherical harmonics are involved.
+pub fn angular_reference(
+    model: &Model,
+    env: &EnvMap,
+    views: &[DVec3],
+    epsilon: f64,
+    width: usize,
+    height: usize,
+    progress: &dyn Progress,
+) -> Result<AngularMaps, PrefilterError> {
+    let cone = ConeIntegrator::new(env)?;
+    if model.centre().is_some() {
+        let u = |x: f64| model.lobe(x)[0];
+        let truncation = angular::radial_truncation(u, epsilon);
+        let choice = angular::reference_rule(cone.grid(), &u, truncation.theta_star, height, epsilon);
+        let cone = cone.with_rule(choice.rule.clone());
+        let map = angular::radial_map(&cone, u, truncation.theta_star, width, height, progress)?;
+        let path = if width == cone.grid().width { AngularPath::Zonal } else { AngularPath::ConeSum };
+        let report = AngularReport {
+            epsilon,
+            epsilon_achieved: truncation.left_out,
+            cone_angle: truncation.theta_star,
+            subsamples: choice.rule.subsamples(),
+            quadrature_error: choice.estimated_error,
+            path,
+        };
+        return Ok(AngularMaps { maps: vec![map], report });
+    }
+    let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), epsilon, 65);
+    let choice = cone.rule_for_view(model, &cutoff, epsilon / 10.0);
+    let cone = cone.with_rule(choice.rule.clone());
+    progress.start("angular", (views.len() * height) as u64);
+    let maps = views.iter().map(|&v| angular::view_map(&cone, model, &cutoff, v, width, height, progress)).collect();
+    progress.finish();
+    let report = AngularReport {
+        epsilon,
+        epsilon_achieved: cutoff.left_out(),
+        cone_angle: cutoff.max(),
+        subsamples: choice.rule.subsamples(),
+        quadrature_error: choice.estimated_error,
+        path: AngularPath::ConeSum,
+    };
+    Ok(AngularMaps { maps, report })
+}
+
+/// The maps of [`angular_reference`].
 pub fn angular_maps(
     model: &Model,
     env: &EnvMap,
@@ -174,18 +258,5 @@ pub fn angular_maps(
     height: usize,
     progress: &dyn Progress,
 ) -> Result<Vec<RgbImage>, PrefilterError> {
-    let cone = ConeIntegrator::new(env)?;
-    if model.centre().is_some() {
-        let grey = |x: f64| {
-            let v = model.lobe(x);
-            (v[0] + v[1] + v[2]) / 3.0
-        };
-        let theta_star = angular::radial_cutoff(grey, epsilon);
-        return Ok(vec![angular::radial_map(&cone, |x| model.lobe(x), theta_star, width, height, progress)]);
-    }
-    let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), epsilon, 65);
-    progress.start("angular", (views.len() * height) as u64);
-    let maps = views.iter().map(|&v| angular::view_map(&cone, model, &cutoff, v, width, height, progress)).collect();
-    progress.finish();
-    Ok(maps)
+    Ok(angular_reference(model, env, views, epsilon, width, height, progress)?.maps)
 }

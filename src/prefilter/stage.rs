@@ -274,17 +274,23 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
             let Lighting::Map(env) = lighting else {
                 return Err(Error::Angular("needs the environment map, not SH coefficients"));
             };
+            if config.orders.is_some() {
+                return Err(Error::Angular("takes no --order: it uses no spherical harmonics (ε is its truncation)"));
+            }
             let latlong = as_latlong(env)?;
-            let brdf_sh = pipeline::brdf_coefficients(&model, orders).map_err(fail)?;
-            let size = config.size.unwrap_or_else(|| default_size(brdf_sh.f));
+            // No SH, so no F_B to size the grid by: the input's own lat-long grid by default.
+            let size = config.size.unwrap_or((latlong.image().width, latlong.image().height));
             let t = Instant::now();
             let wanted = if config.irradiance && views.is_empty() { vec![DVec3::Z] } else { views.clone() };
-            let images = pipeline::angular_maps(&model, &latlong, &wanted, config.epsilon, size.0, size.1, progress)
-                .map_err(fail)?;
+            let reference =
+                pipeline::angular_reference(&model, &latlong, &wanted, config.epsilon, size.0, size.1, progress)
+                    .map_err(fail)?;
             timings.angular_seconds = t.elapsed().as_secs_f64();
             // Radially symmetric BRDFs give one map whatever the view.
+            let images = reference.maps;
             let maps = if model.centre().is_some() { vec![images[0].clone(); wanted.len()] } else { images };
-            (maps, None, brdf_sh.f, brdf_sh.p, config.epsilon, 0, None, size)
+            // F_B = P_B = 0: no orders; ε achieved is the lobe weight the truncation left out.
+            (maps, None, 0, 0, reference.report.epsilon_achieved, 0, None, size)
         }
     };
 

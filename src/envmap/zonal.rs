@@ -1,0 +1,655 @@
+//! Zonal filtering of lat-long maps: B(R) = ∫ L(ω) k(R·ω) dω for a kernel that depends only on
+//! the angle between the output direction R and the light direction ω (Phong's lobe about R,
+//! Lambert's about N, the GGX split-sum lobe), computed exactly for the piecewise-constant map by
+//! circular convolutions in φ.
+//!
+//! **What is computed.** The map is constant over each texel t (radiance L_t). The filter keeps
+//! the texels whose centre c_t lies within the cone angle θ_c of R and integrates the kernel over
+//! each one's extent:
+//!
+//!   B(R) = Σ_{t : R·c_t ≥ cos θ_c} L_t ∫_t k(R·ω) dω.
+//!
+//! The texel integrals use an n × n Gauss–Legendre product rule in (z = cos θ, φ), in which the
+//! solid angle is dz dφ ([`TexelRule`]); n is chosen by measurement ([`choose_rule`]), so a narrow
+//! lobe over coarse texels is integrated over their extent rather than sampled at their centres.
+//! With n = 1 the rule is the texel's z-midpoint times its exact solid angle.
+//!
+//! **Shift invariance.** Let the source have W columns and the output W columns too (any number
+//! of rows). A rotation about +Z by 2π/W maps both grids onto themselves and leaves R·ω, hence the
+//! kernel, unchanged. So the weight between output texel (x_o, y_o) and source texel (x, y) depends
+//! only on (y_o, y, d = x − x_o mod W), and is even in d. For each pair of rows the sum over x is a
+//! circular convolution: B_{y_o} = Σ_y L_y ⊛ K_{y_o,y}, i.e. B̂_{y_o}(m) = Σ_y L̂_y(m) K̂_{y_o,y}(m)
+//! with real K̂ (K is even). The kernel K_{y_o,y} is built once per row pair (the d-window and the
+//! source rows outside the cone are skipped), transformed once, and the products are accumulated
+//! per output row in the frequency domain: one inverse FFT per output row and channel. The cost is
+//! O(H_out·H_cone·(W log W + n²·W_cone)) instead of the direct O(H_out·W·N_cone·n²).
+//!
+//! **Determinism.** Every output row is computed by one thread, accumulating its source rows in
+//! ascending order: the result is bitwise the same for any number of threads.
+//!
+//! [`zonal_filter_reference`] is the slow, obviously-correct form of the same sum (every texel,
+//! every sub-sample, directions from [`crate::sphere::direction`]); the tests hold the fast path
+//! to it at 1e-9.
+
+use crate::io::RgbImage;
+use crate::progress::Progress;
+use crate::quadrature::gauss_legendre_cached;
+use crate::sphere::{self, LatLong};
+use rayon::prelude::*;
+use realfft::num_complex::Complex;
+use realfft::RealFftPlanner;
+use std::f64::consts::{PI, TAU};
+use std::sync::Arc;
+
+/// The largest map (source or output) the filter accepts, in texels: the source spectra take
+/// 24 bytes per texel (3 channels × W/2 + 1 complex f64 per row), 200 MB at this bound.
+pub const MAX_TEXELS: usize = 1 << 23;
+
+/// Errors of the zonal filter.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ZonalError {
+    /// A map or output of no texels.
+    #[error("cannot filter a {width}x{height} map into {out_height} rows")]
+    Empty {
+        /// Source width.
+        width: usize,
+        /// Source height.
+        height: usize,
+        /// Output rows.
+        out_height: usize,
+    },
+    /// Beyond [`MAX_TEXELS`].
+    #[error("a {width}x{height} map is beyond the zonal filter's bound of {max} texels")]
+    TooLarge {
+        /// Width.
+        width: usize,
+        /// Height.
+        height: usize,
+        /// The bound.
+        max: usize,
+    },
+    /// A sub-sample count outside 1..=[`TexelRule::MAX_SUBSAMPLES`].
+    #[error("texel sub-samples per axis must be 1..={max}, got {n}")]
+    Subsamples {
+        /// Requested.
+        n: usize,
+        /// Largest allowed.
+        max: usize,
+    },
+    /// A cone angle that is not in (0, π].
+    #[error("the cone angle must be in (0, π] radians, got {0}")]
+    Cone(f64),
+}
+
+/// One row of a texel rule's nodes: z = cos θ, sin θ, and the weight in z.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SubRow {
+    /// z = cos θ of the node.
+    pub z: f64,
+    /// sin θ = √(1 − z²).
+    pub sin_theta: f64,
+    /// Gauss–Legendre weight in z (the row's weights sum to its z extent).
+    pub weight: f64,
+}
+
+/// The n × n Gauss–Legendre product rule over a lat-long texel in (z = cos θ, φ): the texel
+/// integral ∫_t f dω = ∫∫ f dz dφ is Σ_kj w_k w_j f(z_k, φ_j). Exact for f polynomial of degree
+/// < 2n in z and in φ separately; the weights sum to the texel's exact solid angle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TexelRule {
+    /// Nodes and weights on [−1, 1].
+    nodes: Arc<Vec<(f64, f64)>>,
+}
+
+impl TexelRule {
+    /// The largest sub-sample count per axis.
+    pub const MAX_SUBSAMPLES: usize = 16;
+
+    /// n sub-samples per axis (n² per texel).
+    pub fn new(n: usize) -> Result<Self, ZonalError> {
+        if !(1..=Self::MAX_SUBSAMPLES).contains(&n) {
+            return Err(ZonalError::Subsamples { n, max: Self::MAX_SUBSAMPLES });
+        }
+        Ok(TexelRule { nodes: gauss_legendre_cached(n) })
+    }
+
+    /// One node per texel: the z-midpoint times the texel's solid angle.
+    pub fn midpoint() -> Self {
+        TexelRule { nodes: gauss_legendre_cached(1) }
+    }
+
+    /// Sub-samples per axis.
+    pub fn subsamples(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The nodes of row `y` of `grid` in z, top (largest z) last.
+    pub fn sub_rows(&self, grid: LatLong, y: usize) -> Vec<SubRow> {
+        let z_top = (PI * y as f64 / grid.height as f64).cos();
+        let z_bottom = (PI * (y + 1) as f64 / grid.height as f64).cos();
+        let (mid, half) = (0.5 * (z_top + z_bottom), 0.5 * (z_top - z_bottom));
+        self.nodes
+            .iter()
+            .map(|&(xi, w)| {
+                let z = mid + half * xi;
+                SubRow { z, sin_theta: (1.0 - z * z).max(0.0).sqrt(), weight: half * w }
+            })
+            .collect()
+    }
+
+    /// The nodes in φ of one column of `grid`: offsets from the column centre in columns (in
+    /// (−½, ½)) and weights in radians (summing to 2π/W).
+    pub fn sub_columns(&self, grid: LatLong) -> Vec<(f64, f64)> {
+        let h = TAU / grid.width as f64;
+        self.nodes.iter().map(|&(xi, w)| (0.5 * xi, 0.5 * h * w)).collect()
+    }
+}
+
+/// A rule chosen by [`choose_rule`], with the measured change that justified it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RuleChoice {
+    /// The rule.
+    pub rule: TexelRule,
+    /// Σ|w_n − w_next| / Σ|w_next| between this rule's texel integrals and the next candidate's
+    /// (the estimated share of the kernel's weight the rule misplaces).
+    pub estimated_error: f64,
+}
+
+/// Sub-sample counts [`choose_rule`] tries, in order.
+pub const CANDIDATE_SUBSAMPLES: [usize; 8] = [1, 2, 3, 4, 6, 8, 12, 16];
+
+/// The smallest rule of [`CANDIDATE_SUBSAMPLES`] whose texel integrals move by at most
+/// `tolerance` of their total when the sub-sample count is raised to the next candidate:
+/// Σ|w_n − w_next| ≤ tolerance · Σ|w_next|, with `weights(rule)` the texel integrals of some
+/// probe outputs (the same texels, in the same order, for every rule). Gauss–Legendre converges
+/// geometrically for a kernel smooth over a texel, so the change to the next candidate bounds
+/// the error of the rule itself. The largest candidate if none qualifies.
+pub fn choose_rule(tolerance: f64, mut weights: impl FnMut(&TexelRule) -> Vec<f64>) -> RuleChoice {
+    let rules: Vec<TexelRule> =
+        CANDIDATE_SUBSAMPLES.iter().map(|&n| TexelRule::new(n).expect("candidates are in range")).collect();
+    let mut current = weights(&rules[0]);
+    let mut last_error = f64::INFINITY;
+    for pair in rules.windows(2) {
+        let next = weights(&pair[1]);
+        let total: f64 = next.iter().map(|w| w.abs()).sum();
+        let moved: f64 = current.iter().zip(&next).map(|(a, b)| (a - b).abs()).sum();
+        last_error = if total > 0.0 { moved / total } else { 0.0 };
+        if last_error <= tolerance {
+            return RuleChoice { rule: pair[0].clone(), estimated_error: last_error };
+        }
+        current = next;
+    }
+    RuleChoice { rule: rules[rules.len() - 1].clone(), estimated_error: last_error }
+}
+
+/// A zonally filtered map in f64, with the kernel's total weight per output row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ZonalMap {
+    /// Columns (the source's).
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Row-major RGB.
+    pub pixels: Vec<[f64; 3]>,
+    /// Σ_t ∫_t k(R·ω) dω over the kept texels, per output row (the same for every column):
+    /// what a white map filters to. Divide by it for a kernel normalized on the texels kept.
+    pub row_weight: Vec<f64>,
+}
+
+impl ZonalMap {
+    /// The map as f32.
+    pub fn to_image(&self) -> RgbImage {
+        let pixels = self.pixels.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect();
+        RgbImage { width: self.width, height: self.height, pixels }
+    }
+
+    /// The map divided, row by row, by the weight of the texels kept (a white map gives 1).
+    pub fn normalized_image(&self) -> RgbImage {
+        let pixels = self
+            .pixels
+            .chunks(self.width)
+            .zip(&self.row_weight)
+            .flat_map(|(row, &w)| {
+                let inv = if w != 0.0 { 1.0 / w } else { 0.0 };
+                row.iter().map(move |p| [(p[0] * inv) as f32, (p[1] * inv) as f32, (p[2] * inv) as f32])
+            })
+            .collect();
+        RgbImage { width: self.width, height: self.height, pixels }
+    }
+}
+
+fn check(latlong: &RgbImage, cone: f64, out_height: usize) -> Result<(), ZonalError> {
+    let (width, height) = (latlong.width, latlong.height);
+    if width == 0 || height == 0 || out_height == 0 {
+        return Err(ZonalError::Empty { width, height, out_height });
+    }
+    for (w, h) in [(width, height), (width, out_height)] {
+        if w.checked_mul(h).is_none_or(|n| n > MAX_TEXELS) {
+            return Err(ZonalError::TooLarge { width: w, height: h, max: MAX_TEXELS });
+        }
+    }
+    if cone.is_nan() || cone <= 0.0 || cone > PI {
+        return Err(ZonalError::Cone(cone));
+    }
+    Ok(())
+}
+
+/// cos θ_c, or −∞ for the whole sphere (so that no texel is dropped by rounding).
+fn cos_cone(cone: f64) -> f64 {
+    if cone >= PI {
+        f64::NEG_INFINITY
+    } else {
+        cone.cos()
+    }
+}
+
+/// What every row pair shares: the source grid, its texel rule and the cosine tables.
+struct Plan<'a, K> {
+    grid: LatLong,
+    kernel: &'a K,
+    cone: f64,
+    cos_cone: f64,
+    /// n sub-rows per source row.
+    sub_rows: Vec<SubRow>,
+    /// (cos θ, sin θ) of each source row's centre.
+    centres: Vec<(f64, f64)>,
+    /// Weights in φ of the n sub-columns.
+    phi_weights: Vec<f64>,
+    /// cos((d + offset_j)·2π/W) for d = 0..=W/2, j = 0..n.
+    cos_nodes: Vec<f64>,
+    /// cos(d·2π/W) for d = 0..=W/2.
+    cos_centres: Vec<f64>,
+}
+
+impl<'a, K: Fn(f64) -> f64 + Sync> Plan<'a, K> {
+    fn new(width: usize, height: usize, rule: &TexelRule, cone: f64, kernel: &'a K) -> Self {
+        let grid = LatLong::new(width, height);
+        let h = TAU / width as f64;
+        let columns = rule.sub_columns(grid);
+        let half = width / 2;
+        let mut cos_nodes = Vec::with_capacity((half + 1) * columns.len());
+        for d in 0..=half {
+            cos_nodes.extend(columns.iter().map(|&(offset, _)| ((d as f64 + offset) * h).cos()));
+        }
+        Plan {
+            grid,
+            kernel,
+            cone,
+            cos_cone: cos_cone(cone),
+            sub_rows: (0..height).flat_map(|y| rule.sub_rows(grid, y)).collect(),
+            centres: (0..height).map(|y| grid.row_theta(y).sin_cos()).map(|(s, c)| (c, s)).collect(),
+            phi_weights: columns.iter().map(|c| c.1).collect(),
+            cos_nodes,
+            cos_centres: (0..=half).map(|d| (d as f64 * h).cos()).collect(),
+        }
+    }
+
+    /// Fills `k[d]`, d = 0..=W/2, with the weight of the source texel d columns from the output
+    /// texel, for source row `y` and an output row at (cos θ_R, sin θ_R) (zero where the texel's
+    /// centre is outside the cone). Returns false when no texel of the row has its centre in it.
+    fn pair_kernel(&self, (z_r, s_r): (f64, f64), theta_r: f64, y: usize, k: &mut [f64]) -> bool {
+        // The row's centres are at least |θ_y − θ_R| from R.
+        if (self.grid.row_theta(y) - theta_r).abs() > self.cone {
+            return false;
+        }
+        let half = self.grid.width / 2;
+        let (ct, st) = self.centres[y];
+        // Centres pass when ct·z_R + st·s_R·cos(d h) ≥ cos θ_c, and cos(d h) falls with d on
+        // [0, W/2]: scan d up from 0 and stop at the first failure.
+        let n = self.phi_weights.len();
+        let rows = &self.sub_rows[y * n..(y + 1) * n];
+        k.fill(0.0);
+        let mut any = false;
+        for d in 0..=half {
+            if ct * z_r + st * s_r * self.cos_centres[d] < self.cos_cone {
+                break;
+            }
+            any = true;
+            let cos_dphi = &self.cos_nodes[d * n..(d + 1) * n];
+            let mut sum = 0.0;
+            for row in rows {
+                let (a, b) = (row.z * z_r, row.sin_theta * s_r);
+                let mut inner = 0.0;
+                for (c, w) in cos_dphi.iter().zip(&self.phi_weights) {
+                    inner += w * (self.kernel)(a + b * c);
+                }
+                sum += row.weight * inner;
+            }
+            k[d] = sum;
+        }
+        any
+    }
+}
+
+/// Filters `latlong` (W × H) with the zonal kernel k(cos γ) truncated to the texels whose centres
+/// lie within `cone` radians of R (π: the whole sphere), into a W × `out_height` lat-long map of
+/// R. Texel integrals use `rule`. See the module documentation for the definition and the
+/// algorithm; `progress` advances once per output row.
+pub fn zonal_filter(
+    latlong: &RgbImage,
+    kernel: impl Fn(f64) -> f64 + Sync,
+    cone: f64,
+    rule: &TexelRule,
+    out_height: usize,
+    progress: &dyn Progress,
+) -> Result<ZonalMap, ZonalError> {
+    check(latlong, cone, out_height)?;
+    let (width, height) = (latlong.width, latlong.height);
+    let plan = Plan::new(width, height, rule, cone, &kernel);
+    let bins = width / 2 + 1;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let forward = planner.plan_fft_forward(width);
+    let inverse = planner.plan_fft_inverse(width);
+
+    // The spectra of every source row and channel: [y][channel][m].
+    let spectra: Vec<Complex<f64>> = (0..height)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let mut input = forward.make_input_vec();
+            let mut scratch = forward.make_scratch_vec();
+            let mut out = Vec::with_capacity(3 * bins);
+            for c in 0..3 {
+                for (v, p) in input.iter_mut().zip(latlong.row(y)) {
+                    *v = p[c] as f64;
+                }
+                let mut spectrum = forward.make_output_vec();
+                forward.process_with_scratch(&mut input, &mut spectrum, &mut scratch).expect("sizes from the plan");
+                out.extend(spectrum);
+            }
+            out
+        })
+        .collect();
+
+    let out_grid = LatLong::new(width, out_height);
+    let mut pixels = vec![[0.0; 3]; width * out_height];
+    let mut row_weight = vec![0.0; out_height];
+    progress.start("zonal filter", out_height as u64);
+    pixels.par_chunks_mut(width).zip(row_weight.par_iter_mut()).enumerate().for_each_init(
+        || RowScratch::new(&*forward, &*inverse, width),
+        |s, (y_out, (row, weight))| {
+            let theta_r = out_grid.row_theta(y_out);
+            let (s_r, z_r) = theta_r.sin_cos();
+            s.acc.iter_mut().for_each(|a| a.fill(Complex::new(0.0, 0.0)));
+            let mut total = 0.0;
+            for y in 0..height {
+                if !plan.pair_kernel((z_r, s_r), theta_r, y, &mut s.half) {
+                    continue;
+                }
+                // The even kernel over all W offsets, and its (real) spectrum.
+                s.full[0] = s.half[0];
+                for d in 1..width {
+                    s.full[d] = s.half[d.min(width - d)];
+                }
+                forward
+                    .process_with_scratch(&mut s.full, &mut s.kernel_spectrum, &mut s.forward_scratch)
+                    .expect("sizes from the plan");
+                total += s.kernel_spectrum[0].re;
+                let source = &spectra[y * 3 * bins..(y + 1) * 3 * bins];
+                for c in 0..3 {
+                    let src = &source[c * bins..(c + 1) * bins];
+                    for ((a, l), k) in s.acc[c].iter_mut().zip(src).zip(&s.kernel_spectrum) {
+                        *a += l * k.re;
+                    }
+                }
+            }
+            *weight = total;
+            let scale = 1.0 / width as f64;
+            for c in 0..3 {
+                // The DC and Nyquist bins of a real signal's spectrum are real.
+                s.acc[c][0].im = 0.0;
+                if width % 2 == 0 {
+                    s.acc[c][bins - 1].im = 0.0;
+                }
+                inverse
+                    .process_with_scratch(&mut s.acc[c], &mut s.out, &mut s.inverse_scratch)
+                    .expect("sizes from the plan");
+                for (p, v) in row.iter_mut().zip(&s.out) {
+                    p[c] = v * scale;
+                }
+            }
+            progress.advance(1);
+        },
+    );
+    progress.finish();
+    Ok(ZonalMap { width, height: out_height, pixels, row_weight })
+}
+
+/// Per-thread buffers of [`zonal_filter`].
+struct RowScratch {
+    half: Vec<f64>,
+    full: Vec<f64>,
+    kernel_spectrum: Vec<Complex<f64>>,
+    acc: [Vec<Complex<f64>>; 3],
+    out: Vec<f64>,
+    forward_scratch: Vec<Complex<f64>>,
+    inverse_scratch: Vec<Complex<f64>>,
+}
+
+impl RowScratch {
+    fn new(forward: &dyn realfft::RealToComplex<f64>, inverse: &dyn realfft::ComplexToReal<f64>, width: usize) -> Self {
+        RowScratch {
+            half: vec![0.0; width / 2 + 1],
+            full: forward.make_input_vec(),
+            kernel_spectrum: forward.make_output_vec(),
+            acc: [inverse.make_input_vec(), inverse.make_input_vec(), inverse.make_input_vec()],
+            out: inverse.make_output_vec(),
+            forward_scratch: forward.make_scratch_vec(),
+            inverse_scratch: inverse.make_scratch_vec(),
+        }
+    }
+}
+
+/// The texel integrals of `kernel` seen from probe output rows (the equator, 45° and the first
+/// row of a W × `out_height` grid), for [`choose_rule`]: the same texels for every rule.
+pub fn probe_weights(
+    width: usize,
+    height: usize,
+    kernel: &(impl Fn(f64) -> f64 + Sync),
+    cone: f64,
+    out_height: usize,
+    rule: &TexelRule,
+) -> Vec<f64> {
+    let plan = Plan::new(width, height, rule, cone, kernel);
+    let out_grid = LatLong::new(width, out_height.max(1));
+    let probes = [out_height / 2, out_height / 4, 0];
+    let mut k = vec![0.0; width / 2 + 1];
+    let mut weights = Vec::new();
+    for y_out in probes {
+        let theta_r = out_grid.row_theta(y_out);
+        let (s_r, z_r) = theta_r.sin_cos();
+        for y in 0..height {
+            if plan.pair_kernel((z_r, s_r), theta_r, y, &mut k) {
+                // Offsets 0 < d < W/2 stand for two texels (±d).
+                weights.extend(k.iter().enumerate().map(|(d, w)| if d == 0 || 2 * d == width { *w } else { 2.0 * w }));
+            }
+        }
+    }
+    weights
+}
+
+/// The rule for `kernel` on a W × H source: [`choose_rule`] over [`probe_weights`].
+pub fn rule_for_kernel(
+    width: usize,
+    height: usize,
+    kernel: &(impl Fn(f64) -> f64 + Sync),
+    cone: f64,
+    out_height: usize,
+    tolerance: f64,
+) -> RuleChoice {
+    choose_rule(tolerance, |rule| probe_weights(width, height, kernel, cone, out_height, rule))
+}
+
+/// The same sum as [`zonal_filter`], directly: for every output texel, every source texel whose
+/// centre is in the cone and every sub-sample, L_t·w·k(R·ω) with R and ω from
+/// [`sphere::direction`]. O(N_out·N_in·n²): for tests on small maps.
+pub fn zonal_filter_reference(
+    latlong: &RgbImage,
+    kernel: impl Fn(f64) -> f64,
+    cone: f64,
+    rule: &TexelRule,
+    out_height: usize,
+) -> Result<ZonalMap, ZonalError> {
+    check(latlong, cone, out_height)?;
+    let (width, height) = (latlong.width, latlong.height);
+    let (grid, out_grid) = (LatLong::new(width, height), LatLong::new(width, out_height));
+    let cos_cone = cos_cone(cone);
+    let h = TAU / width as f64;
+    let mut pixels = Vec::with_capacity(width * out_height);
+    let mut row_weight = vec![0.0; out_height];
+    for y_out in 0..out_height {
+        for x_out in 0..width {
+            let r = out_grid.texel_direction(x_out, y_out);
+            let (mut acc, mut weight) = ([0.0; 3], 0.0);
+            for y in 0..height {
+                for x in 0..width {
+                    if r.dot(grid.texel_direction(x, y)) < cos_cone {
+                        continue;
+                    }
+                    let mut w = 0.0;
+                    for row in rule.sub_rows(grid, y) {
+                        for (offset, w_phi) in rule.sub_columns(grid) {
+                            let omega = sphere::direction(row.z.acos(), (x as f64 + 0.5 + offset) * h);
+                            w += row.weight * w_phi * kernel(r.dot(omega));
+                        }
+                    }
+                    let l = latlong.get(x, y);
+                    for c in 0..3 {
+                        acc[c] += l[c] as f64 * w;
+                    }
+                    weight += w;
+                }
+            }
+            if x_out == 0 {
+                row_weight[y_out] = weight;
+            }
+            pixels.push(acc);
+        }
+    }
+    Ok(ZonalMap { width, height: out_height, pixels, row_weight })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::progress::NoProgress;
+
+    /// A map with structure at every scale and a bright, small source.
+    fn test_map(w: usize, h: usize) -> RgbImage {
+        RgbImage::from_fn(w, h, |x, y| {
+            let d = LatLong::new(w, h).texel_direction(x, y);
+            let sun = if x == w / 3 && y == h / 3 { 500.0 } else { 0.0 };
+            let v = 1.0 + 0.5 * (3.0 * d.x).sin() + (d.z > 0.2) as u8 as f64;
+            [(v + sun) as f32, (0.7 * v + (x % 3) as f64 * 0.1) as f32, (0.2 + (y % 2) as f64 + sun) as f32]
+        })
+    }
+
+    fn phong(s: f64) -> impl Fn(f64) -> f64 + Sync {
+        move |x: f64| if x > 0.0 { (s + 1.0) / TAU * x.powf(s) } else { 0.0 }
+    }
+
+    fn max_relative_difference(a: &ZonalMap, b: &ZonalMap) -> f64 {
+        let scale = b.pixels.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        a.pixels
+            .iter()
+            .flatten()
+            .zip(b.pixels.iter().flatten())
+            .map(|(p, q)| (p - q).abs() / q.abs().max(1e-6 * scale))
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn the_fast_filter_equals_the_direct_sum() {
+        for (w, h, out_h) in [(24, 12, 12), (17, 9, 5), (32, 16, 7)] {
+            let map = test_map(w, h);
+            for (s, cone, n) in [(8.0, PI, 2), (8.0, 0.9, 1), (40.0, 0.731, 3), (2.0, 2.2, 2)] {
+                let rule = TexelRule::new(n).unwrap();
+                let fast = zonal_filter(&map, phong(s), cone, &rule, out_h, &NoProgress).unwrap();
+                let slow = zonal_filter_reference(&map, phong(s), cone, &rule, out_h).unwrap();
+                let diff = max_relative_difference(&fast, &slow);
+                assert!(diff < 1e-9, "{w}x{h}→{out_h}, s={s}, cone {cone}, n={n}: {diff:e}");
+                for (a, b) in fast.row_weight.iter().zip(&slow.row_weight) {
+                    assert!((a - b).abs() < 1e-12 * b.abs().max(1.0), "{a} vs {b}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_white_map_filters_to_the_kernel_integral() {
+        // White furnace: ∫ (s+1)/2π max(x, 0)^s dω = 1 over the whole sphere, and a constant
+        // kernel 1/4π integrates exactly to 1 under any rule (the weights sum to solid angles).
+        let white = RgbImage::from_fn(64, 32, |_, _| [1.0; 3]);
+        let constant = zonal_filter(&white, |_| 1.0 / (4.0 * PI), PI, &TexelRule::midpoint(), 16, &NoProgress).unwrap();
+        assert!(constant.pixels.iter().flatten().all(|v| (v - 1.0).abs() < 1e-12));
+        for s in [1.0, 8.0, 64.0] {
+            let choice = rule_for_kernel(64, 32, &phong(s), PI, 32, 1e-7);
+            let map = zonal_filter(&white, phong(s), PI, &choice.rule, 32, &NoProgress).unwrap();
+            for (row, w) in map.pixels.chunks(64).zip(&map.row_weight) {
+                for p in row {
+                    assert!((p[0] - w).abs() < 1e-12, "{} vs row weight {w}", p[0]);
+                }
+                assert!((w - 1.0).abs() < 1e-6, "s={s} (n={}): {w}", choice.rule.subsamples());
+            }
+            assert!(map.normalized_image().pixels.iter().flatten().all(|v| (v - 1.0).abs() < 1e-6));
+        }
+    }
+
+    #[test]
+    fn narrow_lobes_over_coarse_texels_need_and_get_more_subsamples() {
+        // Phong s = 512 (lobe width ≈ 1/√s = 2.5°) over 7.5° texels: the midpoint misplaces a
+        // large share of the lobe; the chosen rule meets the tolerance, measured against n = 16.
+        let kernel = phong(512.0);
+        let choice = rule_for_kernel(48, 24, &kernel, PI, 24, 1e-4);
+        assert!(choice.rule.subsamples() > 1, "{choice:?}");
+        let best = probe_weights(48, 24, &kernel, PI, 24, &TexelRule::new(16).unwrap());
+        let total: f64 = best.iter().sum();
+        for (rule, within) in [(TexelRule::midpoint(), false), (choice.rule.clone(), true)] {
+            let w = probe_weights(48, 24, &kernel, PI, 24, &rule);
+            let moved: f64 = w.iter().zip(&best).map(|(a, b)| (a - b).abs()).sum::<f64>() / total;
+            assert_eq!(moved <= 1e-4, within, "n={}: {moved:e}", rule.subsamples());
+        }
+    }
+
+    #[test]
+    fn the_result_is_the_same_for_any_thread_count() {
+        let map = test_map(40, 20);
+        let run = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| zonal_filter(&map, phong(16.0), 1.2, &TexelRule::new(2).unwrap(), 20, &NoProgress).unwrap())
+        };
+        let one = run(1);
+        for threads in [2, 3] {
+            assert_eq!(run(threads), one, "{threads} threads");
+        }
+    }
+
+    #[test]
+    fn rotating_the_map_about_z_shifts_the_output() {
+        let map = test_map(30, 15);
+        let rolled = RgbImage::from_fn(30, 15, |x, y| map.get((x + 30 - 7) % 30, y));
+        let rule = TexelRule::new(2).unwrap();
+        let a = zonal_filter(&map, phong(8.0), 1.0, &rule, 10, &NoProgress).unwrap();
+        let b = zonal_filter(&rolled, phong(8.0), 1.0, &rule, 10, &NoProgress).unwrap();
+        for y in 0..10 {
+            for x in 0..30 {
+                let (p, q) = (b.pixels[y * 30 + x], a.pixels[y * 30 + (x + 30 - 7) % 30]);
+                assert!((0..3).all(|c| (p[c] - q[c]).abs() < 1e-10 * q[c].abs().max(1.0)));
+            }
+        }
+    }
+
+    #[test]
+    fn bad_requests_are_errors() {
+        let map = test_map(8, 4);
+        let rule = TexelRule::midpoint();
+        assert!(matches!(zonal_filter(&map, phong(8.0), 1.0, &rule, 0, &NoProgress), Err(ZonalError::Empty { .. })));
+        assert_eq!(zonal_filter(&map, phong(8.0), 0.0, &rule, 4, &NoProgress).unwrap_err(), ZonalError::Cone(0.0));
+        assert!(zonal_filter(&map, phong(8.0), f64::NAN, &rule, 4, &NoProgress).is_err());
+        assert!(matches!(
+            zonal_filter(&map, phong(8.0), 1.0, &rule, MAX_TEXELS, &NoProgress),
+            Err(ZonalError::TooLarge { .. })
+        ));
+        assert_eq!(TexelRule::new(0).unwrap_err(), ZonalError::Subsamples { n: 0, max: 16 });
+        assert!(TexelRule::new(17).is_err());
+    }
+}
