@@ -40,13 +40,38 @@ fn stdout_is_the_default_output_and_epsilon_picks_the_smallest_order() {
     assert!(output.status.success(), "{}", common::stderr(&output));
     let doc: Document<ShBody> = parse(&output.stdout);
     let body = &doc.body;
-    assert_eq!((body.selection.method.as_str(), body.selection.epsilon), ("epsilon", Some(0.05)));
+    let selection = &body.selection;
+    assert_eq!((selection.method.as_str(), selection.epsilon), ("epsilon", Some(0.05)));
     let captured = |order: usize| body.band_energy[..=order].iter().sum::<f64>() / body.total_energy;
     let order = body.order;
-    assert!((1.0 - captured(order) - body.selection.epsilon_achieved).abs() < 1e-12);
-    assert!(body.selection.epsilon_achieved <= 0.05, "{:?}", body.selection);
-    // One order less must miss the tolerance (smallest order, §5.1).
-    assert!(order > 0 && 1.0 - captured(order - 1) > 0.05, "order {order}");
+    assert!((1.0 - captured(order) - selection.epsilon_achieved).abs() < 1e-12);
+
+    // ε is measured on the map with its compact sun clipped at `clipped_at` (docs/sh-project.md):
+    // clip it here, sum its energy texel by texel, and check the order is the smallest that
+    // captures 1 − ε of it (§5.1).
+    let threshold = selection.clipped_at.expect("the sun is a compact bright source");
+    let mut clipped = common::sky(128, 64);
+    let luminance = |p: &[f32; 3]| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0;
+    let mut clipped_count = 0;
+    for p in clipped.images_mut()[0].pixels.iter_mut() {
+        let y = luminance(p);
+        if y > threshold {
+            *p = p.map(|c| (c as f64 * threshold / y) as f32);
+            clipped_count += 1;
+        }
+    }
+    assert!(clipped_count > 0 && clipped_count < 128 * 64 / 100, "{clipped_count} texels clipped");
+    let grid = prtkit::sphere::LatLong::new(128, 64);
+    let energy: f64 = (clipped.image().pixels.iter().enumerate())
+        .map(|(i, p)| grid.row_solid_angle(i / 128) * p.iter().map(|&c| c as f64 * c as f64).sum::<f64>())
+        .sum();
+    let residual = |order: usize| {
+        let coeffs = prtkit::sh::project::project(&clipped, order, &prtkit::progress::NoProgress).unwrap();
+        1.0 - coeffs.band_energy().iter().sum::<f64>() / energy
+    };
+    let achieved = selection.epsilon_achieved_clipped.unwrap();
+    assert!((residual(order) - achieved).abs() < 1e-6, "{} vs {achieved}", residual(order));
+    assert!(achieved <= 0.05 && order > 0 && residual(order - 1) > 0.05, "order {order}: {selection:?}");
 }
 
 #[test]

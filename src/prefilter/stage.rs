@@ -7,7 +7,7 @@ use super::document::{layer_name, Lighting as DocLighting, MapEntry, ShrmBody, F
 use super::hybrid::{self, Settings};
 use super::model::{residual_bound, Centre, Model, ModelError};
 use super::orders::OrderRule;
-use super::pipeline::{self, Lighting, Orders, PrefilterError};
+use super::pipeline::{self, Lighting, PrefilterError};
 use super::shrm;
 use crate::brdf::Brdf;
 use crate::envmap::bright::{BrightRule, BrightSources};
@@ -227,10 +227,6 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
     if config.irradiance && model.centre() != Some(Centre::Normal) {
         return Err(Error::IrradianceNeedsLambert);
     }
-    let orders = match config.orders {
-        Some((f, p)) => Orders::Fixed { f, p },
-        None => Orders::Epsilon { epsilon: config.epsilon, max_p: config.max_p },
-    };
     let fail = |error: PrefilterError| Error::Prefilter { source_name: config.source.clone(), error };
     let views: Vec<DVec3> = config.maps.iter().map(|m| m.view).collect();
     let start = Instant::now();
