@@ -9,6 +9,7 @@ pub mod cli;
 pub mod envmap;
 pub mod factor;
 pub mod io;
+pub mod limits;
 pub mod metrics;
 pub mod normals;
 pub mod prefilter;
