@@ -273,7 +273,7 @@ impl Params<'_> {
     fn peak(&self, what: &str, peak: f64, key: &str, limit: f64) -> Result<(), SpecError> {
         if peak > MAX_BRDF_PEAK {
             return Err(self.err(format!(
-                "{what} = {peak:e} is above the ceiling of {MAX_BRDF_PEAK:e} sr^-1 ({key} {limit:.3e} at most; \
+                "{what} = {peak:.3e} is above the ceiling of {MAX_BRDF_PEAK:e} sr^-1 ({key} {limit:.3e} at most; \
                  no stage resolves a narrower lobe, see docs/limits.md)"
             )));
         }
