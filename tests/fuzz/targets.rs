@@ -329,7 +329,7 @@ pub fn corpus(work: &Path) -> Vec<(&'static str, Vec<Vec<u8>>)> {
     );
     run_ok(
         "factor-brdf",
-        &["phong:s=8", "--resolution", "6", "--factors", "f.exr", "--terms", "2", "-o", "f.factor.json", "-q"],
+        &["phong:s=8", "--resolution", "6", "--factors", "f.exr", "--terms", "12", "-o", "f.factor.json", "-q"],
         work,
     );
     let read = |p: &Path| std::fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
