@@ -253,6 +253,22 @@ pub fn read_file(
     Ok(bytes)
 }
 
+/// [`read_file`] for text: bytes that are not UTF-8 are an error at their line and column.
+pub fn read_text(
+    path: &Path,
+    format: &'static str,
+    ceiling: u64,
+    check_start: impl FnOnce(&[u8]) -> Result<(), String>,
+) -> Result<String, IoError> {
+    String::from_utf8(read_file(path, format, ceiling, check_start)?).map_err(|e| {
+        let before = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column =
+            before.rsplit(|&b| b == b'\n').next().map_or(0, |l| String::from_utf8_lossy(l).chars().count()) + 1;
+        IoError::invalid(path, format, format!("line {line}, column {column}: not UTF-8 text"))
+    })
+}
+
 /// A byte count in binary units (KiB, MiB, …).
 pub fn human_bytes(b: u128) -> String {
     crate::factor::svd::human_bytes(b)
@@ -296,6 +312,9 @@ mod tests {
         assert!(e.contains("f.bin") && e.contains("ceiling"), "{e}");
         let e = read_file(&p, "test", 1000, |b| Err(format!("starts with {}", b[0]))).unwrap_err().to_string();
         assert!(e.contains("starts with 7"), "{e}");
+        std::fs::write(&p, b"ok\nab\xffc").unwrap();
+        let e = read_text(&p, "test", 100, |_| Ok(())).unwrap_err().to_string();
+        assert!(e.contains("line 2, column 3: not UTF-8"), "{e}");
         // An endless file is read only up to the ceiling.
         if Path::new("/dev/zero").exists() {
             let e = read_file(Path::new("/dev/zero"), "test", 1 << 20, |_| Ok(())).unwrap_err().to_string();

@@ -106,18 +106,13 @@ fn fields(line: &str) -> Result<Vec<(usize, String)>, (usize, String)> {
 pub fn read(path: &Path) -> Result<Vec<Entry>, ManifestError> {
     let file = path.display().to_string();
     let whole = |reason: String| ManifestError { file: file.clone(), line: 0, column: 0, reason };
-    let bytes = crate::limits::read_file(path, "manifest", crate::limits::max_document_bytes(), |_| Ok(())).map_err(
+    let text = crate::limits::read_text(path, "manifest", crate::limits::max_document_bytes(), |_| Ok(())).map_err(
         |e| match e {
             IoError::Os { error, .. } => whole(error.to_string()),
             IoError::Invalid { reason, .. } | IoError::Unsupported { reason, .. } => whole(reason),
             other => whole(other.to_string()),
         },
     )?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let before = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-        ManifestError { file: file.clone(), line, column: 1, reason: "not UTF-8 text".into() }
-    })?;
     parse(&text, &file, path.parent().unwrap_or(Path::new("")))
 }
 

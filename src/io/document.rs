@@ -250,19 +250,13 @@ pub enum BundleError {
 /// Reads a JSON document's text: at most [`crate::limits::max_document_bytes`], refused at
 /// once when it does not start with `{` (after white space), and UTF-8.
 pub fn read_text(path: &std::path::Path) -> Result<String, BundleError> {
-    let bytes = crate::limits::read_file(path, "JSON", crate::limits::max_document_bytes(), |start| {
+    let text = crate::limits::read_text(path, "JSON", crate::limits::max_document_bytes(), |start| {
         match start.iter().find(|b| !b.is_ascii_whitespace()) {
             Some(b'{') | None => Ok(()),
             Some(_) => Err("does not start with '{': not a JSON document".into()),
         }
     })?;
-    String::from_utf8(bytes).map_err(|e| {
-        let text_before = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = text_before.iter().filter(|&&b| b == b'\n').count() + 1;
-        let column =
-            text_before.rsplit(|&b| b == b'\n').next().map_or(0, |l| String::from_utf8_lossy(l).chars().count()) + 1;
-        BundleError::Parse { path: path.into(), error: DocumentError { line, column, reason: "not UTF-8 text".into() } }
-    })
+    Ok(text)
 }
 
 /// Reads the document at `path` as `format` (versions up to `max_version`) and runs the body's

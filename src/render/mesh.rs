@@ -26,6 +26,9 @@ pub enum MeshError {
         /// What is wrong.
         reason: String,
     },
+    /// The file cannot be read, or is not text, or is too large.
+    #[error(transparent)]
+    Io(#[from] crate::io::IoError),
     /// A line of the file is wrong.
     #[error("{path}:{line}:{column}: {reason}")]
     At {
@@ -76,18 +79,8 @@ impl Mesh {
     pub fn load(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
         let load_error = |reason: String| MeshError::Load { path: name.clone(), reason };
-        let bytes = crate::limits::read_file(path, "OBJ", crate::limits::max_file_bytes(), |_| Ok(())).map_err(
-            |e| match e {
-                crate::io::IoError::Os { error, .. } => load_error(error.to_string()),
-                crate::io::IoError::Invalid { reason, .. } => load_error(reason),
-                other => load_error(other.to_string()),
-            },
-        )?;
-        let text = std::str::from_utf8(&bytes).map_err(|e| {
-            let before = &bytes[..e.valid_up_to()];
-            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-            MeshError::At { path: name.clone(), line, column: 1, reason: "not UTF-8 text".into() }
-        })?;
+        let text = crate::limits::read_text(path, "OBJ", crate::limits::max_file_bytes(), |_| Ok(()))?;
+        let text = text.as_str();
         check_obj(text).map_err(|(line, column, reason)| MeshError::At { path: name.clone(), line, column, reason })?;
         let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
         // Materials are not used: the loader refuses them (tobj keeps that apart from the geometry).

@@ -57,16 +57,7 @@ impl ShaderError {
 
 /// Reads a shader's source: at most [`crate::limits::MAX_SHADER_SOURCE_BYTES`], UTF-8.
 pub fn read_source(path: &std::path::Path) -> Result<String, crate::io::IoError> {
-    let bytes = crate::limits::read_file(path, "shader", crate::limits::MAX_SHADER_SOURCE_BYTES, |_| Ok(()))?;
-    String::from_utf8(bytes).map_err(|e| {
-        let before = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-        crate::io::IoError::Invalid {
-            path: path.into(),
-            format: "shader",
-            reason: format!("line {line}: not UTF-8 text"),
-        }
-    })
+    crate::limits::read_text(path, "shader", crate::limits::MAX_SHADER_SOURCE_BYTES, |_| Ok(()))
 }
 
 /// A compiled shader with its parameter values.
