@@ -82,11 +82,8 @@ pub fn max_file_bytes() -> u64 {
 /// 2²⁸·2001² ≈ 10¹⁵ multiply-adds — hours. The memory check of [`check_image`] comes on top.
 pub const MAX_IMAGE_TEXELS: u64 = 1 << 28;
 
-/// Bytes per texel while an EXR is decoded: the `exr` crate's samples (4 bytes per channel at
-/// most) and prtkit's RGB f32 pixels (12 bytes), for the RGB channels prtkit reads.
-pub const EXR_DECODE_BYTES_PER_TEXEL: u64 = 12 + 12;
-
-/// Bytes per texel of the decoded RGB f32 image (Radiance HDR, PFM).
+/// Bytes per texel of a decoded RGB f32 image (one per Radiance HDR or PFM file, one per RGB or
+/// grey layer of an EXR, on top of the `exr` crate's 2 or 4 bytes per channel sample).
 pub const RGB_BYTES_PER_TEXEL: u64 = 12;
 
 /// Checks an image size read from a header before anything is allocated for it: at most
