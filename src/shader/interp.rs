@@ -14,10 +14,11 @@ use crate::affine::{Real, Sign};
 
 pub use crate::limits::{MAX_CALL_DEPTH, MAX_EVALUATION_DEPTH, MAX_LOOP_ITERATIONS, MAX_OCTAVES, MAX_OPERATIONS};
 
-/// What one noise evaluation counts against [`MAX_OPERATIONS`]: a range over several lattice
-/// cells costs about as much as this many arithmetic operations (per cell part, a Taylor bound
-/// over up to 27 sub-boxes).
-const NOISE_OPERATIONS: u64 = 64;
+/// What one noise evaluation counts against [`MAX_OPERATIONS`]: in affine arithmetic one costs
+/// about 40 µs (a Taylor bound per cell part over up to 27 sub-boxes; measured, 12 000 of them
+/// in 0.5 s), as much as ~1000 other operations (30 ns each), so the budget bounds the time of
+/// a sample whatever mix of operations spends it.
+const NOISE_OPERATIONS: u64 = 1024;
 
 /// A three-valued truth.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -223,6 +224,7 @@ impl<'a, N> Ctx<'a, N> {
     }
 
     /// An error of the evaluation budget at the innermost call or loop in progress.
+    #[cold]
     fn over_budget(&self, what: String) -> ShaderError {
         let callee =
             self.site.1.map(|f| format!(" (in a call of '{}')", self.prog.functions[f].name)).unwrap_or_default();
@@ -233,25 +235,39 @@ impl<'a, N> Ctx<'a, N> {
     fn count(&mut self, n: u64) -> Result<(), ShaderError> {
         self.operations += n;
         if self.operations > MAX_OPERATIONS {
-            return Err(self.over_budget(format!(
-                "evaluation budget: more than {MAX_OPERATIONS} operations in one evaluation \
-                 (exponential recursion, or loops nested too deep?)"
-            )));
+            return Err(self.budget_error());
         }
         Ok(())
     }
 
-    /// One level deeper into the interpreter's recursion, against [`MAX_EVALUATION_DEPTH`]
-    /// (the caller steps back out with `self.level -= 1`; after an error the evaluation is
-    /// abandoned).
-    fn descend(&mut self) -> Result<(), ShaderError> {
+    /// One operation, one level deeper into the interpreter's recursion: checked against
+    /// [`MAX_OPERATIONS`] and [`MAX_EVALUATION_DEPTH`] with one branch (this runs for every
+    /// node). The caller steps back out with `self.level -= 1`; after an error the evaluation
+    /// is abandoned.
+    #[inline(always)]
+    fn enter(&mut self) -> Result<(), ShaderError> {
+        self.operations += 1;
         self.level += 1;
-        if self.level > MAX_EVALUATION_DEPTH {
-            return Err(self.over_budget(format!(
-                "nesting limit: evaluation nested deeper than {MAX_EVALUATION_DEPTH} levels (recursion through deep expressions)"
-            )));
+        if self.operations > MAX_OPERATIONS || self.level > MAX_EVALUATION_DEPTH {
+            return Err(self.budget_error());
         }
         Ok(())
+    }
+
+    /// The error of whichever budget ran out.
+    #[cold]
+    #[inline(never)]
+    fn budget_error(&self) -> ShaderError {
+        self.over_budget(if self.operations > MAX_OPERATIONS {
+            format!(
+                "evaluation budget: more than {MAX_OPERATIONS} operations in one evaluation \
+                 (exponential recursion, or loops nested too deep?)"
+            )
+        } else {
+            format!(
+                "nesting limit: evaluation nested deeper than {MAX_EVALUATION_DEPTH} levels (recursion through deep expressions)"
+            )
+        })
     }
 }
 
@@ -289,8 +305,7 @@ impl<N: Real> Ctx<'_, N> {
     }
 
     fn stmt(&mut self, s: &IStmt, frame: &mut Vec<Value<N>>) -> Result<Option<Value<N>>, ShaderError> {
-        self.count(1)?;
-        self.descend()?;
+        self.enter()?;
         let r = self.stmt_inner(s, frame);
         self.level -= 1;
         r
@@ -378,8 +393,7 @@ impl<N: Real> Ctx<'_, N> {
     }
 
     fn expr(&mut self, e: &IExpr, frame: &[Value<N>]) -> Result<Value<N>, ShaderError> {
-        self.count(1)?;
-        self.descend()?;
+        self.enter()?;
         let v = self.expr_inner(e, frame);
         self.level -= 1;
         v
@@ -405,7 +419,7 @@ impl<N: Real> Ctx<'_, N> {
             IExpr::Or(a, b) => self.binary(a, b, frame, |x, y| Value::B(x.tri().or(y.tri()))),
             IExpr::Not(a) => self.unary(a, frame, |x| Value::B(x.tri().not())),
             IExpr::Select(c, a, b) => self.select(c, a, b, frame),
-            IExpr::Construct(args) => self.nary(args, frame, construct),
+            IExpr::Construct(args) => self.construct(args, frame),
             IExpr::Component(a, k) => self.unary(a, frame, |v| component(v, *k)),
             IExpr::User(fi, args, pos) => self.call(*fi, args, *pos, frame),
             IExpr::Builtin(b, args) => self.builtin(*b, args, frame),
@@ -434,14 +448,17 @@ impl<N: Real> Ctx<'_, N> {
         Ok(f(a, self.expr(b, frame)?))
     }
 
+    /// A triple from one (broadcast) or three floats, without a vector of the values (colours
+    /// are built in every evaluation).
     #[inline(never)]
-    fn nary(
-        &mut self,
-        args: &[IExpr],
-        frame: &[Value<N>],
-        f: impl FnOnce(Vec<Value<N>>) -> Value<N>,
-    ) -> Result<Value<N>, ShaderError> {
-        Ok(f(self.args(args, frame)?))
+    fn construct(&mut self, args: &[IExpr], frame: &[Value<N>]) -> Result<Value<N>, ShaderError> {
+        if let [a] = args {
+            return Ok(Value::T(self.expr(a, frame)?.triple()));
+        }
+        let x = self.expr(&args[0], frame)?.float();
+        let y = self.expr(&args[1], frame)?.float();
+        let z = self.expr(&args[2], frame)?.float();
+        Ok(Value::T([x, y, z]))
     }
 
     #[inline(never)]
@@ -520,17 +537,6 @@ fn arith<N: Real>(op: ArOp, a: Value<N>, b: Value<N>) -> Value<N> {
         ArOp::Sub => map2(a, b, |x, y| x.sub(y)),
         ArOp::Mul => map2(a, b, |x, y| x.mul(y)),
         ArOp::Div => map2(a, b, |x, y| x.div(y)),
-    }
-}
-
-/// A triple from one (broadcast) or three floats.
-#[inline(never)]
-fn construct<N: Real>(values: Vec<Value<N>>) -> Value<N> {
-    let mut it = values.into_iter();
-    match (it.next(), it.next(), it.next()) {
-        (Some(x), Some(y), Some(z)) => Value::T([x.float(), y.float(), z.float()]),
-        (Some(a), _, _) => Value::T(a.triple()),
-        _ => Value::T(std::array::from_fn(|_| N::constant(0.0))),
     }
 }
 
