@@ -10,6 +10,7 @@ pub mod envmap;
 pub mod factor;
 pub mod ibl;
 pub mod io;
+pub mod limits;
 pub mod metrics;
 pub mod normals;
 pub mod prefilter;

@@ -234,6 +234,10 @@ pub fn powi(a: f64, b: f64, n: i32) -> Option<Approx> {
     }
 }
 
+/// Largest |x| for which sin and cos enumerate their critical points: 2⁴⁰. Doubles there are
+/// still 2⁻¹² apart (1/25 000 of a period), far from where the enumeration fails (k ≈ 2⁵³).
+const TRIG_RANGE: f64 = 1_099_511_627_776.0;
+
 /// Every x = base + 2kπ near [a, b].
 fn periodic(a: f64, b: f64, base: f64, out: &mut Vec<f64>) {
     let k0 = ((a - base) / TAU).floor() - 1.0;
@@ -249,7 +253,10 @@ fn periodic(a: f64, b: f64, base: f64, out: &mut Vec<f64>) {
 /// error evaluated at every critical point (cos x = α for sin; −sin x = α for cos). Ranges wider
 /// than 4π use slope 0 and [−1, 1].
 fn trig(a: f64, b: f64, is_sin: bool) -> Option<Approx> {
-    if (b - a).is_nan() || b - a > 4.0 * PI {
+    // Far from 0 the critical points x = base + 2kπ cannot be enumerated (k + 1 rounds back
+    // to k beyond 2⁵³, and `periodic` would never end): there the bound 0 ± 1, which always
+    // holds.
+    if (b - a).is_nan() || b - a > 4.0 * PI || a.abs().max(b.abs()) > TRIG_RANGE {
         return Some(Approx::constant(0.0, 1.0));
     }
     let f = if is_sin { f64::sin } else { f64::cos };

@@ -13,6 +13,7 @@ use super::halfdiff::{self, HalfDiff};
 use super::BrdfError;
 use glam::DVec3;
 use std::f64::consts::PI;
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// Samples along θ_h.
@@ -96,11 +97,32 @@ pub fn index_of(hd: &HalfDiff) -> MerlIndex {
     MerlIndex { theta_h: theta_h_index(hd.theta_h), theta_d: theta_d_index(hd.theta_d), phi_d: phi_d_index(hd.phi_d) }
 }
 
+/// Checks the 12-byte header: three little-endian int32 whose product is MERL's 90·90·180.
+fn check_header(bytes: &[u8]) -> Result<(), String> {
+    let dim = |i: usize| i32::from_le_bytes([bytes[4 * i], bytes[4 * i + 1], bytes[4 * i + 2], bytes[4 * i + 3]]);
+    let dims = [dim(0), dim(1), dim(2)];
+    let product = dims.iter().map(|&d| d as i64).product::<i64>();
+    if product != CHANNEL_LEN as i64 {
+        return Err(format!(
+            "header dimensions {}x{}x{} (product {product}) are not MERL's 90x90x180 (product {CHANNEL_LEN}); \
+             is this a MERL .binary file?",
+            dims[0], dims[1], dims[2]
+        ));
+    }
+    Ok(())
+}
+
 impl MerlBrdf {
     /// Reads and validates a MERL `.binary` file.
     pub fn read(path: &Path) -> Result<Self, BrdfError> {
-        let bytes = std::fs::read(path)
-            .map_err(|e| BrdfError::Merl { path: path.to_path_buf(), reason: format!("cannot read: {e}") })?;
+        // At most one byte more than a MERL file has is read: `/dev/zero` or a huge file is
+        // refused after 35 MB ("too long"), not after filling memory.
+        let cannot =
+            |e: std::io::Error| BrdfError::Merl { path: path.to_path_buf(), reason: format!("cannot read: {e}") };
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(FILE_BYTES as u64 + 1).read_to_end(&mut bytes))
+            .map_err(cannot)?;
         Self::from_bytes(path, &bytes)
     }
 
@@ -113,21 +135,14 @@ impl MerlBrdf {
                 bytes.len()
             )));
         }
-        let dim = |i: usize| i32::from_le_bytes([bytes[4 * i], bytes[4 * i + 1], bytes[4 * i + 2], bytes[4 * i + 3]]);
-        let dims = [dim(0), dim(1), dim(2)];
-        let product = dims.iter().map(|&d| d as i64).product::<i64>();
-        if product != CHANNEL_LEN as i64 {
-            return Err(bad(format!(
-                "header dimensions {}x{}x{} (product {product}) are not MERL's 90x90x180 (product {CHANNEL_LEN}); \
-                 is this a MERL .binary file?",
-                dims[0], dims[1], dims[2]
-            )));
-        }
+        check_header(bytes).map_err(bad)?;
         if bytes.len() != FILE_BYTES {
-            let what = if bytes.len() < FILE_BYTES { "truncated" } else { "too long" };
+            let size = match bytes.len() {
+                n if n < FILE_BYTES => format!("truncated: {n} bytes"),
+                _ => format!("too long: more than {FILE_BYTES} bytes"),
+            };
             return Err(bad(format!(
-                "{what}: {} bytes, expected exactly {FILE_BYTES} (12-byte header + 3 x {CHANNEL_LEN} float64)",
-                bytes.len()
+                "{size}, expected exactly {FILE_BYTES} (12-byte header + 3 x {CHANNEL_LEN} float64)"
             )));
         }
         let mut values = Vec::with_capacity(3 * CHANNEL_LEN);

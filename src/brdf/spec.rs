@@ -9,6 +9,8 @@
 
 use super::models::{BlinnPhong, KajiyaKay, Lafortune, LafortuneLobe, Lambert, Phong, TorranceSparrow};
 use super::{Brdf, BrdfError};
+use crate::limits::{MAX_BRDF_PEAK, MAX_TORRANCE_SPARROW_SIGMA};
+use std::f64::consts::PI;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -73,16 +75,51 @@ impl BrdfSpec {
                 }
                 BrdfSpec::Lambert(Lambert { albedo })
             }
-            "phong" => BrdfSpec::Phong(Phong { exponent: p.positive("s")? }),
-            "blinn-phong" => BrdfSpec::BlinnPhong(BlinnPhong { exponent: p.positive("s")? }),
-            "torrance-sparrow" => BrdfSpec::TorranceSparrow(TorranceSparrow { sigma: p.positive("sigma")? }),
-            "kajiya-kay" => BrdfSpec::KajiyaKay(KajiyaKay { exponent: p.positive("s")? }),
+            "phong" => {
+                let s = p.positive("s")?;
+                p.peak("the lobe's peak (s+1)/(2π)", (s + 1.0) / (2.0 * PI), "s", 2.0 * PI * MAX_BRDF_PEAK - 1.0)?;
+                BrdfSpec::Phong(Phong { exponent: s })
+            }
+            "blinn-phong" => {
+                let s = p.positive("s")?;
+                p.peak("the lobe's peak (s+2)/(8π)", (s + 2.0) / (8.0 * PI), "s", 8.0 * PI * MAX_BRDF_PEAK - 2.0)?;
+                BrdfSpec::BlinnPhong(BlinnPhong { exponent: s })
+            }
+            "torrance-sparrow" => {
+                let sigma = p.positive("sigma")?;
+                let min_sigma = 1.0 / (4.0 * PI * MAX_BRDF_PEAK).sqrt();
+                p.peak("the lobe's peak 1/(4πσ²)", 1.0 / (4.0 * PI * sigma * sigma), "sigma >=", min_sigma)?;
+                if sigma > MAX_TORRANCE_SPARROW_SIGMA {
+                    return Err(err(format!(
+                        "sigma={sigma} is above the ceiling of {MAX_TORRANCE_SPARROW_SIGMA} (the lobe is flat long before; see docs/limits.md)"
+                    )));
+                }
+                BrdfSpec::TorranceSparrow(TorranceSparrow { sigma })
+            }
+            "kajiya-kay" => {
+                let s = p.positive("s")?;
+                p.peak("the lobe's peak (s+1)/(2π)", (s + 1.0) / (2.0 * PI), "s", 2.0 * PI * MAX_BRDF_PEAK - 1.0)?;
+                BrdfSpec::KajiyaKay(KajiyaKay { exponent: s })
+            }
             "lafortune" => {
                 let kd = p.optional("kd", 0.0)?;
                 if kd < 0.0 {
                     return Err(err(format!("lafortune kd must be >= 0, got {kd}")));
                 }
+                p.peak("the diffuse term kd/π", kd / PI, "kd", PI * MAX_BRDF_PEAK)?;
                 let lobes = p.lobes()?;
+                for l in &lobes {
+                    // max |C·(ω_i ⊙ ω_o)| ≤ max |C| for unit directions: the lobe's peak is at
+                    // most (max |C|)^n (compared in logarithms: the power itself may overflow).
+                    let c = l.cx.abs().max(l.cy.abs()).max(l.cz.abs());
+                    if c > 0.0 && l.exponent * c.ln() > MAX_BRDF_PEAK.ln() {
+                        return Err(err(format!(
+                            "lobe {}/{}/{}/{}: its peak (max |C|)^n = {c}^{} is above the ceiling of {MAX_BRDF_PEAK:e} sr^-1 \
+                             (see docs/limits.md)",
+                            l.cx, l.cy, l.cz, l.exponent, l.exponent
+                        )));
+                    }
+                }
                 BrdfSpec::Lafortune(Lafortune { kd, lobes })
             }
             "" => return Err(err(format!("empty model name; accepted: {ACCEPTED}"))),
@@ -231,6 +268,18 @@ impl Params<'_> {
         Ok(self.single(key)?.unwrap_or(default))
     }
 
+    /// Refuses parameters whose BRDF peak exceeds [`MAX_BRDF_PEAK`] (`docs/limits.md`):
+    /// `limit` is the ceiling of parameter `key` it amounts to.
+    fn peak(&self, what: &str, peak: f64, key: &str, limit: f64) -> Result<(), SpecError> {
+        if peak > MAX_BRDF_PEAK {
+            return Err(self.err(format!(
+                "{what} = {peak:.3e} is above the ceiling of {MAX_BRDF_PEAK:e} sr^-1 ({key} {limit:.3e} at most; \
+                 no stage resolves a narrower lobe, see docs/limits.md)"
+            )));
+        }
+        Ok(())
+    }
+
     fn positive(&mut self, key: &str) -> Result<f64, SpecError> {
         match self.single(key)? {
             None => Err(self.err(format!("{} needs {key}: accepted parameters: {}", self.model, self.accepted()))),
@@ -316,5 +365,16 @@ mod tests {
         assert!(e("lambert:albedo=2").contains("[0, 1]"));
         assert!(e("merl:").contains("merl needs a file"));
         assert!(e("phong:30").contains("key=value"));
+        // Ceilings (docs/limits.md): a lobe too tall for f64 energy sums, or too flat to matter.
+        assert!(e("phong:s=1e308").contains("above the ceiling of 1e8"), "{}", e("phong:s=1e308"));
+        assert!(e("blinn-phong:s=1e10").contains("ceiling"));
+        assert!(e("kajiya-kay:s=1e300").contains("ceiling"));
+        assert!(e("torrance-sparrow:sigma=1e-300").contains("sigma >="));
+        assert!(e("torrance-sparrow:sigma=1e200").contains("ceiling of 100"));
+        assert!(e("lafortune:kd=1e300,lobe=-1/1/2").contains("kd/π"));
+        assert!(e("lafortune:lobe=-2/2/1e9").contains("(max |C|)^n"));
+        for ok in ["phong:s=1e8", "blinn-phong:s=1e8", "torrance-sparrow:sigma=1e-4", "lafortune:lobe=-0.5/0.5/1e12"] {
+            assert!(BrdfSpec::parse(ok).is_ok(), "{ok}");
+        }
     }
 }

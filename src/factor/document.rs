@@ -8,8 +8,9 @@
 //! the L²-normalized factors (Σ g² ΔΩ = 1) as 32-bit floats; σ_k stay in the JSON.
 
 use super::{Channel, Domain, Factorization, Grid, Method};
-use crate::io::document::{named_file, read_document, BundleError};
+use crate::io::document::{read_document, read_named_layers, BundleError, Validate};
 use crate::io::{self, IoError};
+use crate::limits;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -17,6 +18,42 @@ use std::path::Path;
 pub const FORMAT: &str = "prtkit.factor";
 /// Schema version.
 pub const VERSION: u32 = 1;
+
+/// The checks every loader of a `prtkit.factor` document gets: the resolution n in
+/// 2..=[`limits::MAX_FACTOR_RESOLUTION`] (before n² is formed), n² directions per side, at most
+/// n² stored terms whose tiles fit the memory budget, finite singular values and energy.
+impl Validate for FactorBody {
+    fn validate(&self) -> Result<(), (&'static str, String)> {
+        let n = self.resolution;
+        if n < 2 {
+            return Err(("resolution", format!("resolution {n} must be at least 2")));
+        }
+        limits::check_count(
+            "the resolution",
+            n,
+            limits::MAX_FACTOR_RESOLUTION,
+            "the finest grid factor-brdf can factor",
+        )
+        .map_err(|e| ("resolution", e.to_string()))?;
+        if self.directions_per_side != n * n {
+            return Err((
+                "directions_per_side",
+                format!("resolution {n} and directions_per_side {} disagree", self.directions_per_side),
+            ));
+        }
+        if !self.total_energy.is_finite() || self.singular_values.iter().any(|s| !s.is_finite()) {
+            return Err(("singular_values", "singular values and total energy must be finite numbers".into()));
+        }
+        if let Some(f) = &self.factors {
+            limits::check_count("the stored terms", f.terms, n * n, "a factorization has at most n² terms")
+                .map_err(|e| ("terms", e.to_string()))?;
+            // Two grey layers of n × K·n texels, read as RGB f32 and kept as f64.
+            let bytes = 2 * (f.terms * n * n) as u128 * (limits::RGB_BYTES_PER_TEXEL as u128 + 8);
+            limits::check_memory("loading the factors", bytes).map_err(|e| ("terms", e.to_string()))?;
+        }
+        Ok(())
+    }
+}
 
 /// The body of a `prtkit.factor` document.
 #[derive(Debug, serde::Serialize, serde::Deserialize)]
@@ -111,11 +148,7 @@ pub fn load(doc_path: &Path) -> Result<(FactorBody, Factorization), FactorLoadEr
         bad("the document names no factor file; run factor-brdf with --factors FILE.exr --terms K".into())
     })?;
     let n = body.resolution;
-    if n < 2 || body.directions_per_side != n * n {
-        return Err(bad(format!("resolution {n} and directions_per_side {} disagree", body.directions_per_side)));
-    }
-    let exr = named_file(doc_path, &entry.file);
-    let layers = io::exr::decode_layers(&exr, &io::read_bytes(&exr)?)?;
+    let (exr, layers) = read_named_layers(doc_path, &entry.file, "factor file")?;
     let mismatch = |reason: String| FactorLoadError::Mismatch { exr: exr.clone(), doc: doc_path.into(), reason };
     let mut tiles = Vec::with_capacity(2);
     for name in ["g", "h"] {

@@ -12,7 +12,8 @@
 //! positive integer or `-` (none: `--max-terms` applies). Relative MERL paths are relative to
 //! the manifest's directory. Names must be unique.
 
-use crate::brdf::BrdfSpec;
+use crate::brdf::{Brdf, BrdfSpec};
+use crate::io::IoError;
 use std::path::Path;
 
 /// One manifest entry.
@@ -26,11 +27,26 @@ pub struct Entry {
     pub budget: Option<usize>,
     /// 1-based line number.
     pub line: usize,
+    /// 1-based column of the spec field.
+    pub spec_column: usize,
 }
 
-/// A manifest error at line:column (1-based).
+impl Entry {
+    /// Builds the entry's BRDF (reading MERL data); an error (a missing or garbled MERL file)
+    /// names the manifest `file`, this entry's line and the column of its spec first.
+    pub fn load(&self, file: &str) -> Result<Brdf, ManifestError> {
+        self.spec.load().map_err(|e| ManifestError {
+            file: file.to_string(),
+            line: self.line,
+            column: self.spec_column,
+            reason: format!("material {:?}: {e}", self.name),
+        })
+    }
+}
+
+/// A manifest error at line:column (1-based; line 0: the file as a whole).
 #[derive(Debug, thiserror::Error)]
-#[error("{file}:{line}:{column}: {reason}")]
+#[error("{file}{}: {reason}", if *line > 0 { format!(":{line}:{column}") } else { String::new() })]
 pub struct ManifestError {
     /// The manifest file.
     pub file: String,
@@ -85,6 +101,21 @@ fn fields(line: &str) -> Result<Vec<(usize, String)>, (usize, String)> {
     Ok(out)
 }
 
+/// Reads and parses the manifest at `path` (at most [`crate::limits::max_document_bytes`]);
+/// relative MERL paths are relative to its directory.
+pub fn read(path: &Path) -> Result<Vec<Entry>, ManifestError> {
+    let file = path.display().to_string();
+    let whole = |reason: String| ManifestError { file: file.clone(), line: 0, column: 0, reason };
+    let text = crate::limits::read_text(path, "manifest", crate::limits::max_document_bytes(), |_| Ok(())).map_err(
+        |e| match e {
+            IoError::Os { error, .. } => whole(error.to_string()),
+            IoError::Invalid { reason, .. } | IoError::Unsupported { reason, .. } => whole(reason),
+            other => whole(other.to_string()),
+        },
+    )?;
+    parse(&text, &file, path.parent().unwrap_or(Path::new("")))
+}
+
 /// Parses manifest text; `file` names it in errors and `base` resolves relative MERL paths.
 pub fn parse(text: &str, file: &str, base: &Path) -> Result<Vec<Entry>, ManifestError> {
     let err =
@@ -116,7 +147,7 @@ pub fn parse(text: &str, file: &str, base: &Path) -> Result<Vec<Entry>, Manifest
                 _ => return Err(err(n, *c, format!("budget {b:?} is not a positive integer (or `-` for none)"))),
             },
         };
-        entries.push(Entry { name, spec, budget, line: n });
+        entries.push(Entry { name, spec, budget, line: n, spec_column: f[1].0 });
     }
     if entries.is_empty() {
         return Err(err(1, 1, "the manifest lists no material".into()));
@@ -149,5 +180,19 @@ mod tests {
         assert!(e("\"a lambert\n").contains("unterminated"));
         assert!(e("# nothing\n").contains("no material"));
         assert!(e("x glossy:s=2").contains("m.txt:1:3: invalid BRDF spec"));
+    }
+
+    #[test]
+    fn a_missing_merl_file_is_reported_at_its_manifest_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = dir.path().join("materials.txt");
+        std::fs::write(&m, "# materials\nglossy phong:s=30\n  gold   merl:brdfs/gold.binary 64\n").unwrap();
+        let entries = read(&m).unwrap();
+        assert!(entries[0].load("materials.txt").is_ok());
+        let e = entries[1].load(&m.display().to_string()).unwrap_err().to_string();
+        let want = format!("{}:3:10: material \"gold\": ", m.display());
+        assert!(e.starts_with(&want) && e.contains("gold.binary") && e.contains("cannot read"), "{e}");
+        let e = read(&dir.path().join("none.txt")).unwrap_err().to_string();
+        assert!(e.contains("none.txt: ") && !e.contains(":0:"), "{e}");
     }
 }

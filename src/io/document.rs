@@ -92,29 +92,126 @@ pub fn to_json_pretty<T: Serialize + ?Sized>(value: &T) -> String {
     s
 }
 
-/// Reads a document and checks its `format` and major `version`.
+/// An error in a JSON document, at a line and column when one is known (1-based; 0 when not).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{}{reason}", if *line > 0 { format!("line {line}, column {column}: ") } else { String::new() })]
+pub struct DocumentError {
+    /// Line, from 1 (0: the document as a whole).
+    pub line: usize,
+    /// Column, from 1.
+    pub column: usize,
+    /// What is wrong.
+    pub reason: String,
+}
+
+impl DocumentError {
+    fn whole(reason: impl Into<String>) -> Self {
+        DocumentError { line: 0, column: 0, reason: reason.into() }
+    }
+
+    fn from_json(e: &serde_json::Error, what: &str) -> Self {
+        // serde_json's message ends with its own " at line L column C": keep the words only.
+        let text = e.to_string();
+        let words = text.rfind(" at line ").map_or(text.as_str(), |i| &text[..i]);
+        DocumentError { line: e.line(), column: e.column(), reason: format!("{what}{words}") }
+    }
+}
+
+/// What a document body checks beyond its types, before a loader computes with its values:
+/// ceilings on orders and sizes (`docs/limits.md`), counts that must agree, finite numbers.
+/// Every loader of the document gets the check through [`read_document`] and
+/// [`parse_validated`].
+pub trait Validate {
+    /// `Err((field, reason))` names the offending field (located in the text for the message).
+    fn validate(&self) -> Result<(), (&'static str, String)>;
+}
+
+/// The `format` and `version` fields alone (other fields are skipped, not built).
+#[derive(Deserialize)]
+struct Head {
+    format: Option<serde_json::Value>,
+    version: Option<serde_json::Value>,
+}
+
+/// The fields every document shares, read apart from the body.
+#[derive(Deserialize)]
+struct Header {
+    format: String,
+    version: u32,
+    conventions: Conventions,
+    provenance: Provenance,
+}
+
+/// Reads a document and checks its `format` and major `version`. Errors carry the line and
+/// column of the text where serde_json knows them: the header and the body are read in two
+/// passes over the text, each skipping the other's fields, because a flattened body would be
+/// buffered first and lose every position.
 pub fn parse_document<T: for<'de> Deserialize<'de>>(
     text: &str,
     expected_format: &str,
     max_version: u32,
-) -> Result<Document<T>, String> {
-    let head: serde_json::Value =
-        serde_json::from_str(text).map_err(|e| format!("not JSON: line {}, column {}: {e}", e.line(), e.column()))?;
-    let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("<none>");
+) -> Result<Document<T>, DocumentError> {
+    let head: Head = serde_json::from_str(text).map_err(|e| DocumentError::from_json(&e, "not a JSON object: "))?;
+    let format = head.format.as_ref().and_then(|f| f.as_str()).unwrap_or("<none>");
     if format != expected_format {
-        return Err(format!("expected a \"{expected_format}\" document, found format \"{format}\""));
+        return Err(DocumentError::whole(format!(
+            "expected a \"{expected_format}\" document, found format \"{format}\""
+        )));
     }
-    let version = head.get("version").and_then(|v| v.as_u64()).unwrap_or(0);
+    let version = head.version.as_ref().and_then(|v| v.as_u64()).unwrap_or(0);
     if version == 0 || version > max_version as u64 {
-        return Err(format!("unsupported {expected_format} version {version} (this prtkit reads 1..={max_version})"));
+        return Err(DocumentError::whole(format!(
+            "unsupported {expected_format} version {version} (this prtkit reads 1..={max_version})"
+        )));
     }
-    serde_json::from_value(head).map_err(|e| format!("invalid {expected_format} document: {e}"))
+    let invalid = |e: serde_json::Error| DocumentError::from_json(&e, &format!("invalid {expected_format} document: "));
+    let header: Header = serde_json::from_str(text).map_err(invalid)?;
+    let body: T = serde_json::from_str(text).map_err(invalid)?;
+    Ok(Document {
+        format: header.format,
+        version: header.version,
+        conventions: header.conventions,
+        provenance: header.provenance,
+        body,
+    })
+}
+
+/// [`parse_document`], then the body's own checks ([`Validate`]); a failed check names the
+/// field and, when the field's key occurs in the text, its line and column.
+pub fn parse_validated<T: for<'de> Deserialize<'de> + Validate>(
+    text: &str,
+    expected_format: &str,
+    max_version: u32,
+) -> Result<Document<T>, DocumentError> {
+    let doc: Document<T> = parse_document(text, expected_format, max_version)?;
+    doc.body.validate().map_err(|(field, reason)| {
+        let (line, column) = locate_key(text, field).unwrap_or((0, 0));
+        DocumentError { line, column, reason: format!("\"{field}\": {reason}") }
+    })?;
+    Ok(doc)
+}
+
+/// Line and column (1-based, in characters) of the first `"key"` followed by a colon.
+fn locate_key(text: &str, key: &str) -> Option<(usize, usize)> {
+    let quoted = format!("\"{key}\"");
+    let mut from = 0;
+    while let Some(i) = text[from..].find(&quoted).map(|i| from + i) {
+        let after = text[i + quoted.len()..].trim_start();
+        if after.starts_with(':') {
+            let before = &text[..i];
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            return Some((line, column));
+        }
+        from = i + quoted.len();
+    }
+    None
 }
 
 /// Errors of reading a document together with the EXR it names (an SHRM, a factor file).
 #[derive(Debug, thiserror::Error)]
 pub enum BundleError {
-    /// I/O or EXR decoding.
+    /// I/O or EXR decoding of the document itself.
     #[error(transparent)]
     Io(#[from] super::IoError),
     /// The JSON document is not valid, or lacks what was asked of it.
@@ -124,6 +221,24 @@ pub enum BundleError {
         path: std::path::PathBuf,
         /// What is wrong.
         reason: String,
+    },
+    /// The JSON document does not parse or fails its checks, at a line and column.
+    #[error("{}:{}", path.display(), match error.line { 0 => format!(" {}", error.reason), l => format!("{l}:{}: {}", error.column, error.reason) })]
+    Parse {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong, and where.
+        error: DocumentError,
+    },
+    /// The file the document names cannot be read: the document first, then the file's error.
+    #[error("{}: cannot read the {what} it names: {error}", doc.display())]
+    Named {
+        /// The document that names the file.
+        doc: std::path::PathBuf,
+        /// What the file is, e.g. "SHRM file".
+        what: &'static str,
+        /// The named file's error (which names that file).
+        error: super::IoError,
     },
     /// The EXR does not match its document.
     #[error("{exr}: does not match {doc}: {reason}")]
@@ -137,16 +252,27 @@ pub enum BundleError {
     },
 }
 
-/// Reads the document at `path` as `format` (versions up to `max_version`), naming the file in
-/// every error.
-pub fn read_document<T: for<'de> Deserialize<'de>>(
+/// Reads a JSON document's text: at most [`crate::limits::max_document_bytes`], refused at
+/// once when it does not start with `{` (after white space), and UTF-8.
+pub fn read_text(path: &std::path::Path) -> Result<String, BundleError> {
+    let text = crate::limits::read_text(path, "JSON", crate::limits::max_document_bytes(), |start| {
+        match start.iter().find(|b| !b.is_ascii_whitespace()) {
+            Some(b'{') | None => Ok(()),
+            Some(_) => Err("does not start with '{': not a JSON document".into()),
+        }
+    })?;
+    Ok(text)
+}
+
+/// Reads the document at `path` as `format` (versions up to `max_version`) and runs the body's
+/// checks ([`Validate`]), naming the file (and line:column) in every error.
+pub fn read_document<T: for<'de> Deserialize<'de> + Validate>(
     path: &std::path::Path,
     format: &str,
     max_version: u32,
 ) -> Result<Document<T>, BundleError> {
-    let bad = |reason: String| BundleError::Document { path: path.into(), reason };
-    let text = String::from_utf8(super::read_bytes(path)?).map_err(|_| bad("not UTF-8 text".into()))?;
-    parse_document(&text, format, max_version).map_err(bad)
+    let text = read_text(path)?;
+    parse_validated(&text, format, max_version).map_err(|error| BundleError::Parse { path: path.into(), error })
 }
 
 /// The file a document names: as written when that exists (or is absolute), else the file of
@@ -158,4 +284,17 @@ pub fn named_file(doc: &std::path::Path, file: &str) -> std::path::PathBuf {
     }
     let dir = doc.parent().unwrap_or(std::path::Path::new("."));
     dir.join(std::path::Path::new(file).file_name().unwrap_or_default())
+}
+
+/// Reads the EXR a document names ([`named_file`]) with all its layers; an error that
+/// concerns the EXR (missing, unreadable, garbled, too large) names the document first.
+/// `what` says what the file is to the document, e.g. "SHRM file".
+pub fn read_named_layers(
+    doc: &std::path::Path,
+    file: &str,
+    what: &'static str,
+) -> Result<(std::path::PathBuf, Vec<(String, super::RgbImage)>), BundleError> {
+    let exr = named_file(doc, file);
+    let layers = super::exr::read_layers(&exr).map_err(|error| BundleError::Named { doc: doc.into(), what, error })?;
+    Ok((exr, layers))
 }

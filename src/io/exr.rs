@@ -5,6 +5,7 @@
 //! `name.R`, `name.G`, `name.B` the layer `name`; in multi-part files the part name is a prefix.
 
 use super::{IoError, RgbImage};
+use crate::limits;
 use exr::prelude::{
     read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, ReadChannels, ReadLayers,
     WritableImage,
@@ -14,6 +15,28 @@ use std::path::Path;
 
 const FORMAT: &str = "OpenEXR";
 
+/// The first four bytes of every OpenEXR file.
+pub const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+/// Reads an EXR file (at most [`limits::max_file_bytes`], refused at once when it does not
+/// start like one) and decodes every RGB or grey layer, as [`decode_layers`].
+pub fn read_layers(path: &Path) -> Result<Vec<(String, RgbImage)>, IoError> {
+    let bytes = limits::read_file(path, FORMAT, limits::max_file_bytes(), check_magic)?;
+    decode_layers(path, &bytes)
+}
+
+/// Whether `start` (the first bytes of a file) is the start of an EXR file.
+pub fn check_magic(start: &[u8]) -> Result<(), String> {
+    if start.starts_with(&MAGIC) {
+        Ok(())
+    } else {
+        Err(format!(
+            "does not start with the OpenEXR magic number 76 2f 31 01 (found {:02x?})",
+            &start[..start.len().min(4)]
+        ))
+    }
+}
+
 /// Decodes the main RGB layer of an EXR file: the unnamed layer if there is one, else the first.
 /// A file with only `Y` (or a single channel) is read as grey.
 pub fn decode(path: &Path, bytes: &[u8]) -> Result<RgbImage, IoError> {
@@ -22,8 +45,73 @@ pub fn decode(path: &Path, bytes: &[u8]) -> Result<RgbImage, IoError> {
     Ok(layers.swap_remove(index).1)
 }
 
-/// Decodes every RGB (or grey) layer in an EXR file as `(name, image)`, in file order.
+fn exr_error(path: &Path, e: exr::error::Error) -> IoError {
+    match e {
+        exr::error::Error::NotSupported(what) => IoError::unsupported(path, FORMAT, what.to_string()),
+        other => IoError::invalid(path, FORMAT, other.to_string()),
+    }
+}
+
+/// Which RGB (or grey) layer a channel belongs to, and its slot (0–2 for R, G, B; 3 for Y):
+/// channel `R` of part `""` is layer `""`, `coef.R` is layer `coef`, and in a part named `p`
+/// they are `p` and `p.coef`. `None` for other channels (alpha, depth, …).
+fn layer_slot(part: &str, channel: &str) -> Option<(String, usize)> {
+    let (prefix, base) = match channel.rfind('.') {
+        Some(i) => (&channel[..i], &channel[i + 1..]),
+        None => ("", channel),
+    };
+    let slot = match base.to_ascii_uppercase().as_str() {
+        "R" => 0,
+        "G" => 1,
+        "B" => 2,
+        "Y" => 3,
+        _ => return None,
+    };
+    let layer = match (part.is_empty(), prefix.is_empty()) {
+        (true, _) => prefix.to_string(),
+        (false, true) => part.to_string(),
+        (false, false) => format!("{part}.{prefix}"),
+    };
+    Some((layer, slot))
+}
+
+/// Reads the headers alone and checks every part's data window against the image ceilings
+/// (`docs/limits.md`) and the memory decoding takes — the `exr` crate's samples of every
+/// channel plus prtkit's RGB pixels per layer — against the budget, before any pixel is
+/// allocated (a data window patched to 100000×100000 would ask for tens of GB).
+fn check_size(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| exr_error(path, e))?;
+    let too_large = |e: limits::LimitError| IoError::invalid(path, FORMAT, e.to_string());
+    let mut need: u128 = 0;
+    for (i, header) in meta.headers.iter().enumerate() {
+        let (w, h) = (header.layer_size.0 as u64, header.layer_size.1 as u64);
+        let what = if meta.headers.len() == 1 {
+            "the data window".to_string()
+        } else {
+            format!("the data window of part {i}")
+        };
+        limits::check_image(&what, w, h, 0).map_err(too_large)?;
+        let part = header.own_attributes.layer_name.as_ref().map(|t| t.to_string()).unwrap_or_default();
+        let mut layers: Vec<String> = Vec::new();
+        let mut sample_bytes = 0u64;
+        for c in &header.channels.list {
+            sample_bytes += if c.sample_type == exr::meta::attribute::SampleType::F16 { 2 } else { 4 };
+            if let Some((layer, _)) = layer_slot(&part, &c.name.to_string()) {
+                if !layers.contains(&layer) {
+                    layers.push(layer);
+                }
+            }
+        }
+        let per_texel = sample_bytes + limits::RGB_BYTES_PER_TEXEL * layers.len().max(1) as u64;
+        need += w as u128 * h as u128 * per_texel as u128;
+    }
+    limits::check_memory("decoding the EXR", need).map_err(too_large)
+}
+
+/// Decodes every RGB (or grey) layer in an EXR file as `(name, image)`, in file order. The
+/// sizes in the headers are checked against the ceilings first (`docs/limits.md`).
 pub fn decode_layers(path: &Path, bytes: &[u8]) -> Result<Vec<(String, RgbImage)>, IoError> {
+    check_size(path, bytes)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -31,35 +119,16 @@ pub fn decode_layers(path: &Path, bytes: &[u8]) -> Result<Vec<(String, RgbImage)
         .all_layers()
         .all_attributes()
         .from_buffered(Cursor::new(bytes))
-        .map_err(|e| match e {
-            exr::error::Error::NotSupported(what) => IoError::unsupported(path, FORMAT, what.to_string()),
-            other => IoError::invalid(path, FORMAT, other.to_string()),
-        })?;
+        .map_err(|e| exr_error(path, e))?;
 
     let mut out: Vec<(String, RgbImage)> = Vec::new();
     for layer in &image.layer_data {
         let (width, height) = (layer.size.0, layer.size.1);
         let part = layer.attributes.layer_name.as_ref().map(|t| t.to_string()).unwrap_or_default();
-        // Group this part's channels by prefix (text before the last '.').
+        // Group this part's channels into layers.
         let mut groups: Vec<(String, [Option<&FlatSamples>; 4])> = Vec::new();
         for channel in &layer.channel_data.list {
-            let name = channel.name.to_string();
-            let (prefix, base) = match name.rfind('.') {
-                Some(i) => (name[..i].to_string(), name[i + 1..].to_string()),
-                None => (String::new(), name.clone()),
-            };
-            let slot = match base.to_ascii_uppercase().as_str() {
-                "R" => 0,
-                "G" => 1,
-                "B" => 2,
-                "Y" => 3,
-                _ => continue,
-            };
-            let full = match (part.is_empty(), prefix.is_empty()) {
-                (true, _) => prefix,
-                (false, true) => part.clone(),
-                (false, false) => format!("{part}.{prefix}"),
-            };
+            let Some((full, slot)) = layer_slot(&part, &channel.name.to_string()) else { continue };
             match groups.iter_mut().find(|(n, _)| *n == full) {
                 Some((_, slots)) => slots[slot] = Some(&channel.sample_data),
                 None => {
@@ -73,19 +142,16 @@ pub fn decode_layers(path: &Path, bytes: &[u8]) -> Result<Vec<(String, RgbImage)
             groups.push((part.clone(), [None, None, None, Some(&layer.channel_data.list[0].sample_data)]));
         }
         for (name, slots) in groups {
-            let to_vec = |s: &FlatSamples| -> Vec<f32> { s.values_as_f32().collect() };
-            let planes: [Vec<f32>; 3] = match slots {
-                [Some(r), Some(g), Some(b), _] => [to_vec(r), to_vec(g), to_vec(b)],
-                [_, _, _, Some(y)] => {
-                    let y = to_vec(y);
-                    [y.clone(), y.clone(), y]
-                }
+            let channels: [&FlatSamples; 3] = match slots {
+                [Some(r), Some(g), Some(b), _] => [r, g, b],
+                [_, _, _, Some(y)] => [y, y, y],
                 _ => continue, // an incomplete colour layer (e.g. only R): not an RGB image
             };
-            if planes.iter().any(|p| p.len() != width * height) {
+            if channels.iter().any(|c| c.len() != width * height) {
                 return Err(IoError::invalid(path, FORMAT, "channel sizes do not match the data window"));
             }
-            let pixels = (0..width * height).map(|i| [planes[0][i], planes[1][i], planes[2][i]]).collect();
+            let [r, g, b] = channels.map(|c| c.values_as_f32());
+            let pixels = r.zip(g).zip(b).map(|((r, g), b)| [r, g, b]).collect();
             out.push((name, RgbImage { width, height, pixels }));
         }
     }

@@ -1,6 +1,7 @@
 //! The in-memory HDR image every stage passes around, and reading by file extension.
 
 use super::IoError;
+use crate::limits;
 use std::path::Path;
 
 /// A linear RGB float image, row-major, row 0 at the top.
@@ -73,11 +74,22 @@ impl ImageFormat {
     }
 }
 
-/// Reads an HDR image (EXR, Radiance `.hdr`, PFM), chosen by extension.
+/// A check of the first bytes of a file.
+type StartCheck = fn(&[u8]) -> Result<(), String>;
+
+/// Reads an HDR image (EXR, Radiance `.hdr`, PFM), chosen by extension. The file is refused
+/// at once when it does not start like its format, and read only up to
+/// [`limits::max_file_bytes`]; sizes in its header are checked against the image ceilings
+/// before pixels are allocated (`docs/limits.md`).
 pub fn read_image(path: &Path) -> Result<RgbImage, IoError> {
     let format =
         ImageFormat::from_path(path).ok_or_else(|| IoError::UnknownFormat { path: path.to_path_buf(), extra: "" })?;
-    let bytes = super::read_bytes(path)?;
+    let (name, check_start): (&'static str, StartCheck) = match format {
+        ImageFormat::Exr => ("OpenEXR", super::exr::check_magic),
+        ImageFormat::Rgbe => ("Radiance HDR", super::rgbe::check_magic),
+        ImageFormat::Pfm => ("PFM", super::pfm::check_magic),
+    };
+    let bytes = limits::read_file(path, name, limits::max_file_bytes(), check_start)?;
     let image = match format {
         ImageFormat::Exr => super::exr::decode(path, &bytes)?,
         ImageFormat::Rgbe => super::rgbe::decode(path, &bytes)?,

@@ -2,9 +2,19 @@
 //! means little-endian.
 
 use super::{IoError, RgbImage};
+use crate::limits;
 use std::path::Path;
 
 const FORMAT: &str = "PFM";
+
+/// Whether `start` (the first bytes of a file) is the start of a PFM file (`PF` or `Pf`).
+pub fn check_magic(start: &[u8]) -> Result<(), String> {
+    if start.starts_with(b"PF") || start.starts_with(b"Pf") {
+        Ok(())
+    } else {
+        Err("does not start with \"PF\" or \"Pf\"".into())
+    }
+}
 
 /// Decodes a PFM file.
 pub fn decode(path: &Path, bytes: &[u8]) -> Result<RgbImage, IoError> {
@@ -40,6 +50,8 @@ pub fn decode(path: &Path, bytes: &[u8]) -> Result<RgbImage, IoError> {
     if !(scale.is_finite() && scale != 0.0) {
         return Err(bad("scale must be a non-zero number"));
     }
+    limits::check_image("the image", width as u64, height as u64, limits::RGB_BYTES_PER_TEXEL)
+        .map_err(|e| bad(&e.to_string()))?;
     let little = scale < 0.0;
     let count =
         width.checked_mul(height).and_then(|n| n.checked_mul(channels * 4)).ok_or_else(|| bad("size overflows"))?;

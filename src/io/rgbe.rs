@@ -5,16 +5,27 @@
 //! An `EXPOSURE=` line means the pixels were multiplied by it, so values are divided back.
 
 use super::{IoError, RgbImage};
+use crate::limits;
 use std::path::Path;
 
 const FORMAT: &str = "Radiance HDR";
+
+/// Whether `start` (the first bytes of a file) is the start of a Radiance file (`#?`).
+pub fn check_magic(start: &[u8]) -> Result<(), String> {
+    if start.starts_with(b"#?") {
+        Ok(())
+    } else {
+        Err("does not start with \"#?\" (\"#?RADIANCE\" or \"#?RGBE\")".into())
+    }
+}
 
 /// Decodes a Radiance RGBE file.
 pub fn decode(path: &Path, bytes: &[u8]) -> Result<RgbImage, IoError> {
     let bad = |reason: String| IoError::invalid(path, FORMAT, reason);
     let mut pos = 0usize;
     let mut line_no = 0usize;
-    let mut next_line = |pos: &mut usize| -> Option<String> {
+    // The next header line and its 1-based number.
+    let mut next_line = |pos: &mut usize| -> Option<(usize, String)> {
         if *pos >= bytes.len() {
             return None;
         }
@@ -22,32 +33,39 @@ pub fn decode(path: &Path, bytes: &[u8]) -> Result<RgbImage, IoError> {
         let line = String::from_utf8_lossy(&bytes[*pos..end]).trim_end_matches('\r').to_string();
         *pos = end + 1;
         line_no += 1;
-        Some(line)
+        Some((line_no, line))
     };
-    let magic = next_line(&mut pos).ok_or_else(|| bad("empty file".into()))?;
+    let (_, magic) = next_line(&mut pos).ok_or_else(|| bad("empty file".into()))?;
     if !magic.starts_with("#?") {
         return Err(bad(format!("line 1: expected \"#?RADIANCE\" or \"#?RGBE\", found {magic:?}")));
     }
     let mut exposure = 1.0f64;
     loop {
-        let line =
+        let (n, line) =
             next_line(&mut pos).ok_or_else(|| bad("truncated header (no blank line before the resolution)".into()))?;
         if line.is_empty() {
             break;
         }
         if let Some(fmt) = line.strip_prefix("FORMAT=") {
             if fmt.trim() != "32-bit_rle_rgbe" {
-                return Err(IoError::unsupported(path, FORMAT, format!("pixel format {fmt:?} (only 32-bit_rle_rgbe)")));
+                return Err(IoError::unsupported(
+                    path,
+                    FORMAT,
+                    format!("line {n}: pixel format {fmt:?} (only 32-bit_rle_rgbe)"),
+                ));
             }
         } else if let Some(e) = line.strip_prefix("EXPOSURE=") {
-            let e: f64 = e.trim().parse().map_err(|_| bad(format!("bad EXPOSURE line {line:?}")))?;
+            let e: f64 = e.trim().parse().map_err(|_| bad(format!("line {n}: bad EXPOSURE line {line:?}")))?;
             if !(e.is_finite() && e > 0.0) {
-                return Err(bad(format!("bad EXPOSURE value {e}")));
+                return Err(bad(format!("line {n}: bad EXPOSURE value {e}")));
             }
             exposure *= e;
+            if !(exposure.is_finite() && exposure > 0.0) {
+                return Err(bad(format!("line {n}: the EXPOSURE lines multiply to {exposure}")));
+            }
         }
     }
-    let res = next_line(&mut pos).ok_or_else(|| bad("missing resolution line".into()))?;
+    let (n, res) = next_line(&mut pos).ok_or_else(|| bad("missing resolution line".into()))?;
     let parts: Vec<&str> = res.split_whitespace().collect();
     let (flip_y, height, width) = match parts.as_slice() {
         ["-Y", h, "+X", w] => (false, *h, *w),
@@ -56,31 +74,35 @@ pub fn decode(path: &Path, bytes: &[u8]) -> Result<RgbImage, IoError> {
             return Err(IoError::unsupported(
                 path,
                 FORMAT,
-                format!("resolution line {res:?} (only \"-Y H +X W\" and \"+Y H +X W\")"),
+                format!("line {n}: resolution line {res:?} (only \"-Y H +X W\" and \"+Y H +X W\")"),
             ))
         }
     };
-    let height: usize = height.parse().map_err(|_| bad(format!("bad height in {res:?}")))?;
-    let width: usize = width.parse().map_err(|_| bad(format!("bad width in {res:?}")))?;
+    let height: usize = height.parse().map_err(|_| bad(format!("line {n}: bad height in {res:?}")))?;
+    let width: usize = width.parse().map_err(|_| bad(format!("line {n}: bad width in {res:?}")))?;
     if width == 0 || height == 0 {
-        return Err(bad("the image is empty (zero width or height)".into()));
+        return Err(bad(format!("line {n}: the image is empty (zero width or height)")));
     }
-    if width.saturating_mul(height) > 1 << 28 {
-        return Err(bad(format!("{width}x{height} is too large")));
-    }
+    limits::check_image(&format!("the image (line {n})"), width as u64, height as u64, limits::RGB_BYTES_PER_TEXEL)
+        .map_err(|e| bad(e.to_string()))?;
 
     let data = &bytes[pos..];
     let mut cursor = 0usize;
     let mut scan = vec![[0u8; 4]; width];
-    let mut image = RgbImage::new(width, height);
+    // Pixels are appended as scanlines decode (in file order), so a header that promises more
+    // than the data holds fails before the whole image is allocated.
+    let mut pixels: Vec<[f32; 3]> = Vec::new();
     let scale = 1.0 / exposure;
     for row in 0..height {
         read_scanline(data, &mut cursor, &mut scan)
             .map_err(|reason| bad(format!("scanline {row} of {height}: {reason}")))?;
-        let y = if flip_y { height - 1 - row } else { row };
-        for (x, rgbe) in scan.iter().enumerate() {
-            image.set(x, y, rgbe_to_float(*rgbe, scale));
-        }
+        pixels.extend(scan.iter().map(|rgbe| rgbe_to_float(*rgbe, scale)));
+    }
+    let mut image = RgbImage { width, height, pixels };
+    if flip_y {
+        // "+Y H" stores the bottom row first.
+        let rows: Vec<Vec<[f32; 3]>> = image.pixels.chunks(width).rev().map(<[_]>::to_vec).collect();
+        image.pixels = rows.concat();
     }
     Ok(image)
 }

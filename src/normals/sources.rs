@@ -59,14 +59,14 @@ impl NormalSource {
                 Ok(NormalSource { normals, kind: Kind::Exr { width: image.width, height: image.height, unorm } })
             }
             SourceFormat::Obj => {
-                let bytes = crate::io::read_bytes(path)?;
+                let bytes = read_whole(path, "OBJ")?;
                 let text = String::from_utf8(bytes)
                     .map_err(|e| IoError::invalid(path, "OBJ", format!("not UTF-8 text: {e}")))?;
                 read_obj(path, text)
             }
-            SourceFormat::Ply => read_ply(path, crate::io::read_bytes(path)?),
+            SourceFormat::Ply => read_ply(path, read_whole(path, "PLY")?),
             SourceFormat::Raw => {
-                let bytes = crate::io::read_bytes(path)?;
+                let bytes = read_whole(path, "raw f32 xyz")?;
                 Ok(NormalSource { normals: raw_from_bytes(path, &bytes)?, kind: Kind::Raw })
             }
         }
@@ -101,6 +101,11 @@ impl NormalSource {
             Kind::Raw => Ok(raw_to_bytes(decoded)),
         }
     }
+}
+
+/// Reads a file whole, up to [`crate::limits::max_file_bytes`] (`docs/limits.md`).
+fn read_whole(path: &Path, format: &'static str) -> Result<Vec<u8>, IoError> {
+    crate::limits::read_file(path, format, crate::limits::max_file_bytes(), |_| Ok(()))
 }
 
 /// Raw little-endian f32 xyz triples.
@@ -383,7 +388,10 @@ fn read_ply(path: &Path, bytes: Vec<u8>) -> Result<NormalSource, IoError> {
                         } else if let Some((cs, vs)) = p.list {
                             let count = read_uint(pos, cs)
                                 .ok_or_else(|| bad(format!("truncated in element {} #{v}", el.name)))?;
-                            pos += cs + count * vs;
+                            // A garbled count must not wrap the offset back into the file.
+                            pos = count.checked_mul(vs).and_then(|n| n.checked_add(pos + cs)).ok_or_else(|| {
+                                bad(format!("list length {count} in element {} #{v} overflows", el.name))
+                            })?;
                         }
                         if pos > bytes.len() {
                             return Err(bad(format!("truncated in element {} #{v} of {}", el.name, el.count)));

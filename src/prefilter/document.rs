@@ -1,6 +1,8 @@
 //! The `prtkit.shrm` document: metadata of an SHRM (and of reflection maps derived from it),
 //! `docs/formats/shrm.md`.
 
+use crate::io::document::Validate;
+use crate::limits;
 use serde::{Deserialize, Serialize};
 
 /// Document kind.
@@ -78,7 +80,61 @@ pub struct MapEntry {
     pub view: Option<[f64; 3]>,
 }
 
+/// The checks every SHRM loader gets, before it computes with the orders or the grid: F_B, P_B
+/// and the lighting order within [`limits::MAX_SH_ORDER`] (a P_B of 10¹² used to overflow
+/// (P+1)² into "capacity overflow"), and the (P_B+1)² layers of the W×H grid within the image
+/// and memory ceilings.
+impl Validate for ShrmBody {
+    fn validate(&self) -> Result<(), (&'static str, String)> {
+        for (field, order) in [("f_b", self.f_b), ("p_b", self.p_b)] {
+            limits::check_sh_order(field, order).map_err(|e| (field, e.to_string()))?;
+        }
+        limits::check_sh_order("the lighting order", self.lighting.order).map_err(|e| ("order", e.to_string()))?;
+        if self.width == 0 || self.height == 0 {
+            return Err(("width", format!("the grid is {}x{}: empty", self.width, self.height)));
+        }
+        let layer_bytes = limits::RGB_BYTES_PER_TEXEL * crate::sh::count(self.p_b) as u64;
+        limits::check_image("the SHRM grid", self.width as u64, self.height as u64, layer_bytes)
+            .map_err(|e| ("width", e.to_string()))
+    }
+}
+
 /// Name of SHRM layer (p, q) in the EXR file.
 pub fn layer_name(p: usize, q: isize) -> String {
     format!("B{p}{q:+}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::document::parse_validated;
+
+    fn doc(p_b: &str, width: usize) -> String {
+        format!(
+            r#"{{"format": "prtkit.shrm", "version": 1,
+  "conventions": {{"frame": "f", "sh": "s"}},
+  "provenance": {{"tool": "t", "stage": "s", "args": []}},
+  "brdf": "phong:s=8", "cosine": true, "method": "frequency", "f_b": 4,
+  "p_b": {p_b},
+  "epsilon_achieved": 0.05, "parameterization": "reflection", "layout": "latlong",
+  "width": {width}, "height": 40, "global": false, "shrm_file": "p.shrm.exr", "layers": ["B0+0"],
+  "lighting": {{"source": "sky.exr", "order": 4}}, "maps": [], "timings": {{}}
+}}"#
+        )
+    }
+
+    #[test]
+    fn absurd_orders_and_grids_are_refused_before_any_loader_computes() {
+        assert!(parse_validated::<ShrmBody>(&doc("0", 80), FORMAT, VERSION).is_ok());
+        // 10^12 used to end in "capacity overflow", 2^32 in an abort.
+        for p_b in ["1000000000000", "4294967296"] {
+            let e = parse_validated::<ShrmBody>(&doc(p_b, 80), FORMAT, VERSION).unwrap_err();
+            assert_eq!((e.line, e.column), (5, 3), "{e}");
+            assert!(e.reason.contains(p_b) && e.reason.contains("ceiling of 2000"), "{e}");
+        }
+        let e = parse_validated::<ShrmBody>(&doc("0", 0), FORMAT, VERSION).unwrap_err().to_string();
+        assert!(e.contains("empty"), "{e}");
+        let e = parse_validated::<ShrmBody>(&doc("20", 1 << 30), FORMAT, VERSION).unwrap_err().to_string();
+        assert!(e.contains("the SHRM grid") && e.contains("texels"), "{e}");
+    }
 }

@@ -1,8 +1,10 @@
 //! The `prtkit.sh` document: SH coefficients of an environment map (`docs/formats/sh.md`).
 
 use super::ShCoeffs;
-use crate::io::document::{parse_document, Document};
+use crate::io::document::{parse_validated, read_document, BundleError, Document, DocumentError, Validate};
+use crate::limits;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
 /// Document kind.
 pub const FORMAT: &str = "prtkit.sh";
@@ -85,19 +87,66 @@ impl ShBody {
     }
 }
 
-/// Parses a `prtkit.sh` document and checks that its coefficient count matches its order.
-pub fn parse(text: &str) -> Result<Document<ShBody>, String> {
-    let doc: Document<ShBody> = parse_document(text, FORMAT, VERSION)?;
-    let want = super::count(doc.body.order);
-    if doc.body.coefficients.len() != want {
-        return Err(format!(
-            "order {} needs {want} coefficients, the document has {}",
-            doc.body.order,
-            doc.body.coefficients.len()
-        ));
+/// The checks every `prtkit.sh` loader gets: the order within [`limits::MAX_SH_ORDER`]
+/// (before (F+1)² is formed: at 2³² − 1 it wraps), (F+1)² finite coefficients.
+impl Validate for ShBody {
+    fn validate(&self) -> Result<(), (&'static str, String)> {
+        limits::check_sh_order("the order", self.order).map_err(|e| ("order", e.to_string()))?;
+        let want = super::count(self.order);
+        if self.coefficients.len() != want {
+            return Err((
+                "coefficients",
+                format!("order {} needs {want} coefficients, the document has {}", self.order, self.coefficients.len()),
+            ));
+        }
+        if self.coefficients.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(("coefficients", "coefficients must be finite numbers".into()));
+        }
+        Ok(())
     }
-    if doc.body.coefficients.iter().flatten().any(|v| !v.is_finite()) {
-        return Err("coefficients must be finite numbers".into());
+}
+
+/// Parses a `prtkit.sh` document and checks it ([`Validate`]): errors carry line and column.
+pub fn parse(text: &str) -> Result<Document<ShBody>, DocumentError> {
+    parse_validated(text, FORMAT, VERSION)
+}
+
+/// Reads and checks the `prtkit.sh` document at `path` (at most
+/// [`limits::max_document_bytes`]); errors name the file, line and column.
+pub fn read(path: &Path) -> Result<Document<ShBody>, BundleError> {
+    read_document(path, FORMAT, VERSION)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn doc(order: &str, coefficients: &str) -> String {
+        format!(
+            r#"{{"format": "prtkit.sh", "version": 1,
+  "conventions": {{"frame": "f", "sh": "s"}},
+  "provenance": {{"tool": "t", "stage": "s", "args": []}},
+  "order": {order},
+  "coefficients": {coefficients},
+  "band_energy": [], "total_energy": 1,
+  "selection": {{"method": "order", "epsilon_achieved": 0}},
+  "source": {{"path": "p", "layout": "latlong", "width": 2, "height": 1, "max_order": 0}}
+}}"#
+        )
     }
-    Ok(doc)
+
+    #[test]
+    fn absurd_orders_are_refused_with_their_position() {
+        assert!(parse(&doc("0", "[[1, 2, 3]]")).is_ok());
+        // (2^32 - 1 + 1)^2 wraps to 0 in 32 bits: it used to pass the count check and panic later.
+        let e = parse(&doc("4294967295", "[]")).unwrap_err();
+        assert_eq!((e.line, e.column), (4, 3), "{e}");
+        assert!(e.reason.contains("4294967295") && e.reason.contains("ceiling"), "{e}");
+        let e = parse(&doc("18446744073709551615", "[]")).unwrap_err().to_string();
+        assert!(e.contains("ceiling"), "{e}");
+        let e = parse(&doc("1", "[[1, 2, 3]]")).unwrap_err().to_string();
+        assert!(e.starts_with("line 5, column 3: \"coefficients\": order 1 needs 4"), "{e}");
+        let e = parse(&doc("-1", "[]")).unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+    }
 }

@@ -25,6 +25,13 @@ use std::sync::OnceLock;
 /// Most lattice cells evaluated one by one for a range.
 pub const MAX_CELLS: i64 = 64;
 
+/// The lattice repeats every `PERIOD` cells along each axis (the hash reduces cell indices
+/// modulo 256).
+const PERIOD: f64 = 256.0;
+
+/// 2⁵²: from here on every double is an integer (see [`snoise`]).
+const INTEGRAL: f64 = 4_503_599_627_370_496.0;
+
 /// Ranges over at most this many cells get the tightest bound of each cell (see [`snoise`]).
 const FEW_CELLS: i64 = 4;
 
@@ -586,16 +593,34 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
     if b.iter().any(|iv| !iv.is_finite()) {
         return global();
     }
+    if b.iter().any(|iv| iv.lo.abs().max(iv.hi.abs()) >= INTEGRAL) {
+        // Every double this large is an integer, so a point there is a lattice point along that
+        // axis; the hash repeats every PERIOD cells, so the coordinate modulo PERIOD (exact)
+        // gives the same value with cell indices far from overflow. A range there takes the
+        // global bound.
+        if b.iter().all(|iv| iv.lo == iv.hi) {
+            let q: [N; 3] = std::array::from_fn(|k| {
+                if b[k].lo.abs() >= INTEGRAL {
+                    N::constant(b[k].lo.rem_euclid(PERIOD))
+                } else {
+                    p[k].clone()
+                }
+            });
+            return snoise(dim, &q);
+        }
+        return global();
+    }
     let lo: [i64; 3] = std::array::from_fn(|k| b[k].lo.floor() as i64);
     let hi: [i64; 3] = std::array::from_fn(|k| b[k].hi.floor() as i64);
     let counts: [i64; 3] = std::array::from_fn(|k| hi[k] - lo[k] + 1);
+    // Each count first: the product of three counts of up to 2^53 would overflow.
+    if counts.iter().any(|&c| c > MAX_CELLS) || counts.iter().product::<i64>() > MAX_CELLS {
+        return global();
+    }
     if counts.iter().all(|&c| c == 1) {
         // One cell (always the case for points): the polynomial in the caller's arithmetic.
         let cell = [lo[0], lo[1], lo[2]];
         return cell_value(dim, cell, p, cell.map(|c| c as f64), HESSIAN_PIECES);
-    }
-    if counts.iter().product::<i64>() > MAX_CELLS {
-        return global();
     }
     // Each touched cell on its part of the box, in the caller's arithmetic with fresh inputs
     // (affine stays tighter than interval inside a cell); the hull of the cells' bounds. Only
@@ -646,7 +671,7 @@ pub fn snoise<N: Real>(dim: usize, p: &[N; 3]) -> N {
 fn snoise_scaled<N: Real>(p: &[N; 3], scale: f64) -> N {
     if scale.is_finite() && scale != 0.0 && p[0].first_order().is_some() {
         let b: [Interval; 3] = std::array::from_fn(|k| p[k].bounds().scale(scale));
-        if b.iter().all(|iv| iv.is_finite() && iv.lo.floor() == iv.hi.floor()) {
+        if b.iter().all(|iv| iv.lo.abs().max(iv.hi.abs()) < INTEGRAL && iv.lo.floor() == iv.hi.floor()) {
             let cell: [i64; 3] = std::array::from_fn(|k| b[k].lo.floor() as i64);
             if let Some((v, r)) = taylor_cell(3, cell, p, scale, cell.map(|c| c as f64), HESSIAN_PIECES) {
                 if r <= TAYLOR_ONLY_RADIUS_CORRELATED || r <= TAYLOR_ONLY_RADIUS && !correlated(3, p) {

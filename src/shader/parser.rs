@@ -2,6 +2,7 @@
 
 use super::lexer::{lex, Pos, Tok, Token};
 use super::ShaderError;
+use crate::limits;
 
 /// Value types.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -185,11 +186,16 @@ pub struct Program {
 struct Parser {
     toks: Vec<Token>,
     i: usize,
+    /// Nesting depth of the tree under construction (see [`Parser::enter`]).
+    depth: usize,
 }
 
-/// Parses a source file.
+/// Parses a source file. Expressions and statements may nest at most
+/// [`limits::MAX_NESTING_DEPTH`] levels (a chain of binary operators counts one level per
+/// operator): the checker and interpreter recurse once per level, and that bound keeps their
+/// stack use bounded.
 pub fn parse(src: &str) -> Result<Program, ShaderError> {
-    let mut p = Parser { toks: lex(src)?, i: 0 };
+    let mut p = Parser { toks: lex(src)?, i: 0, depth: 0 };
     p.program()
 }
 
@@ -203,6 +209,23 @@ fn describe(t: &Tok) -> String {
 }
 
 impl Parser {
+    /// One level deeper into the tree; an error at `pos` past the ceiling. Callers restore
+    /// `depth` on success; after an error the parse is abandoned, so it need not be.
+    fn enter(&mut self, pos: Pos) -> Result<(), ShaderError> {
+        self.depth += 1;
+        if self.depth > limits::MAX_NESTING_DEPTH {
+            return Err(ShaderError::at(
+                pos,
+                format!(
+                    "nested deeper than {} levels (expressions, blocks and each operator of a chain count one level; \
+                     split it with intermediate variables)",
+                    limits::MAX_NESTING_DEPTH
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     fn peek(&self) -> &Tok {
         &self.toks[self.i].tok
     }
@@ -338,6 +361,13 @@ impl Parser {
 
     fn stmt(&mut self) -> Result<Stmt, ShaderError> {
         let pos = self.pos();
+        self.enter(pos)?;
+        let s = self.stmt_inner(pos);
+        self.depth -= 1;
+        s
+    }
+
+    fn stmt_inner(&mut self, pos: Pos) -> Result<Stmt, ShaderError> {
         if self.is_sym("{") {
             return Ok(Stmt { kind: StmtKind::Block(self.block()?), pos });
         }
@@ -444,6 +474,13 @@ impl Parser {
     }
 
     fn expr(&mut self) -> Result<Expr, ShaderError> {
+        self.enter(self.pos())?;
+        let e = self.expr_inner();
+        self.depth -= 1;
+        e
+    }
+
+    fn expr_inner(&mut self) -> Result<Expr, ShaderError> {
         let c = self.binary(0)?;
         if self.is_sym("?") {
             let pos = c.pos;
@@ -478,35 +515,44 @@ impl Parser {
     /// Precedence climbing; all binary operators are left-associative.
     fn binary(&mut self, min_prec: u8) -> Result<Expr, ShaderError> {
         let mut lhs = self.unary()?;
+        // Each operator of the chain puts the tree built so far one level deeper.
+        let base = self.depth;
         while let Some((op, prec)) = self.binop() {
             if prec <= min_prec {
                 break;
             }
+            self.enter(self.pos())?;
             self.bump();
             let rhs = self.binary(prec)?;
             let pos = lhs.pos;
             lhs = Expr { kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), pos };
         }
+        self.depth = base;
         Ok(lhs)
     }
 
     fn unary(&mut self) -> Result<Expr, ShaderError> {
         let pos = self.pos();
-        if self.eat("-") {
-            return Ok(Expr { kind: ExprKind::Neg(Box::new(self.unary()?)), pos });
-        }
-        if self.eat("+") {
-            return self.unary();
-        }
-        if self.eat("!") {
-            return Ok(Expr { kind: ExprKind::Not(Box::new(self.unary()?)), pos });
+        if matches!(self.peek(), Tok::Sym("-" | "+" | "!")) {
+            self.enter(pos)?;
+            let e = match self.bump().tok {
+                Tok::Sym("-") => Expr { kind: ExprKind::Neg(Box::new(self.unary()?)), pos },
+                Tok::Sym("!") => Expr { kind: ExprKind::Not(Box::new(self.unary()?)), pos },
+                _ => self.unary()?,
+            };
+            self.depth -= 1;
+            return Ok(e);
         }
         let mut e = self.primary()?;
-        while self.eat(".") {
+        let base = self.depth;
+        while self.is_sym(".") {
+            self.enter(self.pos())?;
+            self.bump();
             let (m, _) = self.ident("a component name (x, y, z, r, g, b)")?;
             let epos = e.pos;
             e = Expr { kind: ExprKind::Member(Box::new(e), m), pos: epos };
         }
+        self.depth = base;
         Ok(e)
     }
 

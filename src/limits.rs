@@ -1,0 +1,322 @@
+//! Ceilings on what prtkit accepts from files, documents and shaders, each derived from memory
+//! or time, in one place (the table is `docs/limits.md`). Every reader checks its input against
+//! them with a `check_*` helper *before* allocating, so a hostile or garbled file ends with a
+//! clear error naming the file instead of an allocation failure, a panic or an endless loop.
+//!
+//! Memory ceilings scale with the machine: [`memory_budget`] is half of the memory the process
+//! may use (the smallest of physical memory, the cgroup's limit and the address-space limit of
+//! `ulimit -v`). Everything else is a fixed number, so that what a file means does not depend
+//! on the machine that reads it.
+
+use crate::io::IoError;
+use std::io::Read;
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// A value above its ceiling. The message says what, how much, the ceiling and why it exists.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{what} is {value}, above the ceiling of {ceiling} ({reason}; see docs/limits.md)")]
+pub struct LimitError {
+    /// What was too large, e.g. "the image (data window 100000x100000)".
+    pub what: String,
+    /// Its size, in words.
+    pub value: String,
+    /// The ceiling, in words.
+    pub ceiling: String,
+    /// Why the ceiling is there.
+    pub reason: &'static str,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Memory
+// ---------------------------------------------------------------------------------------------
+
+/// Memory assumed when none of `/proc/meminfo`, the cgroup limit or `/proc/self/limits` can be
+/// read (a non-Linux system): 4 GiB, less than any machine prtkit is meant for has.
+pub const FALLBACK_MEMORY: u64 = 4 << 30;
+
+/// The memory this process may use, in bytes: the smallest of physical memory (`MemTotal` of
+/// `/proc/meminfo`), the cgroup's memory limit (v2 `memory.max` or v1 `memory.limit_in_bytes`)
+/// and the address-space limit (`ulimit -v`, from `/proc/self/limits`); [`FALLBACK_MEMORY`] when
+/// none is readable. Read once per process.
+pub fn available_memory() -> u64 {
+    static MEMORY: OnceLock<u64> = OnceLock::new();
+    *MEMORY.get_or_init(|| {
+        let read = |p: &str| std::fs::read_to_string(p).ok();
+        let mem_total = read("/proc/meminfo").and_then(|t| {
+            let line = t.lines().find(|l| l.starts_with("MemTotal:"))?;
+            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            kib.checked_mul(1024)
+        });
+        let cgroup = ["/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"]
+            .iter()
+            .filter_map(|p| read(p)?.trim().parse::<u64>().ok())
+            .min();
+        let address_space = read("/proc/self/limits").and_then(|t| {
+            let line = t.lines().find(|l| l.starts_with("Max address space"))?;
+            line.split_whitespace().nth(3)?.parse::<u64>().ok()
+        });
+        [mem_total, cgroup, address_space].into_iter().flatten().min().unwrap_or(FALLBACK_MEMORY)
+    })
+}
+
+/// The memory one input may take once decoded: half of [`available_memory`], leaving the other
+/// half for the stage's own work on it (a projection, a resampled copy, an output image).
+pub fn memory_budget() -> u64 {
+    available_memory() / 2
+}
+
+/// The largest file read whole into memory (images, meshes, normals): half of
+/// [`memory_budget`], since decoding needs the bytes and the decoded values at once.
+pub fn max_file_bytes() -> u64 {
+    memory_budget() / 2
+}
+
+// ---------------------------------------------------------------------------------------------
+// Images
+// ---------------------------------------------------------------------------------------------
+
+/// Largest image any reader accepts, in texels: 2²⁸ (16384 × 16384, a 32768 × 8192 lat-long).
+/// Fixed, so that a file means the same on every machine: as an RGB f32 image it is 3 GiB, and
+/// the SH projection of the largest order a document may carry ([`MAX_SH_ORDER`]) over it costs
+/// 2²⁸·2001² ≈ 10¹⁵ multiply-adds — hours. The memory check of [`check_image`] comes on top.
+pub const MAX_IMAGE_TEXELS: u64 = 1 << 28;
+
+/// Bytes per texel of a decoded RGB f32 image (one per Radiance HDR or PFM file, one per RGB or
+/// grey layer of an EXR, on top of the `exr` crate's 2 or 4 bytes per channel sample).
+pub const RGB_BYTES_PER_TEXEL: u64 = 12;
+
+/// Checks an image size read from a header before anything is allocated for it: at most
+/// [`MAX_IMAGE_TEXELS`] texels, and `bytes_per_texel` of them within [`memory_budget`].
+/// `what` names the image in the message (e.g. "the data window of layer \"B1+0\"").
+pub fn check_image(what: &str, width: u64, height: u64, bytes_per_texel: u64) -> Result<(), LimitError> {
+    let texels = width as u128 * height as u128;
+    if texels > MAX_IMAGE_TEXELS as u128 {
+        return Err(LimitError {
+            what: format!("{what} ({width}x{height})"),
+            value: format!("{texels} texels"),
+            ceiling: format!("{MAX_IMAGE_TEXELS} texels"),
+            reason: "the largest image prtkit reads",
+        });
+    }
+    check_memory(what, texels * bytes_per_texel as u128)
+}
+
+/// Checks that `bytes` of working memory fit the [`memory_budget`].
+pub fn check_memory(what: &str, bytes: u128) -> Result<(), LimitError> {
+    let budget = memory_budget();
+    if bytes > budget as u128 {
+        return Err(LimitError {
+            what: format!("the memory {what} needs"),
+            value: human_bytes(bytes),
+            ceiling: human_bytes(budget as u128),
+            reason: "half of the memory this process may use",
+        });
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Documents
+// ---------------------------------------------------------------------------------------------
+
+/// Highest SH order (F, P_B, F_B) a document may carry: 2000, the order `sh-project --order`
+/// accepts. (F+1)² = 4·10⁶ RGB coefficients: 96 MB as f64, about 450 MB of pretty JSON.
+pub const MAX_SH_ORDER: usize = 2000;
+
+/// Largest JSON document read: 1 GiB, room for a `prtkit.sh` at [`MAX_SH_ORDER`] (≈ 450 MB,
+/// one number per line) twice over. Also bounded by [`memory_budget`]/4, as parsing holds the
+/// text and the values at once.
+pub fn max_document_bytes() -> u64 {
+    (1u64 << 30).min(memory_budget() / 4)
+}
+
+/// Checks an SH order read from a document (before (F+1)² is computed: it would overflow).
+pub fn check_sh_order(what: &str, order: usize) -> Result<(), LimitError> {
+    if order > MAX_SH_ORDER {
+        return Err(LimitError {
+            what: what.to_string(),
+            value: order.to_string(),
+            ceiling: MAX_SH_ORDER.to_string(),
+            reason: "the highest SH order prtkit computes or reads",
+        });
+    }
+    Ok(())
+}
+
+/// Highest grid resolution n of a `prtkit.factor` document: 1024. Above it even the FFT
+/// factorization needs 2n³·8 bytes = 16 GiB, so no factor-brdf run has written one.
+pub const MAX_FACTOR_RESOLUTION: usize = 1024;
+
+/// Checks a count read from a document against its ceiling.
+pub fn check_count(what: &str, value: usize, ceiling: usize, reason: &'static str) -> Result<(), LimitError> {
+    if value > ceiling {
+        return Err(LimitError {
+            what: what.to_string(),
+            value: value.to_string(),
+            ceiling: ceiling.to_string(),
+            reason,
+        });
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// BRDF specs
+// ---------------------------------------------------------------------------------------------
+
+/// Tallest BRDF peak a spec may ask for: 10⁸ sr⁻¹ (Phong s ≈ 6.3·10⁸, Torrance–Sparrow σ ≈
+/// 2.8·10⁻⁵). Such a lobe is about 1/√s ≈ 4·10⁻⁵ rad wide, narrower than a texel of the
+/// largest image prtkit reads (2π/32768 ≈ 1.9·10⁻⁴ rad), so no stage can resolve anything
+/// taller; and the squares the factorization sums (10¹⁶ per entry, over at most 10¹² entries)
+/// stay far from f64 overflow, which a Phong s = 10³⁰⁸ reaches (its energy came out −∞).
+pub const MAX_BRDF_PEAK: f64 = 1e8;
+
+/// Widest Torrance–Sparrow σ: 100 rad. The lobe exp(−(θ_h/σ)²) then varies by less than
+/// 0.1 % over the sphere (a constant), and its peak 1/(4πσ²) stays a normal number, which
+/// σ ≳ 10¹⁵³ would not (the BRDF would be 0 and its energy curve 0/0).
+pub const MAX_TORRANCE_SPARROW_SIGMA: f64 = 100.0;
+
+// ---------------------------------------------------------------------------------------------
+// The shading language
+// ---------------------------------------------------------------------------------------------
+
+/// Largest shader source: 1 MiB (the shipped shaders are under 4 KiB).
+pub const MAX_SHADER_SOURCE_BYTES: u64 = 1 << 20;
+
+/// Deepest nesting of expressions and statements in a shader (each operand of a chain of
+/// binary operators counts as one level: a sum of 300 terms is 300 deep). The parser, checker
+/// and interpreter recurse once per level: measured, at most 1.1 KiB of stack per level in the
+/// interpreter (affine numbers), so a shader at the ceiling evaluates within 1 MiB, half of a
+/// worker thread's 2 MiB stack (a test runs one on a 1 MiB thread). The shipped shaders
+/// evaluate at most 12 levels deep.
+pub const MAX_NESTING_DEPTH: usize = 256;
+
+/// Deepest user-function call chain in one evaluation (recursion depth).
+pub const MAX_CALL_DEPTH: usize = 64;
+
+/// Deepest recursion of the interpreter in one evaluation, counting every nested expression,
+/// statement and call: calls multiply nesting (a function nested 200 deep calling itself 64
+/// times), so the interpreter checks the sum as it goes. At 1.1 KiB per level, 512 levels
+/// stay within 600 KiB of stack.
+pub const MAX_EVALUATION_DEPTH: usize = 512;
+
+/// Most loop iterations in one evaluation of the shader.
+pub const MAX_LOOP_ITERATIONS: u64 = 1_000_000;
+
+/// Most operations in one evaluation of the shader (expressions and statements evaluated; a
+/// noise evaluation counts 1024, fbm 1024 per octave, as they cost that much more): 10⁶, about
+/// 30–40 ms of one sample (measured: 10⁷ plain operations took 0.2–0.3 s in each arithmetic,
+/// 12 000 affine noise evaluations 0.5 s). The shipped shaders need at most 6287 (bumpmap.sl).
+/// It stops exponential recursion (`f(x−1) + f(x−1)`), which the depth limit alone lets run
+/// 2⁶⁴ calls, and loops nested so that their iterations multiply.
+pub const MAX_OPERATIONS: u64 = 1_000_000;
+
+/// Most octaves of fbm/turbulence (larger counts are clamped): the 17th octave of a unit
+/// frequency has wavelength 2⁻¹⁶, below a texel of any image prtkit writes.
+pub const MAX_OCTAVES: usize = 16;
+
+// ---------------------------------------------------------------------------------------------
+// Reading files within a ceiling
+// ---------------------------------------------------------------------------------------------
+
+/// Reads the file at `path` whole, refusing it once it exceeds `ceiling` bytes (so `/dev/zero`
+/// or a growing pipe costs at most `ceiling` bytes of reading). `format` names the expected
+/// format in the messages; `check_start` sees the first bytes (up to 64) before the rest is
+/// read, so a file of the wrong kind is refused at once.
+pub fn read_file(
+    path: &Path,
+    format: &'static str,
+    ceiling: u64,
+    check_start: impl FnOnce(&[u8]) -> Result<(), String>,
+) -> Result<Vec<u8>, IoError> {
+    let mut file = std::fs::File::open(path).map_err(|e| IoError::os(path, e))?;
+    // The size on disk sizes the buffer when it is a regular file within the ceiling.
+    let hint = file.metadata().ok().filter(|m| m.is_file()).map_or(0, |m| m.len()).min(ceiling);
+    let mut bytes = Vec::with_capacity(hint as usize + 1);
+    let mut head = (&mut file).take(64);
+    head.read_to_end(&mut bytes).map_err(|e| IoError::os(path, e))?;
+    check_start(&bytes).map_err(|reason| IoError::invalid(path, format, reason))?;
+    let rest = (ceiling + 1).saturating_sub(bytes.len() as u64);
+    file.take(rest).read_to_end(&mut bytes).map_err(|e| IoError::os(path, e))?;
+    if bytes.len() as u64 > ceiling {
+        let e = LimitError {
+            what: "the file".into(),
+            value: format!("more than {}", human_bytes(ceiling as u128)),
+            ceiling: human_bytes(ceiling as u128),
+            reason: "files are read whole into memory",
+        };
+        return Err(IoError::invalid(path, format, e.to_string()));
+    }
+    Ok(bytes)
+}
+
+/// [`read_file`] for text: bytes that are not UTF-8 are an error at their line and column.
+pub fn read_text(
+    path: &Path,
+    format: &'static str,
+    ceiling: u64,
+    check_start: impl FnOnce(&[u8]) -> Result<(), String>,
+) -> Result<String, IoError> {
+    String::from_utf8(read_file(path, format, ceiling, check_start)?).map_err(|e| {
+        let before = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column =
+            before.rsplit(|&b| b == b'\n').next().map_or(0, |l| String::from_utf8_lossy(l).chars().count()) + 1;
+        IoError::invalid(path, format, format!("line {line}, column {column}: not UTF-8 text"))
+    })
+}
+
+/// A byte count in binary units (KiB, MiB, …).
+pub fn human_bytes(b: u128) -> String {
+    crate::factor::svd::human_bytes(b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn memory_is_read_and_bounded() {
+        let m = available_memory();
+        assert!(m >= 64 << 20, "{m} bytes of memory?");
+        assert!(memory_budget() == m / 2 && max_file_bytes() == m / 4);
+    }
+
+    #[test]
+    fn image_ceilings_refuse_before_overflowing() {
+        assert!(check_image("x", 512, 256, 12).is_ok());
+        let e = check_image("the data window", 100_000, 100_000, 12).unwrap_err().to_string();
+        assert!(e.contains("100000x100000") && e.contains("texels") && e.contains("docs/limits.md"), "{e}");
+        // u64::MAX² does not wrap to something small.
+        assert!(check_image("x", u64::MAX, u64::MAX, u64::MAX).is_err());
+        assert!(check_memory("x", u128::MAX).is_err());
+    }
+
+    #[test]
+    fn sh_orders_above_the_ceiling_are_refused() {
+        assert!(check_sh_order("order", MAX_SH_ORDER).is_ok());
+        let e = check_sh_order("\"order\"", 4_294_967_295).unwrap_err().to_string();
+        assert!(e.contains("4294967295") && e.contains("2000"), "{e}");
+    }
+
+    #[test]
+    fn read_file_stops_at_the_ceiling_and_checks_the_start_first() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("f.bin");
+        std::fs::write(&p, vec![7u8; 1000]).unwrap();
+        assert_eq!(read_file(&p, "test", 1000, |_| Ok(())).unwrap().len(), 1000);
+        let e = read_file(&p, "test", 999, |_| Ok(())).unwrap_err().to_string();
+        assert!(e.contains("f.bin") && e.contains("ceiling"), "{e}");
+        let e = read_file(&p, "test", 1000, |b| Err(format!("starts with {}", b[0]))).unwrap_err().to_string();
+        assert!(e.contains("starts with 7"), "{e}");
+        std::fs::write(&p, b"ok\nab\xffc").unwrap();
+        let e = read_text(&p, "test", 100, |_| Ok(())).unwrap_err().to_string();
+        assert!(e.contains("line 2, column 3: not UTF-8"), "{e}");
+        // An endless file is read only up to the ceiling.
+        if Path::new("/dev/zero").exists() {
+            let e = read_file(Path::new("/dev/zero"), "test", 1 << 20, |_| Ok(())).unwrap_err().to_string();
+            assert!(e.contains("/dev/zero") && e.contains("1.0 MiB"), "{e}");
+        }
+    }
+}

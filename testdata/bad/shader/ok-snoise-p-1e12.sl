@@ -1,0 +1,3 @@
+shader far() {
+  Ci = color(snoise(P * 1e12));
+}
