@@ -113,5 +113,5 @@ pub fn parse(text: &str) -> Result<Document<EncodeReport>, String> {
             "{FORMAT} version 1 describes the bit-field layouts before mixed-radix codes; re-encode, or decode with --scheme/--bits"
         ));
     }
-    crate::io::document::parse_document(text, FORMAT, VERSION)
+    crate::io::document::parse_document(text, FORMAT, VERSION).map_err(|e| e.to_string())
 }
