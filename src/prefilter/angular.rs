@@ -319,6 +319,61 @@ impl ConeIntegrator {
     }
 }
 
+/// Cone sums over a pyramid of a smooth lat-long map: each level halves the last (2 × 2 texels
+/// averaged with their solid angles, so every level keeps the map's integral), and a lobe is
+/// summed on the coarsest level whose texels are at most 1/[`ConePyramid::TEXELS_PER_CONE`] of
+/// its cone angle θ*. Midpoint sums of a smooth lobe over box-filtered texels err by
+/// O((Δ/θ*)²), so on a smooth map (the remainder once bright sources are apart) this costs a
+/// fraction of the full-resolution sum for wide lobes at no visible loss (measured in
+/// `docs/prefilter.md`, "Fallback texels").
+pub struct ConePyramid {
+    levels: Vec<ConeIntegrator>,
+}
+
+impl ConePyramid {
+    /// Texels of the level summed per cone angle θ*.
+    pub const TEXELS_PER_CONE: f64 = 24.0;
+
+    /// The pyramid of `env` (lat-long) down to rows of at least 8 texels.
+    pub fn new(env: &EnvMap) -> Result<Self, AngularError> {
+        let mut levels = vec![ConeIntegrator::new(env)?];
+        let mut image = env.image().clone();
+        while image.height >= 16 && image.height % 2 == 0 && image.width % 2 == 0 {
+            image = halved(&image);
+            let level = EnvMap::latlong(image.clone()).map_err(|_| AngularError::NotLatLong(Layout::LatLong.name()))?;
+            levels.push(ConeIntegrator::new(&level)?);
+        }
+        Ok(ConePyramid { levels })
+    }
+
+    /// ∫ L(ω) weight(ω) dω over the cone of half-angle `theta_star` about `axis`, on the level
+    /// fit for that cone.
+    pub fn integrate(&self, axis: DVec3, theta_star: f64, weight: impl FnMut(DVec3) -> [f64; 3]) -> [f64; 3] {
+        let fits = |c: &&ConeIntegrator| PI / c.grid().height as f64 <= theta_star / Self::TEXELS_PER_CONE;
+        let level = self.levels.iter().rev().find(fits).unwrap_or(&self.levels[0]);
+        level.integrate(axis, theta_star, weight)
+    }
+}
+
+/// A lat-long image at half the resolution: each texel the solid-angle-weighted mean of the 2 × 2
+/// it covers.
+fn halved(image: &RgbImage) -> RgbImage {
+    let grid = LatLong::new(image.width, image.height);
+    RgbImage::from_fn(image.width / 2, image.height / 2, |x, y| {
+        let (w0, w1) = (grid.row_solid_angle(2 * y), grid.row_solid_angle(2 * y + 1));
+        let mut acc = [0.0f64; 3];
+        for (yy, w) in [(2 * y, w0), (2 * y + 1, w1)] {
+            for xx in [2 * x, 2 * x + 1] {
+                let p = image.get(xx, yy);
+                for c in 0..3 {
+                    acc[c] += w * p[c] as f64;
+                }
+            }
+        }
+        acc.map(|v| (v / (2.0 * (w0 + w1))) as f32)
+    })
+}
+
 /// A truncation of a lobe: the cone angle θ* and the share of the lobe's weight outside it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Truncation {
@@ -525,6 +580,40 @@ mod tests {
     use crate::brdf::Brdf;
     use crate::prefilter::model::Model;
     use crate::progress::NoProgress;
+
+    #[test]
+    fn each_pyramid_level_keeps_the_integral_and_wide_lobes_read_coarse_levels() {
+        // A smooth map: every level's texel integrals sum to the same ∫ L dω (solid-angle
+        // weights), and a wide Phong lobe summed on the coarse level it picks agrees with the
+        // full-resolution sum to well under the prefilter's tolerance.
+        let smooth = |d: DVec3| [(1.0 + 0.5 * d.z + 0.3 * (3.0 * d.x).sin()) as f32, 1.0, (2.0 + d.y) as f32];
+        let img = RgbImage::from_fn(256, 128, |x, y| smooth(LatLong::new(256, 128).texel_direction(x, y)));
+        let env = EnvMap::latlong(img).unwrap();
+        let pyramid = ConePyramid::new(&env).unwrap();
+        assert_eq!(pyramid.levels.len(), 5, "256x128 down to 16x8");
+        let whole = |c: &ConeIntegrator| c.integrate(DVec3::Z, PI, |_| [1.0; 3]);
+        let base = whole(&pyramid.levels[0]);
+        for level in &pyramid.levels[1..] {
+            let v = whole(level);
+            assert!((0..3).all(|k| (v[k] - base[k]).abs() < 1e-5 * base[k]), "{:?}: {v:?} vs {base:?}", level.grid());
+        }
+        let axis = DVec3::new(0.3, -0.5, 0.6).normalize();
+        for s in [4.0f64, 16.0] {
+            let theta_star = radial_cutoff(|x| if x > 0.0 { x.powf(s) } else { 0.0 }, 1e-5);
+            let lobe = |l: DVec3| [axis.dot(l).max(0.0).powf(s); 3];
+            let coarse = pyramid.integrate(axis, theta_star, lobe);
+            let fine = pyramid.levels[0].integrate(axis, theta_star, lobe);
+            assert!((0..3).all(|k| (coarse[k] - fine[k]).abs() < 1e-3 * fine[k]), "s={s}: {coarse:?} vs {fine:?}");
+        }
+        // The wide lobe reads a coarser level than the full map.
+        let chosen = |theta_star: f64| {
+            pyramid
+                .levels
+                .iter()
+                .rposition(|c| PI / c.grid().height as f64 <= theta_star / ConePyramid::TEXELS_PER_CONE)
+        };
+        assert_eq!((chosen(1.5), chosen(3.0), chosen(0.1)), (Some(1), Some(2), None));
+    }
 
     #[test]
     fn phong_cutoff_matches_appendix_d() {

@@ -17,7 +17,7 @@
 //! part (its single layer is a reflection map); for view-dependent BRDFs the bright part is
 //! projected onto the view basis texel by texel (exact in angle, truncated at P_B like the rest).
 
-use super::angular::{radial_cutoff, ConeIntegrator, CutoffTable};
+use super::angular::{radial_cutoff, ConePyramid, CutoffTable};
 use super::brdf_sh::BrdfSh;
 use super::model::Model;
 use super::orders::{texel_orders, OrderRule, TexelOrders};
@@ -112,8 +112,9 @@ pub struct Prefiltered {
     pub remainder_shrm: Shrm,
     /// The bright texels.
     pub bright: BrightSources,
-    /// The lat-long map (for the angular passes), when the lighting was a map.
-    pub env: Option<EnvMap>,
+    /// The lat-long remainder (bright sources clipped) for the angular fallback, when the
+    /// lighting was a map.
+    pub remainder_map: Option<EnvMap>,
     /// What was done.
     pub report: Report,
 }
@@ -141,13 +142,13 @@ pub fn prefilter(
 ) -> Result<Prefiltered, PrefilterError> {
     let radial = model.centre().is_some();
     let max_p = if radial { 0 } else { settings.max_p };
-    let (env, remainder, bright) = match lighting {
+    let (remainder, bright) = match lighting {
         Lighting::Map(map) => {
             let latlong = as_latlong(map).map_err(|e| PrefilterError::Resample(e.to_string()))?;
             let (rest, bright) = split(&latlong, settings.bright);
-            (Some(latlong), Some(rest), bright)
+            (Some(rest), bright)
         }
-        Lighting::Coefficients(_) => (None, None, BrightSources { threshold: f64::INFINITY, ..Default::default() }),
+        Lighting::Coefficients(_) => (None, BrightSources { threshold: f64::INFINITY, ..Default::default() }),
     };
     // The lighting to the highest band any rule may ask for.
     let full_light = match (&remainder, lighting) {
@@ -221,7 +222,7 @@ pub fn prefilter(
         },
         window: WindowReport { kind: settings.window, t: (settings.window == Window::Nonneg).then_some(0.0) },
     };
-    Ok(Prefiltered { brdf, lighting: light, factors, remainder_shrm, bright, env, report })
+    Ok(Prefiltered { brdf, lighting: light, factors, remainder_shrm, bright, remainder_map: remainder, report })
 }
 
 /// The mean reflected radiance per channel, which the texel floor is a fraction of: band 0 of
@@ -300,65 +301,95 @@ impl Prefiltered {
         views: &[DVec3],
         progress: &dyn Progress,
     ) -> Result<Vec<RgbImage>, PrefilterError> {
-        let global = shrm::to_global(&self.remainder_shrm);
-        let mut maps = shrm::reflection_maps(&global, views);
-        let cone = self.env.as_ref().map(ConeIntegrator::new).transpose()?;
+        // The angular parts do not depend on the window: computed once, whatever the search does.
+        let angular = self.angular_parts(model, views)?;
+        let synthesize = |remainder: &Shrm| -> Vec<RgbImage> {
+            let mut maps = remainder_maps(remainder, views);
+            for (map, part) in maps.iter_mut().zip(&angular) {
+                part.apply(map);
+            }
+            maps
+        };
+        let maps = synthesize(&self.remainder_shrm);
+        if self.report.window.kind != Window::Nonneg || !maps.iter().any(has_negative) {
+            return Ok(maps);
+        }
+        // The `nonneg` window: the smallest heat parameter t for which every map is ≥ 0,
+        // bracketed by the kernel-positivity bound (for radially symmetric BRDFs exact; for
+        // others the bound of the l-dimension's worst kernel, which the bisection then relaxes).
+        let f_b = self.brdf.f;
+        let kernel: Vec<f64> = match model.centre() {
+            Some(_) => (0..=f_b).map(|l| self.brdf.radial_kernel(l)[1].abs().max(1e-300)).collect(),
+            None => vec![1.0; f_b + 1],
+        };
+        let (w, h) = (self.remainder_shrm.width(), self.remainder_shrm.height());
+        let windowed = |factors: &[f64]| remainder_shrm(model, &self.brdf, &self.lighting, factors, w, h, progress);
+        let min_of = |maps: &Result<Vec<RgbImage>, PrefilterError>| match maps {
+            Ok(maps) => maps.iter().flat_map(|m| m.pixels.iter().flatten()).fold(0.0f64, |a, &v| a.min(v as f64)),
+            Err(_) => 0.0,
+        };
+        let found = window::nonneg(&kernel, |factors| windowed(factors).map(|s| synthesize(&s)), min_of);
+        self.remainder_shrm = windowed(&found.factors)?;
+        self.factors = found.factors;
+        self.report.window.t = Some(found.t);
+        found.map
+    }
+
+    /// What each view's map takes from angle: the bright texels' exact contribution, and the
+    /// remainder of the texels beyond the SHRM's valid view angle, integrated in angle.
+    fn angular_parts(&self, model: &Model, views: &[DVec3]) -> Result<Vec<AngularPart>, PrefilterError> {
+        let (w, h) = (self.remainder_shrm.width(), self.remainder_shrm.height());
+        let cone = self.remainder_map.as_ref().map(ConePyramid::new).transpose()?;
         let valid = self.report.texel.as_ref().map_or(PI, |t| t.valid_view_angle.to_radians());
         let cutoff = model
             .centre()
             .is_none()
             .then(|| CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), ANGULAR_EPSILON, 65));
-        for (map, &view) in maps.iter_mut().zip(views) {
-            add_bright(map, model, &self.bright, cutoff.as_ref().map(|c| (view, c)));
-            if let (Some(cone), Some(cutoff)) = (&cone, &cutoff) {
-                if valid < PI {
-                    fallback(map, model, cone, cutoff, view, valid);
-                }
+        Ok(views
+            .iter()
+            .map(|&view| {
+                let mut added = RgbImage::new(w, h);
+                add_bright(&mut added, model, &self.bright, cutoff.as_ref().map(|c| (view, c)));
+                let replaced = match (&cone, &cutoff) {
+                    (Some(cone), Some(cutoff)) if valid < PI => fallback(w, h, model, cone, cutoff, view, valid),
+                    _ => Vec::new(),
+                };
+                AngularPart { added, replaced }
+            })
+            .collect())
+    }
+}
+
+/// Reflection maps of the remainder's local SHRM: per view from the local layers (a few views),
+/// or through the global SHRM (eq. 7–8), whose rotation per texel pays off over many views.
+fn remainder_maps(local: &Shrm, views: &[DVec3]) -> Vec<RgbImage> {
+    const GLOBAL_FROM_VIEWS: usize = 8;
+    if views.len() < GLOBAL_FROM_VIEWS {
+        shrm::reflection_maps(local, views)
+    } else {
+        shrm::reflection_maps(&shrm::to_global(local), views)
+    }
+}
+
+/// One view's angular share of a reflection map.
+struct AngularPart {
+    /// Texels whose remainder is replaced (index, value): the fallback beyond the valid view
+    /// angle.
+    replaced: Vec<(usize, [f32; 3])>,
+    /// Added to every texel (the bright sources).
+    added: RgbImage,
+}
+
+impl AngularPart {
+    fn apply(&self, map: &mut RgbImage) {
+        for &(i, v) in &self.replaced {
+            map.pixels[i] = v;
+        }
+        for (px, a) in map.pixels.iter_mut().zip(&self.added.pixels) {
+            for c in 0..3 {
+                px[c] += a[c];
             }
         }
-        if self.report.window.kind == Window::Nonneg && maps.iter().any(has_negative) {
-            maps = self.nonneg_maps(model, views, progress)?;
-        }
-        Ok(maps)
-    }
-
-    /// The `nonneg` window: the smallest heat parameter t for which every map is ≥ 0, bracketed
-    /// by the kernel-positivity bound (for radially symmetric BRDFs exact; for others the bound
-    /// of the l-dimension's worst kernel, which the bisection then relaxes).
-    fn nonneg_maps(
-        &mut self,
-        model: &Model,
-        views: &[DVec3],
-        progress: &dyn Progress,
-    ) -> Result<Vec<RgbImage>, PrefilterError> {
-        let f_b = self.brdf.f;
-        let kernel: Vec<f64> = (0..=f_b).map(|l| self.brdf.radial_kernel(l)[1].abs().max(1e-300)).collect();
-        let kernel = if model.centre().is_some() { kernel } else { vec![1.0; f_b + 1] };
-        let (w, h) = (self.remainder_shrm.width(), self.remainder_shrm.height());
-        let saved = (self.factors.clone(), self.remainder_shrm.clone());
-        let synth = |factors: &[f64]| -> Vec<RgbImage> {
-            let mut this = Prefiltered {
-                brdf: self.brdf.clone(),
-                lighting: self.lighting.clone(),
-                factors: factors.to_vec(),
-                remainder_shrm: match remainder_shrm(model, &self.brdf, &self.lighting, factors, w, h, progress) {
-                    Ok(s) => s,
-                    Err(_) => saved.1.clone(),
-                },
-                bright: self.bright.clone(),
-                env: self.env.clone(),
-                report: Report { window: WindowReport { kind: Window::None, t: None }, ..self.report.clone() },
-            };
-            this.reflection_maps(model, views, progress).unwrap_or_default()
-        };
-        let min_of = |maps: &Vec<RgbImage>| {
-            maps.iter().flat_map(|m| m.pixels.iter().flatten()).fold(0.0f64, |a, &v| a.min(v as f64))
-        };
-        let found = window::nonneg(&kernel, synth, min_of);
-        self.factors = found.factors.clone();
-        self.remainder_shrm = remainder_shrm(model, &self.brdf, &self.lighting, &self.factors, w, h, progress)?;
-        self.report.window.t = Some(found.t);
-        Ok(found.map)
     }
 }
 
@@ -422,25 +453,34 @@ fn add_bright(map: &mut RgbImage, model: &Model, bright: &BrightSources, view: O
     });
 }
 
-/// Replaces the texels whose view angle θ_o (cos θ_o = R·V) exceeds `valid` by the angular
-/// integral of the whole map (the SHRM does not represent ρ̂ there within the tolerance).
-fn fallback(map: &mut RgbImage, model: &Model, cone: &ConeIntegrator, cutoff: &CutoffTable, view: DVec3, valid: f64) {
-    let (w, h) = (map.width, map.height);
+/// The texels whose view angle θ_o (cos θ_o = R·V) exceeds `valid`, with the angular integral
+/// of the remainder (the SHRM does not represent ρ̂ there within the tolerance; the bright part
+/// is added exactly to every texel).
+fn fallback(
+    w: usize,
+    h: usize,
+    model: &Model,
+    cone: &ConePyramid,
+    cutoff: &CutoffTable,
+    view: DVec3,
+    valid: f64,
+) -> Vec<(usize, [f32; 3])> {
     let grid = LatLong::new(w, h);
-    map.pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        for (x, px) in row.iter_mut().enumerate() {
-            let r = grid.texel_direction(x, y);
+    (0..w * h)
+        .into_par_iter()
+        .filter_map(|i| {
+            let r = grid.texel_direction(i % w, i / w);
             let theta_o = r.dot(view).clamp(-1.0, 1.0).acos();
             if theta_o <= valid {
-                continue;
+                return None;
             }
             let v = match model.prepare_view(r, view) {
                 Some(prepared) => cone.integrate(r, cutoff.at(theta_o), |l| model.rho_hat_prepared(&prepared, l)),
                 None => [0.0; 3],
             };
-            *px = v.map(|c| c as f32);
-        }
-    });
+            Some((i, v.map(|c| c as f32)))
+        })
+        .collect()
 }
 
 /// Adds the bright texels to a local SHRM of a view-dependent BRDF: per texel R,

@@ -147,14 +147,12 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
     if config.reconstruction || config.irradiance {
         let (w, h) = image_size(map, coeffs.order, config.size);
         synthesis = Some(Synthesis { window: config.window, size: [w, h], reconstruction_t: None, irradiance_t: None });
-        let kernels: [(&mut Option<(RgbImage, Option<f64>)>, bool, Vec<f64>); 2] = [
-            (&mut reconstruction, config.reconstruction, vec![1.0; coeffs.order + 1]),
-            (&mut irradiance, config.irradiance, (0..=coeffs.order).map(convolve::clamped_cosine).collect()),
-        ];
-        for (slot, wanted, kernel) in kernels {
-            if wanted {
-                *slot = Some(windowed_synthesis(coeffs, &kernel, config.window, w, h)?);
-            }
+        if config.reconstruction {
+            reconstruction = Some(windowed_synthesis(coeffs, &vec![1.0; coeffs.order + 1], config.window, w, h)?);
+        }
+        if config.irradiance {
+            let cosine: Vec<f64> = (0..=coeffs.order).map(convolve::clamped_cosine).collect();
+            irradiance = Some(windowed_synthesis(coeffs, &cosine, config.window, w, h)?);
         }
         if let Some(s) = &mut synthesis {
             s.reconstruction_t = reconstruction.as_ref().and_then(|r| r.1);
