@@ -300,11 +300,13 @@ fn library_entry_point_and_binary_give_the_same_bytes() {
         on_invalid: InvalidPolicy::Error,
         histogram_bins: 8,
         files: encode::Files::new(&input, Some(codes.display().to_string()), Some(decoded.display().to_string())),
+        args: Vec::new(),
     };
     let out = encode::run(&config, &normals, &NoProgress).unwrap();
     assert_eq!(std::fs::read(&codes).unwrap(), out.stream);
     assert_eq!(std::fs::read(&decoded).unwrap(), sources::raw_to_bytes(&out.decoded));
-    // The report differs only in its provenance (the command line).
+    // The report differs only in its provenance (the command line; tests/stage_library.rs gives
+    // the library the binary's argv and compares every byte).
     let written: EncodeReport = report::parse(&std::fs::read_to_string(&report).unwrap()).unwrap().body;
     assert_eq!(written, out.report.body);
 }

@@ -237,6 +237,40 @@ fn count_terms_library_and_binary_write_the_same_bytes() {
 }
 
 #[test]
+fn encode_normals_library_and_binary_write_the_same_bytes() {
+    use prtkit::normals::pack::Stream;
+    use prtkit::normals::sources::raw_to_bytes;
+    use prtkit::normals::{encode, InvalidPolicy, Scheme};
+    let b = bench();
+    // A Fibonacci spiral of 500 directions, the axes and one zero-length normal (replaced).
+    let mut normals: Vec<[f32; 3]> = (0..500)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / 500.0;
+            let (r, phi) = ((1.0 - z * z).sqrt(), i as f64 * 2.399_963_229_728_653);
+            [(r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32]
+        })
+        .collect();
+    normals.extend([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]]);
+    std::fs::write(b.root.join("n.f32"), raw_to_bytes(&normals)).unwrap();
+    let args = ["n.f32", "--scheme", "cm", "--bits", "20", "--packed", "--on-invalid", "replace", "--bins", "8"];
+    let outputs = ["-o", "codes.bin", "--report", "r.json", "--decoded", "d.f32"];
+    let (argv, _) = b.binary("encode-normals", &[&args[..], &outputs[..]].concat());
+    let config = encode::Config {
+        scheme: Scheme::Cm,
+        bits: 20,
+        stream: Stream::Packed,
+        on_invalid: InvalidPolicy::Replace,
+        histogram_bins: 8,
+        files: encode::Files::new(Path::new("n.f32"), Some("codes.bin".into()), Some("d.f32".into())),
+        args: argv,
+    };
+    let out = encode::run(&config, &normals, &NoProgress).unwrap();
+    b.same("codes.bin", &out.stream);
+    b.same("r.json", out.report.to_json().as_bytes());
+    b.same("d.f32", &raw_to_bytes(&out.decoded));
+}
+
+#[test]
 fn sample_shader_library_and_binary_write_the_same_bytes() {
     use prtkit::shader::sampler::{Arith, Domain};
     use prtkit::shader::stage::{run, Config};

@@ -50,7 +50,19 @@ impl TryFrom<&Args> for Mode {
         let name = |i: usize| outputs[i].as_ref().map(Output::display);
         let (scheme, on_invalid, histogram_bins) = (a.scheme, a.on_invalid, a.bins as usize);
         let files = encode::Files::new(&input, name(0), name(2));
-        Ok(Mode::Encode(encode::Config { scheme, bits, stream, on_invalid, histogram_bins, files }, input, outputs))
+        Ok(Mode::Encode(
+            encode::Config {
+                scheme,
+                bits,
+                stream,
+                on_invalid,
+                histogram_bins,
+                files,
+                args: std::env::args().collect(),
+            },
+            input,
+            outputs,
+        ))
     }
 }
 
