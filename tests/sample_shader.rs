@@ -174,7 +174,10 @@ fn division_by_a_range_with_zero_is_reported_not_a_crash() {
     std::fs::write(&src, "shader d() { Ci = color(1 / (u - 0.3)); }\n").unwrap_or_else(|e| panic!("{e}"));
     let out = bin().arg(&src).args(["--res", "16x16", "--json", "-q"]).output().unwrap_or_else(|e| panic!("{e}"));
     assert!(out.status.success());
-    let stats: Stats = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{e}"));
+    let text = String::from_utf8(out.stdout).unwrap_or_default();
+    let stats = prtkit::io::document::parse_document::<Stats>(&text, STATS_FORMAT, STATS_VERSION)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .body;
     assert!(stats.unbounded_leaves > 0);
     // An unbounded width is written as null and read back as infinity.
     assert_eq!(stats.width.max, f64::INFINITY);

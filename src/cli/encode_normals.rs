@@ -45,7 +45,7 @@ impl TryFrom<&Args> for Mode {
             return Ok(Mode::Decode(config, input, output.context("--decode needs --output (normals)")?));
         }
         if outputs.iter().filter(|o| o.as_ref() == Some(&Output::Stdout)).count() + usize::from(a.json) > 1 {
-            bail!("only one of --output -, --report - and --json can use stdout");
+            bail!("only one of --output -, --report - and --json can use standard output");
         }
         let name = |i: usize| outputs[i].as_ref().map(Output::display);
         let (scheme, on_invalid, histogram_bins) = (a.scheme, a.on_invalid, a.bins as usize);
