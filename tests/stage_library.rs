@@ -377,6 +377,9 @@ mod convert_example;
 #[path = "../examples/count_terms.rs"]
 mod count_terms_example;
 #[allow(dead_code)]
+#[path = "../examples/encode_normals.rs"]
+mod encode_normals_example;
+#[allow(dead_code)]
 #[path = "../examples/factor_brdf.rs"]
 mod factor_brdf_example;
 #[allow(dead_code)]
@@ -404,6 +407,7 @@ fn every_example_runs_and_writes_what_it_documents() {
     count_terms_example::run(out).unwrap();
     factor_brdf_example::run(out).unwrap();
     render_example::run(out).unwrap();
+    encode_normals_example::run(out).unwrap();
     for file in [
         "sky.exr",
         "sky-cross.exr",
@@ -414,6 +418,10 @@ fn every_example_runs_and_writes_what_it_documents() {
         "p30.exr",
         "ref.exr",
         "k75.png",
+        "sphere.codes",
+        "sphere.normals.json",
+        "sphere-decoded.obj",
+        "table32.md",
     ] {
         assert!(out.join(file).is_file(), "no {file} among {:?}", common::entries(out));
     }
@@ -421,4 +429,6 @@ fn every_example_runs_and_writes_what_it_documents() {
     assert!(doc.body.selection.epsilon_achieved_clipped.is_some_and(|e| e <= 0.1), "{:?}", doc.body.selection);
     let doc: prtkit::io::Document<prtkit::factor::document::FactorBody> = common::read(&out.join("p30.json"));
     assert_eq!(doc.body.factors.map(|f| f.terms), Some(75));
+    let doc = prtkit::normals::report::read(&out.join("sphere.normals.json")).unwrap();
+    assert!(doc.body.count > 0 && doc.body.error.max <= doc.body.bound * 1.0001, "{:?}", doc.body.error);
 }
