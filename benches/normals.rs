@@ -8,8 +8,8 @@
 
 use glam::DVec3;
 use prtkit::normals::metrics::angle_between;
-use prtkit::normals::rng::{chunk_state, uniform_direction};
 use prtkit::normals::{Codec, Scheme};
+use prtkit::rng::SplitMix64;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -68,8 +68,8 @@ fn main() {
     let normals: Vec<[f32; 3]> = (0..n.div_ceil(1 << 16))
         .into_par_iter()
         .flat_map_iter(|c| {
-            let mut s = chunk_state(2024, c as u64);
-            (0..1 << 16).map(move |_| uniform_direction(&mut s).map(|x| x as f32))
+            let mut s = SplitMix64::for_chunk(2024, c as u64);
+            (0..1 << 16).map(move |_| s.direction().as_vec3().to_array())
         })
         .take_any(n)
         .collect();

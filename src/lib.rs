@@ -17,6 +17,7 @@ pub mod prefilter;
 pub mod progress;
 pub mod quadrature;
 pub mod render;
+pub mod rng;
 pub mod sh;
 pub mod shader;
 pub mod sphere;

@@ -267,9 +267,20 @@ pub fn read_text(
     })
 }
 
-/// A byte count in binary units (KiB, MiB, …).
+/// A byte count in binary units (KiB, MiB, …, one decimal).
 pub fn human_bytes(b: u128) -> String {
-    crate::factor::svd::human_bytes(b)
+    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < units.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{b} bytes")
+    } else {
+        format!("{v:.1} {}", units[u])
+    }
 }
 
 #[cfg(test)]

@@ -28,6 +28,8 @@ struct World {
     sh: String,
     /// `prefilter --brdf phong:s=8 --order 8,0 --shrm` of the sky: its document.
     shrm: String,
+    /// 40 000 unit normals (a Fibonacci spiral) as raw f32 triples, for `encode-normals`.
+    normals: String,
 }
 
 fn world() -> World {
@@ -39,7 +41,11 @@ fn world() -> World {
     let sh = root.join("sky.sh.json");
     cmd("sh-project").arg(&sky).args(["-F", "8", "-q", "-o"]).arg(&sh).assert().success();
     let chain = common::Chain::prefilter(&root, &sky, "phong:s=8", "phong8.shrm", &["--order", "8,0"]);
-    World { _dir: dir, sky: text(&sky), reference: text(&reference), sh: text(&sh), shrm: text(&chain.document), root }
+    let normals = root.join("normals.f32");
+    std::fs::write(&normals, prtkit::normals::sources::raw_to_bytes(&common::spiral_normals(40_000))).unwrap();
+    let (sky, reference, sh, shrm, normals) =
+        (text(&sky), text(&reference), text(&sh), text(&chain.document), text(&normals));
+    World { _dir: dir, sky, reference, sh, shrm, normals, root }
 }
 
 impl World {
@@ -273,6 +279,8 @@ fn dash_writes_each_output_to_stdout_and_only_one_may_claim_it() {
         (run("sample-shader", &[&wood, "--res", "16x16"]), "-o", "t.exr"),
         (run("count-terms", &["--brdf", "phong:s=8", "--resolution", "8"]), "--plot", "k.svg"),
         (run("convert", &[&w.sky, "--to", "cross-vertical"]), "-o", "c.exr"),
+        (run("encode-normals", &[&w.normals, "--bits", "16"]), "-o", "c.bin"),
+        (run("encode-normals", &[&w.normals, "--bits", "16", "-o", "c.bin"]), "--report", "r.json"),
     ];
     for (i, (base, option, file)) in cases.iter().enumerate() {
         let dir = w.run_dir(&format!("stdout-{i}"));
@@ -288,6 +296,8 @@ fn dash_writes_each_output_to_stdout_and_only_one_may_claim_it() {
         run("render", &[&w.sky, "--res", "8x8", "-o", "-", "--png", "-"]),
         run("sample-shader", &[&wood, "--res", "8x8", "-o", "-", "--stats", "-"]),
         run("render", &[&w.sky, "--res", "8x8", "--json", "-o", "-"]),
+        run("encode-normals", &[&w.normals, "-o", "-", "--report", "-"]),
+        run("encode-normals", &[&w.normals, "--json", "--report", "-"]),
     ] {
         let out = r.output_in(&w.root);
         assert_eq!(out.status.code(), Some(2), "{r:?}");
@@ -330,6 +340,7 @@ fn a_closed_pipe_ends_quietly() {
         run("render", &[&w.sky, "--res", "128x128", "--shading", "irradiance", "-o", "-"]),
         run("render", &[&w.sky, "--res", "128x128", "--compare", &reference, "-o", "-"]),
         run("convert", &[&w.sky, "--size", "256x128", "-o", "-"]),
+        run("encode-normals", &[&w.normals, "--bits", "32", "-o", "-"]),
     ];
     // Outputs a pipe holds: only a reader gone before the stage writes breaks the pipe.
     let small = [
@@ -504,6 +515,9 @@ fn threads_1_and_2_write_identical_bytes() {
         run("render", &[&w.sky, "--res", "16x16", "--scene", &bowl, "--brdf", "phong:s=8", "-o", "r.exr"]),
         run("render", &[&w.sky, "--res", "16x16", "--scene", &bowl, "--shading", "factored", "--brdf", "phong:s=8"])
             .with(&["--factor-resolution", "8", "-K", "4", "-o", "r.exr"]),
+        run("encode-normals", &[&w.normals, "--scheme", "onv-range", "--bits", "20", "--packed", "-o", "c.bin"])
+            .with(&["--report", "r.json", "--decoded", "d.f32"]),
+        run("encode-normals", &["--table", "--bits", "16", "--samples", "20000"]),
     ];
     for (i, r) in runs.iter().enumerate() {
         let (a, b) = (w.run_dir(&format!("t1-{i}")), w.run_dir(&format!("t2-{i}")));
@@ -721,6 +735,7 @@ fn all_or_nothing_an_unwritable_output_leaves_the_others_untouched() {
         (run("sample-shader", &[&wood, "--res", "16x16"]), ("-o", "t.exr"), ("--stats", "s.json")),
         (run("render", &[&w.sky, "--res", "16x16"]), ("-o", "r.exr"), ("--png", "r.png")),
         (run("convert", &[&w.sky]), ("-o", "c.exr"), ("-o", "c.exr")),
+        (run("encode-normals", &[&w.normals, "--bits", "16"]), ("-o", "c.bin"), ("--report", "r.json")),
     ];
     for (k, (base, first, second)) in cases.iter().enumerate() {
         for (kept, broken) in [(first, second), (second, first)] {
@@ -767,6 +782,7 @@ fn fail_fast_outputs_are_checked_before_the_inputs_are_read() {
         run("sample-shader", &[&missing, "--stats", &format!("{nowhere}.json")]),
         run("factor-brdf", &["phong:s=8", "--resolution", "2000", "--factors", &format!("{nowhere}.exr")]),
         run("count-terms", &["--manifest", &missing, "--plot", &format!("{nowhere}.svg")]),
+        run("encode-normals", &[&missing, "--report", &format!("{nowhere}.json")]),
     ];
     for r in runs {
         let out = r.output_in(&w.root);
@@ -827,13 +843,13 @@ fn json_summaries_deserialize_into_the_library_types() {
     );
     assert_eq!((doc.body.reference.as_str(), doc.body.render.as_deref()), (w.reference.as_str(), Some("r.exr")));
 
-    // sample-shader: `shader::stage::Stats` does not derive Deserialize yet; its keys.
+    // sample-shader: the summary is the document with the sampling time.
     let wood = testdata("shaders/wood.sl");
-    let stats: serde_json::Value =
+    let stats: Document<prtkit::shader::stage::Stats> =
         parse(&stdout(run("sample-shader", &[&wood, "--res", "16x16", "--json", "--stats", "s.json"])));
-    let doc: serde_json::Value = read(&dir.join("s.json"));
-    assert!(stats["seconds"].as_f64().is_some_and(|s| s >= 0.0) && doc.get("seconds").is_none_or(|s| s.is_null()));
-    assert_eq!(stats["nodes"], doc["nodes"]);
+    let doc: Document<prtkit::shader::stage::Stats> = read(&dir.join("s.json"));
+    assert!(stats.body.seconds.is_some_and(|s| s >= 0.0) && doc.body.seconds.is_none());
+    assert_eq!(prtkit::shader::stage::Stats { seconds: None, ..stats.body }, doc.body);
 }
 
 // ---------------------------------------------------------------------------------------------

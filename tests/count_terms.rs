@@ -44,6 +44,25 @@ fn json_rows_carry_prediction_and_measurement() {
 }
 
 #[test]
+fn ggx_is_counted_and_narrower_lobes_need_more_terms() {
+    // With the cosine folded in, ρ cos θ_i is bounded and its energy sits in the lobe; without
+    // it GGX's 1/(4 cos θ_i cos θ_o) puts the energy at grazing angles (docs/brdf-specs.md).
+    let out = count_terms()
+        .args(["--brdf", "ggx:roughness=0.8", "--brdf", "ggx:roughness=0.5", "--brdf", "ggx:roughness=0.3"])
+        .args(["--resolution", "24", "--cosine", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let rows: Vec<Row> = parse(&out.stdout);
+    let specs: Vec<&str> = rows.iter().map(|r| r.brdf.as_str()).collect();
+    assert_eq!(specs, ["ggx:roughness=0.8", "ggx:roughness=0.5", "ggx:roughness=0.3"]);
+    let k: Vec<usize> = rows.iter().map(|r| r.measured_k.unwrap()).collect();
+    assert!(k[0] >= 1 && k[0] < k[1] && k[1] < k[2], "{k:?}");
+    // The paper's closed forms are for ρ alone: no prediction, and the rule says so.
+    assert!(rows.iter().all(|r| r.predicted_k.is_none() && r.rule.contains("cosine")), "{rows:?}");
+}
+
+#[test]
 fn check_fails_naming_each_material_over_budget() {
     count_terms()
         .args(["--brdf", "phong:s=30", "--brdf", "lambert", "--brdf", "phong:s=2", "--max-terms", "10", "--check"])

@@ -1,5 +1,7 @@
 //! Integration tests of the `encode-normals` binary: exit codes, outputs, JSON deserialized.
 
+mod common;
+
 use assert_cmd::Command;
 use predicates::prelude::*;
 use prtkit::normals::report::{self, EncodeReport};
@@ -14,14 +16,7 @@ fn cmd() -> Command {
 
 /// A deterministic spread of unit normals (golden-angle spiral), including the six axes.
 fn spiral(n: usize) -> Vec<[f32; 3]> {
-    let mut v: Vec<[f32; 3]> = (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let r = (1.0 - z * z).sqrt();
-            let phi = i as f64 * 2.399_963_229_728_653;
-            [(r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32]
-        })
-        .collect();
+    let mut v = common::spiral_normals(n);
     v.extend([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]);
     v
 }
@@ -300,11 +295,13 @@ fn library_entry_point_and_binary_give_the_same_bytes() {
         on_invalid: InvalidPolicy::Error,
         histogram_bins: 8,
         files: encode::Files::new(&input, Some(codes.display().to_string()), Some(decoded.display().to_string())),
+        args: Vec::new(),
     };
     let out = encode::run(&config, &normals, &NoProgress).unwrap();
     assert_eq!(std::fs::read(&codes).unwrap(), out.stream);
     assert_eq!(std::fs::read(&decoded).unwrap(), sources::raw_to_bytes(&out.decoded));
-    // The report differs only in its provenance (the command line).
+    // The report differs only in its provenance (the command line; tests/stage_library.rs gives
+    // the library the binary's argv and compares every byte).
     let written: EncodeReport = report::parse(&std::fs::read_to_string(&report).unwrap()).unwrap().body;
     assert_eq!(written, out.report.body);
 }

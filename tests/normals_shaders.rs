@@ -8,9 +8,9 @@
 use glam::DVec3;
 use naga::{BinaryOperator as Bin, Expression as E, Handle, Literal, MathFunction as M, ScalarKind, Statement};
 use prtkit::normals::metrics::angle_between;
-use prtkit::normals::rng::next_u64;
 use prtkit::normals::shader::{decoder, Language};
 use prtkit::normals::{Codec, Scheme};
+use prtkit::rng::SplitMix64;
 use std::collections::HashMap;
 
 const BUDGETS: [u32; 8] = [8, 16, 19, 31, 32, 33, 48, 64];
@@ -419,9 +419,9 @@ fn digits(codec: &Codec, code: u64) -> (u64, u64, u64) {
 }
 
 /// Codes to test: random ones, the first and last, and every digit at its extremes.
-fn codes(codec: &Codec, state: &mut u64) -> Vec<u64> {
+fn codes(codec: &Codec, state: &mut SplitMix64) -> Vec<u64> {
     let mask = if codec.bits() == 64 { u64::MAX } else { (1u64 << codec.bits()) - 1 };
-    let mut codes: Vec<u64> = (0..300).map(|_| next_u64(state) & mask).collect();
+    let mut codes: Vec<u64> = (0..300).map(|_| state.next_u64() & mask).collect();
     codes.extend([0, 1, mask, mask - 1]);
     let mut place = 1u128;
     for d in codec.digits() {
@@ -457,7 +457,7 @@ fn emitted_decoders_decode_like_the_rust_decoder() {
     // The tolerance (f32_tolerance) is far below every step of a 33-bit code (~4e-5 rad) away
     // from PP's equator, so a wrong digit, face or axis at up to 32 bits cannot pass; above 32
     // bits the digits come from prtkit_divmod, tested exactly below.
-    let mut state = 99u64;
+    let mut state = SplitMix64::new(99);
     let (mut report, mut checked) = (String::new(), 0);
     for scheme in Scheme::ALL {
         for bits in BUDGETS {
@@ -495,7 +495,7 @@ fn divmod_helper_divides_64_bit_codes_exactly() {
     // prtkit_divmod is the one piece of integer arithmetic that has no native shader operation;
     // it must agree with u64 division for every divisor the layouts use and for the extremes.
     let codec = Codec::new(Scheme::Sc, 64).unwrap();
-    let mut state = 5u64;
+    let mut state = SplitMix64::new(5);
     for (lang, module) in [("wgsl", wgsl_module(&codec)), ("glsl", glsl_module(&codec))] {
         let divmod = function(&module, "prtkit_divmod");
         let mut divisors: Vec<u64> = vec![2, 3, 6, 7, 65_537, (1 << 31) - 1, 1 << 31, (1 << 31) + 1, u32::MAX as u64];
@@ -507,7 +507,7 @@ fn divmod_helper_divides_64_bit_codes_exactly() {
             }
         }
         for n in divisors {
-            let mut xs: Vec<u64> = (0..40).map(|_| next_u64(&mut state)).collect();
+            let mut xs: Vec<u64> = (0..40).map(|_| state.next_u64()).collect();
             xs.extend([0, 1, n - 1, n, n + 1, u64::MAX, u64::MAX - 1, (n << 32).wrapping_sub(1)]);
             for x in xs {
                 let args = [x >> 32, x & 0xffff_ffff, n].map(|w| Value::S(Scalar::U(w as u32))).to_vec();

@@ -50,6 +50,32 @@ fn writes_an_shrm_its_document_and_reflection_maps() {
 }
 
 #[test]
+fn ggx_prefilters_a_white_environment_to_white() {
+    // The split-sum kernel is normalized (∫ k dω = 1, docs/brdf-specs.md), so a constant
+    // environment prefilters to the same constant at every reflection direction, up to the SH
+    // projection's texel quadrature (measured: 8e-4 at 128×64, and 1.3 % at 32×16 for Phong as
+    // for GGX).
+    let dir = tempfile::tempdir().unwrap();
+    let white = common::write_pfm(dir.path(), "white.pfm", &common::latlong(128, 64, |_| [1.0; 3]));
+    let (doc, map) = (dir.path().join("g.json"), dir.path().join("g.exr"));
+    cmd("prefilter")
+        .arg(&white)
+        .args(["--brdf", "ggx:roughness=0.5", "--size", "32x16", "--view", "1,0,0.2", "--reflection-map"])
+        .arg(&map)
+        .arg("-o")
+        .arg(&doc)
+        .assert()
+        .success();
+    let d: Document<ShrmBody> = read(&doc);
+    assert_eq!((d.body.brdf.as_str(), d.body.p_b), ("ggx:roughness=0.5", 0));
+    assert_eq!(d.body.maps[0].view, None, "a lobe about R is the same for every view");
+    let image = prtkit::io::image::read_image(&map).unwrap();
+    for p in &image.pixels {
+        assert!(p.iter().all(|&c| (c - 1.0).abs() < 2e-3), "{p:?}");
+    }
+}
+
+#[test]
 fn the_sh_document_path_equals_the_map_path() {
     let dir = tempfile::tempdir().unwrap();
     let env = sky_pfm(dir.path(), 64, 32);

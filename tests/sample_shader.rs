@@ -1,12 +1,11 @@
-//! Integration tests of the `sample-shader` binary (and its `prtkit sample-shader` form).
-//!
-//! The statistics are read as `serde_json::Value` until `shader::stage::Stats` and
-//! `CompareRow` derive `Deserialize`.
+//! Integration tests of the `sample-shader` binary (and its `prtkit sample-shader` form). The
+//! statistics are read into the library's own types (`shader::stage::Stats`, `CompareRow`).
 
 mod common;
 
 use common::cmd;
 use predicates::prelude::*;
+use prtkit::shader::stage::{CompareRow, Stats, STATS_FORMAT, STATS_VERSION};
 use std::path::{Path, PathBuf};
 
 fn shader(name: &str) -> PathBuf {
@@ -36,14 +35,17 @@ fn texture_exr_has_width_and_depth_layers_matching_the_stats() {
     for want in ["", "width", "depth"] {
         assert!(names.contains(&want), "layers {names:?}");
     }
-    let doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap_or_default()).unwrap_or_default();
-    assert_eq!(doc["format"], "prtkit.shader-stats");
-    assert_eq!(doc["arith"], "affine");
+    let text = std::fs::read_to_string(&stats).unwrap_or_default();
+    let doc = prtkit::io::document::parse_document::<Stats>(&text, STATS_FORMAT, STATS_VERSION)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .body;
+    assert_eq!(doc.arith, "affine");
+    assert_eq!(doc.resolution, [64, 64]);
+    assert_eq!(doc.seconds, None, "timings stay out of documents");
     let width = &layers.iter().find(|(n, _)| n == "width").map(|l| l.1.clone()).unwrap_or_else(|| panic!("no width"));
     let depth = &layers.iter().find(|(n, _)| n == "depth").map(|l| l.1.clone()).unwrap_or_else(|| panic!("no depth"));
     let max_width = width.pixels.iter().map(|p| p[0].max(p[1]).max(p[2])).fold(0.0f32, f32::max) as f64;
-    let stats_max = doc["width"]["max"].as_f64().unwrap_or(f64::NAN);
+    let stats_max = doc.width.max;
     assert!((max_width - stats_max).abs() <= 1e-6 * stats_max.max(1.0), "{max_width} vs {stats_max}");
     // Leaves stop at the tolerance or at the default depth log2(64) = 6.
     let max_depth = depth.pixels.iter().map(|p| p[0]).fold(0.0f32, f32::max);
@@ -53,10 +55,10 @@ fn texture_exr_has_width_and_depth_layers_matching_the_stats() {
         assert!(w <= 0.05 + 1e-6 || d[0] == 6.0, "a leaf above tolerance before max depth: {w} at depth {}", d[0]);
     }
     // Histogram counts every pixel once.
-    let counts: u64 =
-        doc["error_histogram"]["counts"].as_array().map(|a| a.iter().filter_map(|c| c.as_u64()).sum()).unwrap_or(0);
-    let overflow = doc["error_histogram"]["overflow"].as_u64().unwrap_or(0);
-    assert_eq!(counts + overflow, 64 * 64);
+    let counts: u64 = doc.error_histogram.counts.iter().sum();
+    assert_eq!(counts + doc.error_histogram.overflow, 64 * 64);
+    // And every leaf once, by depth.
+    assert_eq!(doc.depth_histogram.iter().sum::<u64>(), doc.leaves as u64);
 }
 
 #[test]
@@ -67,20 +69,19 @@ fn compare_json_rows_show_affine_tighter_than_interval() {
         .output()
         .unwrap_or_else(|e| panic!("{e}"));
     assert!(out.status.success());
-    let rows: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{e}"));
-    let arith: Vec<&str> = rows.iter().filter_map(|r| r["arith"].as_str()).collect();
+    let rows: Vec<CompareRow> = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{e}"));
+    let arith: Vec<&str> = rows.iter().map(|r| r.arith.as_str()).collect();
     assert_eq!(arith, ["affine", "interval", "point"]);
     for r in &rows {
-        for key in ["nodes", "evaluations", "median_width", "p95_width", "max_width", "seconds"] {
-            assert!(r[key].is_number(), "{key} missing in {r}");
-        }
+        assert!(r.seconds > 0.0 && r.max_width >= r.p95_width && r.p95_width >= r.median_width, "{r:?}");
     }
     // Equal depth (tolerance 0): same node count; affine bounds much tighter than interval.
-    assert_eq!(rows[0]["nodes"], rows[1]["nodes"]);
-    let (a, i) = (rows[0]["median_width"].as_f64().unwrap_or(1.0), rows[1]["median_width"].as_f64().unwrap_or(0.0));
+    assert_eq!(rows[0].nodes, rows[1].nodes);
+    let (a, i) = (rows[0].median_width, rows[1].median_width);
     assert!(a < 0.5 * i, "affine {a} vs interval {i}");
     // Point sampling at 8 samples per node spends 8 evaluations per node.
-    assert_eq!(rows[2]["evaluations"].as_u64(), rows[2]["nodes"].as_u64().map(|n| 8 * n));
+    assert_eq!(rows[2].evaluations, 8 * rows[2].nodes as u64);
+    assert!(rows[0].guaranteed && rows[1].guaranteed && !rows[2].guaranteed);
 }
 
 #[test]
@@ -173,6 +174,12 @@ fn division_by_a_range_with_zero_is_reported_not_a_crash() {
     std::fs::write(&src, "shader d() { Ci = color(1 / (u - 0.3)); }\n").unwrap_or_else(|e| panic!("{e}"));
     let out = bin().arg(&src).args(["--res", "16x16", "--json", "-q"]).output().unwrap_or_else(|e| panic!("{e}"));
     assert!(out.status.success());
-    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
-    assert!(doc["unbounded_leaves"].as_u64().unwrap_or(0) > 0);
+    let text = String::from_utf8(out.stdout).unwrap_or_default();
+    let stats = prtkit::io::document::parse_document::<Stats>(&text, STATS_FORMAT, STATS_VERSION)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .body;
+    assert!(stats.unbounded_leaves > 0);
+    // An unbounded width is written as null and read back as infinity.
+    assert_eq!(stats.width.max, f64::INFINITY);
+    assert!(stats.seconds.is_some(), "the --json summary carries the timing");
 }

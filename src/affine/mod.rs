@@ -22,7 +22,7 @@ mod tests {
     //! done in outward-rounded interval arithmetic, so it cannot raise false alarms.
     #![allow(clippy::redundant_closure)]
     use super::*;
-    use crate::shader::rng::SplitMix64;
+    use crate::rng::SplitMix64;
 
     const FORMS: usize = 20_000;
     const POINTS: usize = 50; // 10⁶ trials per operation

@@ -19,10 +19,10 @@ pub mod models;
 pub mod spec;
 
 pub use merl::MerlBrdf;
-pub use spec::{BrdfSpec, SpecError};
+pub use spec::{SpecError, ACCEPTED};
 
 use glam::DVec3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Errors from building a BRDF.
@@ -41,7 +41,10 @@ pub enum BrdfError {
     },
 }
 
-/// A BRDF in the local frame. Cheap to clone (MERL tables are shared).
+/// A BRDF in the local frame: the one vocabulary of models every stage takes (`--brdf`, the
+/// `count-terms` manifest, the documents' `brdf` field). A model is one variant here, one
+/// branch of the parser ([`spec`]) and one arm in each method below. Cheap to clone (MERL
+/// tables are shared).
 #[derive(Clone, Debug)]
 pub enum Brdf {
     /// Lambertian.
@@ -56,14 +59,22 @@ pub enum Brdf {
     Lafortune(models::Lafortune),
     /// Kajiya-Kay (anisotropic, tangent +X).
     KajiyaKay(models::KajiyaKay),
+    /// GGX microfacet reflection (Walter et al. 2007; Heitz 2014), no Fresnel.
+    Ggx(models::GgxMicrofacet),
     /// Measured MERL table.
     Merl(Arc<MerlBrdf>),
 }
 
 impl Brdf {
-    /// Parses a spec and builds the BRDF (reading MERL data).
+    /// Parses a spec (`docs/brdf-specs.md`) and builds the BRDF, reading MERL data.
     pub fn parse(spec: &str) -> Result<Brdf, BrdfError> {
-        BrdfSpec::parse(spec)?.load()
+        Self::parse_relative_to(spec, Path::new(""))
+    }
+
+    /// [`Brdf::parse`] with a relative MERL path taken relative to `base` (a manifest's
+    /// directory).
+    pub fn parse_relative_to(spec: &str, base: &Path) -> Result<Brdf, BrdfError> {
+        spec::parse(spec, base)
     }
 
     /// ρ(ω_i, ω_o) per RGB channel; analytic models are grey. Both directions are unit vectors
@@ -77,6 +88,7 @@ impl Brdf {
             Brdf::TorranceSparrow(m) => grey(m.eval(wi, wo)),
             Brdf::Lafortune(m) => grey(m.eval(wi, wo)),
             Brdf::KajiyaKay(m) => grey(m.eval(wi, wo)),
+            Brdf::Ggx(m) => grey(m.eval(wi, wo)),
             Brdf::Merl(m) => m.eval(wi, wo),
         }
     }
@@ -128,24 +140,21 @@ impl Brdf {
 
     /// The model name, e.g. `phong`.
     pub fn name(&self) -> &'static str {
-        self.spec_parts().model_name()
-    }
-
-    /// The canonical spec string (parses back to an equal BRDF).
-    pub fn spec(&self) -> String {
-        self.spec_parts().to_string()
-    }
-
-    fn spec_parts(&self) -> BrdfSpec {
         match self {
-            Brdf::Lambert(m) => BrdfSpec::Lambert(*m),
-            Brdf::Phong(m) => BrdfSpec::Phong(*m),
-            Brdf::BlinnPhong(m) => BrdfSpec::BlinnPhong(*m),
-            Brdf::TorranceSparrow(m) => BrdfSpec::TorranceSparrow(*m),
-            Brdf::Lafortune(m) => BrdfSpec::Lafortune(m.clone()),
-            Brdf::KajiyaKay(m) => BrdfSpec::KajiyaKay(*m),
-            Brdf::Merl(m) => BrdfSpec::Merl(m.path().to_path_buf()),
+            Brdf::Lambert(_) => "lambert",
+            Brdf::Phong(_) => "phong",
+            Brdf::BlinnPhong(_) => "blinn-phong",
+            Brdf::TorranceSparrow(_) => "torrance-sparrow",
+            Brdf::Lafortune(_) => "lafortune",
+            Brdf::KajiyaKay(_) => "kajiya-kay",
+            Brdf::Ggx(_) => "ggx",
+            Brdf::Merl(_) => "merl",
         }
+    }
+
+    /// The canonical spec string (parses back to an equal BRDF; see `Display` in [`spec`]).
+    pub fn spec(&self) -> String {
+        self.to_string()
     }
 }
 

@@ -4,6 +4,7 @@
 //! hemispheres is the caller's choice (`factor --domain hemisphere`), because the paper's
 //! analysis (Mahajan et al. 2008, §3.1–3.2) deliberately extends Phong to the full sphere.
 
+use crate::ibl::ggx::{self, Ggx, GgxError};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -201,6 +202,62 @@ impl KajiyaKay {
     }
 }
 
+/// The GGX microfacet reflection model (Walter, Marschner, Li & Torrance 2007) with the
+/// height-correlated Smith masking-shadowing (Heitz 2014, eq. 99) and no Fresnel term (F = 1):
+///
+///   ρ = D(h) G₂(ω_i, ω_o) / (4 (n·ω_i)(n·ω_o)),  h = normalize(ω_i + ω_o),
+///
+/// D the Trowbridge–Reitz distribution of width α = r² for the perceptual roughness r (Karis
+/// 2013). D, Λ and the visibility V = G₂/(4 (n·ω_i)(n·ω_o)) are those of [`crate::ibl::ggx::Ggx`],
+/// the one GGX the crate has. Unlike the other models, ρ is zero unless both directions are in
+/// the upper hemisphere: G₂ carries the Heaviside factors χ⁺(n·ω) of Heitz's eq. 99, so the
+/// formula has no meaning below the surface. With F = 1 the model is the specular layer a glTF
+/// engine scales by its Fresnel term; its directional albedo is at most 1 and falls below 1 at
+/// grazing view as single scattering loses energy.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GgxMicrofacet {
+    distribution: Ggx,
+}
+
+impl GgxMicrofacet {
+    /// GGX of perceptual roughness r ∈ [0, 1] (α = r²).
+    pub fn new(roughness: f64) -> Result<Self, GgxError> {
+        Ok(GgxMicrofacet { distribution: Ggx::new(roughness)? })
+    }
+
+    /// The perceptual roughness r.
+    pub fn roughness(&self) -> f64 {
+        self.distribution.perceptual_roughness()
+    }
+
+    /// The microfacet distribution and its Smith terms.
+    pub fn distribution(&self) -> Ggx {
+        self.distribution
+    }
+
+    /// The peak at normal incidence, ρ(n, n) = D(1) V(1, 1) = 1/(4πα²): the value the spec
+    /// parser holds against [`crate::limits::MAX_BRDF_PEAK`] (the lobe's height where it is
+    /// narrowest; towards grazing ρ grows like 1/(n·ω) but ρ (n·ω_i) stays bounded).
+    pub fn normal_peak(roughness: f64) -> f64 {
+        let a = ggx::alpha(roughness);
+        1.0 / (4.0 * PI * a * a)
+    }
+
+    /// ρ(ω_i, ω_o).
+    pub fn eval(&self, wi: DVec3, wo: DVec3) -> f64 {
+        let (cos_i, cos_o) = (wi.z, wo.z);
+        if cos_i <= 0.0 || cos_o <= 0.0 {
+            return 0.0;
+        }
+        // D from cos² θ_h and sin² θ_h of the unnormalized half vector: no cancellation in
+        // 1 − cos² θ_h at the peak, which a narrow lobe (α² below the rounding of n·h) needs.
+        let h = wi + wo;
+        let len2 = h.length_squared();
+        let d = self.distribution.d_half_angle(h.z * h.z / len2, (h.x * h.x + h.y * h.y) / len2);
+        d * self.distribution.visibility(cos_o, cos_i)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -284,5 +341,84 @@ mod tests {
         let off_cone = DVec3::new(a.cos(), 0.0, a.sin());
         assert!((k.eval(wi, on_cone) - 33.0 / (2.0 * PI)).abs() < 1e-12);
         assert!(k.eval(wi, off_cone) < 1e-6);
+    }
+
+    /// GGX written out independently of `ibl::ggx` (Walter et al. 2007, eq. 33; Heitz 2014,
+    /// eqs. 72 and 99): D(h) G₂ / (4 cos θ_i cos θ_o).
+    fn ggx_by_hand(alpha: f64, wi: DVec3, wo: DVec3) -> f64 {
+        let a2 = alpha * alpha;
+        let h = (wi + wo).normalize();
+        let d = a2 / (PI * (h.z * h.z * (a2 - 1.0) + 1.0).powi(2));
+        let lambda = |c: f64| 0.5 * (-1.0 + (1.0 + a2 * (1.0 - c * c) / (c * c)).sqrt());
+        let g2 = 1.0 / (1.0 + lambda(wi.z) + lambda(wo.z));
+        d * g2 / (4.0 * wi.z * wo.z)
+    }
+
+    #[test]
+    fn ggx_is_the_microfacet_formula_and_reciprocal() {
+        for r in [0.1, 0.5, 1.0] {
+            let m = GgxMicrofacet::new(r).unwrap();
+            for (wi, wo) in [
+                (direction(0.3, 0.2), direction(0.5, 2.9)),
+                (direction(1.2, 1.0), direction(0.1, 4.0)),
+                (direction(1.5, 0.0), direction(1.4, 3.0)),
+            ] {
+                let want = ggx_by_hand(r * r, wi, wo);
+                assert!((m.eval(wi, wo) - want).abs() < 1e-12 * want, "r={r}: {} vs {want}", m.eval(wi, wo));
+                assert!((m.eval(wi, wo) - m.eval(wo, wi)).abs() < 1e-14 * want, "reciprocity at r={r}");
+            }
+            // Below the surface the Heaviside factors of G₂ make ρ zero.
+            assert_eq!(m.eval(direction(1.7, 0.0), direction(0.3, 3.0)), 0.0);
+            assert_eq!(m.eval(direction(0.3, 0.0), direction(2.0, 3.0)), 0.0);
+            // The normal-incidence peak the parser checks: D(1)/4 = 1/(4πα²).
+            assert!((m.eval(DVec3::Z, DVec3::Z) - GgxMicrofacet::normal_peak(r)).abs() < 1e-12 / (r * r * r * r));
+        }
+    }
+
+    #[test]
+    fn ggx_distribution_is_normalized_and_masking_is_at_most_one() {
+        // ∫ D(h) (n·h) dω_h = 2π ∫ D(θ_h) cos θ_h sin θ_h dθ_h = 1 by the midpoint rule in θ_h
+        // (independent of the lobe-adapted Gauss–Legendre rule ibl::ggx tests it with).
+        for r in [0.1, 0.3, 0.6, 1.0] {
+            let g = GgxMicrofacet::new(r).unwrap().distribution();
+            let n = 200_000;
+            let dt = PI / 2.0 / n as f64;
+            let got: f64 = (0..n)
+                .map(|k| {
+                    let t = (k as f64 + 0.5) * dt;
+                    2.0 * PI * g.d(t.cos()) * t.cos() * t.sin() * dt
+                })
+                .sum();
+            assert!((got - 1.0).abs() < 1e-6, "r={r}: {got}");
+            // G₂ ∈ (0, 1], 1 exactly at normal incidence and falling towards grazing.
+            assert_eq!(g.smith_g2(1.0, 1.0), 1.0);
+            let mut last = 1.0;
+            for k in 1..=50 {
+                let mu = 1.0 - k as f64 / 51.0;
+                let g2 = g.smith_g2(mu, 0.8);
+                assert!(g2 > 0.0 && g2 <= 1.0 && g2 <= last, "r={r}, μ={mu}: {g2}");
+                last = g2;
+            }
+        }
+    }
+
+    #[test]
+    fn ggx_white_furnace_is_at_most_one_and_matches_the_dfg_albedo() {
+        // E(ω_o) = ∫ ρ cos θ_i dω_i by brute force over ω_i, against the split-sum A + B of
+        // ibl::dfg at F0 = 1 (integrated over the half vector): the same albedo two ways.
+        for r in [0.3, 0.6, 1.0] {
+            let m = GgxMicrofacet::new(r).unwrap();
+            for mu in [1.0, 0.5, 0.2] {
+                let wo = DVec3::new((1.0f64 - mu * mu).sqrt(), 0.0, mu);
+                let e = hemisphere_integral(|wi| m.eval(wi, wo) * wi.z, 800);
+                let want = crate::ibl::dfg::split_sum_terms(mu, r).unwrap().albedo();
+                assert!(e <= 1.0 && (e - want).abs() < 2e-3, "r={r}, μ={mu}: {e} vs {want}");
+            }
+        }
+        // Single scattering loses energy on rough surfaces, little on smooth ones at normal view.
+        // At r = 1, D = 1/π and Λ(θ) = (1/cos θ − 1)/2, so E(n) = ∫₀¹ μ/(1 + μ) dμ = 1 − ln 2.
+        let e = |r: f64| hemisphere_integral(|wi| GgxMicrofacet::new(r).unwrap().eval(wi, DVec3::Z) * wi.z, 800);
+        assert!(e(0.3) > 0.98, "{}", e(0.3));
+        assert!((e(1.0) - (1.0 - 2f64.ln())).abs() < 1e-5, "{}", e(1.0));
     }
 }

@@ -1,41 +1,24 @@
-//! The one BRDF spec parser every stage uses (`docs/brdf-specs.md`).
+//! The one BRDF spec parser every stage uses (`docs/brdf-specs.md`), and its inverse: the
+//! canonical spec string a [`Brdf`] prints as (`Display`), which the documents record.
 //!
 //! ```text
 //! spec   := model | model ":" params | "merl:" path
 //! params := key "=" number ("," key "=" number)*        (lafortune: lobe=a/b/c[/d], repeatable)
 //! ```
 //!
-//! Parsing checks names and numbers without touching files; [`BrdfSpec::load`] reads MERL data.
+//! Names and numbers are checked before any file is touched; `merl:` then reads the table.
 
-use super::models::{BlinnPhong, KajiyaKay, Lafortune, LafortuneLobe, Lambert, Phong, TorranceSparrow};
-use super::{Brdf, BrdfError};
+use super::models::{BlinnPhong, GgxMicrofacet, KajiyaKay, Lafortune, LafortuneLobe, Lambert, Phong, TorranceSparrow};
+use super::{Brdf, BrdfError, MerlBrdf};
 use crate::limits::{MAX_BRDF_PEAK, MAX_TORRANCE_SPARROW_SIGMA};
 use std::f64::consts::PI;
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use std::sync::Arc;
 
 /// The models and their parameters, for error messages and `--help`.
 pub const ACCEPTED: &str = "lambert[:albedo=A], phong:s=S, blinn-phong:s=S, torrance-sparrow:sigma=SIGMA, \
-lafortune:[kd=KD,]lobe=CXY/CZ/N[,lobe=CX/CY/CZ/N...], kajiya-kay:s=S, merl:PATH";
-
-/// A parsed BRDF spec: a model and its validated parameters (MERL data not yet read).
-#[derive(Clone, Debug, PartialEq)]
-pub enum BrdfSpec {
-    /// `lambert[:albedo=A]`.
-    Lambert(Lambert),
-    /// `phong:s=S`.
-    Phong(Phong),
-    /// `blinn-phong:s=S`.
-    BlinnPhong(BlinnPhong),
-    /// `torrance-sparrow:sigma=SIGMA`.
-    TorranceSparrow(TorranceSparrow),
-    /// `lafortune:kd=KD,lobe=…`.
-    Lafortune(Lafortune),
-    /// `kajiya-kay:s=S`.
-    KajiyaKay(KajiyaKay),
-    /// `merl:PATH`.
-    Merl(PathBuf),
-}
+lafortune:[kd=KD,]lobe=CXY/CZ/N[,lobe=CX/CY/CZ/N...], kajiya-kay:s=S, ggx:roughness=R, merl:PATH";
 
 /// A spec that does not parse. The message says what is wrong and what is accepted.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -47,134 +30,117 @@ pub struct SpecError {
     pub reason: String,
 }
 
-impl BrdfSpec {
-    /// Parses a spec string.
-    pub fn parse(spec: &str) -> Result<Self, SpecError> {
-        let err = |reason: String| SpecError { spec: spec.to_string(), reason };
-        let trimmed = spec.trim();
-        let (model, rest) = match trimmed.split_once(':') {
-            Some((m, r)) => (m.trim(), Some(r)),
-            None => (trimmed, None),
-        };
-        let model_lc = model.to_ascii_lowercase();
-        if model_lc == "merl" {
-            let path = rest.map(str::trim).unwrap_or("");
-            if path.is_empty() {
-                return Err(err("merl needs a file: merl:path/to/material.binary".into()));
-            }
-            return Ok(BrdfSpec::Merl(PathBuf::from(path)));
+/// Parses a spec string into its [`Brdf`]; a relative `merl:` path is taken relative to `base`.
+pub(super) fn parse(spec: &str, base: &Path) -> Result<Brdf, BrdfError> {
+    let trimmed = spec.trim();
+    let (model, rest) = match trimmed.split_once(':') {
+        Some((m, r)) => (m.trim().to_ascii_lowercase(), r),
+        None => (trimmed.to_ascii_lowercase(), ""),
+    };
+    if model == "merl" {
+        let path = rest.trim();
+        if path.is_empty() {
+            let reason = "merl needs a file: merl:path/to/material.binary".into();
+            return Err(SpecError { spec: spec.to_string(), reason }.into());
         }
-        let params = parse_params(rest.unwrap_or(""), spec)?;
-        let mut p = Params { spec, model: model_lc.clone(), params, used: vec![] };
-        p.check_known()?;
-        let parsed = match model_lc.as_str() {
-            "lambert" => {
-                let albedo = p.optional("albedo", 1.0)?;
-                if !(0.0..=1.0).contains(&albedo) {
-                    return Err(err(format!("lambert albedo must be in [0, 1], got {albedo}")));
-                }
-                BrdfSpec::Lambert(Lambert { albedo })
-            }
-            "phong" => {
-                let s = p.positive("s")?;
-                p.peak("the lobe's peak (s+1)/(2π)", (s + 1.0) / (2.0 * PI), "s", 2.0 * PI * MAX_BRDF_PEAK - 1.0)?;
-                BrdfSpec::Phong(Phong { exponent: s })
-            }
-            "blinn-phong" => {
-                let s = p.positive("s")?;
-                p.peak("the lobe's peak (s+2)/(8π)", (s + 2.0) / (8.0 * PI), "s", 8.0 * PI * MAX_BRDF_PEAK - 2.0)?;
-                BrdfSpec::BlinnPhong(BlinnPhong { exponent: s })
-            }
-            "torrance-sparrow" => {
-                let sigma = p.positive("sigma")?;
-                let min_sigma = 1.0 / (4.0 * PI * MAX_BRDF_PEAK).sqrt();
-                p.peak("the lobe's peak 1/(4πσ²)", 1.0 / (4.0 * PI * sigma * sigma), "sigma >=", min_sigma)?;
-                if sigma > MAX_TORRANCE_SPARROW_SIGMA {
-                    return Err(err(format!(
-                        "sigma={sigma} is above the ceiling of {MAX_TORRANCE_SPARROW_SIGMA} (the lobe is flat long before; see docs/limits.md)"
-                    )));
-                }
-                BrdfSpec::TorranceSparrow(TorranceSparrow { sigma })
-            }
-            "kajiya-kay" => {
-                let s = p.positive("s")?;
-                p.peak("the lobe's peak (s+1)/(2π)", (s + 1.0) / (2.0 * PI), "s", 2.0 * PI * MAX_BRDF_PEAK - 1.0)?;
-                BrdfSpec::KajiyaKay(KajiyaKay { exponent: s })
-            }
-            "lafortune" => {
-                let kd = p.optional("kd", 0.0)?;
-                if kd < 0.0 {
-                    return Err(err(format!("lafortune kd must be >= 0, got {kd}")));
-                }
-                p.peak("the diffuse term kd/π", kd / PI, "kd", PI * MAX_BRDF_PEAK)?;
-                let lobes = p.lobes()?;
-                for l in &lobes {
-                    // max |C·(ω_i ⊙ ω_o)| ≤ max |C| for unit directions: the lobe's peak is at
-                    // most (max |C|)^n (compared in logarithms: the power itself may overflow).
-                    let c = l.cx.abs().max(l.cy.abs()).max(l.cz.abs());
-                    if c > 0.0 && l.exponent * c.ln() > MAX_BRDF_PEAK.ln() {
-                        return Err(err(format!(
-                            "lobe {}/{}/{}/{}: its peak (max |C|)^n = {c}^{} is above the ceiling of {MAX_BRDF_PEAK:e} sr^-1 \
-                             (see docs/limits.md)",
-                            l.cx, l.cy, l.cz, l.exponent, l.exponent
-                        )));
-                    }
-                }
-                BrdfSpec::Lafortune(Lafortune { kd, lobes })
-            }
-            "" => return Err(err(format!("empty model name; accepted: {ACCEPTED}"))),
-            other => return Err(err(format!("unknown BRDF model {other:?}; accepted: {ACCEPTED}"))),
-        };
-        p.finish()?;
-        Ok(parsed)
+        return Ok(Brdf::Merl(Arc::new(MerlBrdf::read(&base.join(path))?)));
     }
-
-    /// The model name, e.g. `phong`.
-    pub fn model_name(&self) -> &'static str {
-        match self {
-            BrdfSpec::Lambert(_) => "lambert",
-            BrdfSpec::Phong(_) => "phong",
-            BrdfSpec::BlinnPhong(_) => "blinn-phong",
-            BrdfSpec::TorranceSparrow(_) => "torrance-sparrow",
-            BrdfSpec::Lafortune(_) => "lafortune",
-            BrdfSpec::KajiyaKay(_) => "kajiya-kay",
-            BrdfSpec::Merl(_) => "merl",
-        }
-    }
-
-    /// Makes a relative MERL path relative to `base` (e.g. a manifest's directory).
-    pub fn resolve_relative_to(self, base: &Path) -> Self {
-        match self {
-            BrdfSpec::Merl(p) if p.is_relative() => BrdfSpec::Merl(base.join(p)),
-            other => other,
-        }
-    }
-
-    /// Builds the BRDF, reading MERL data from disk.
-    pub fn load(&self) -> Result<Brdf, BrdfError> {
-        Ok(match self {
-            BrdfSpec::Lambert(m) => Brdf::Lambert(*m),
-            BrdfSpec::Phong(m) => Brdf::Phong(*m),
-            BrdfSpec::BlinnPhong(m) => Brdf::BlinnPhong(*m),
-            BrdfSpec::TorranceSparrow(m) => Brdf::TorranceSparrow(*m),
-            BrdfSpec::Lafortune(m) => Brdf::Lafortune(m.clone()),
-            BrdfSpec::KajiyaKay(m) => Brdf::KajiyaKay(*m),
-            BrdfSpec::Merl(path) => Brdf::Merl(std::sync::Arc::new(super::merl::MerlBrdf::read(path)?)),
-        })
-    }
+    Ok(parse_analytic(spec, model, rest)?)
 }
 
-/// Canonical spec string (parses back to the same spec).
-impl fmt::Display for BrdfSpec {
+/// An analytic model `model` with its parameter text `rest` (after the colon).
+fn parse_analytic(spec: &str, model: String, rest: &str) -> Result<Brdf, SpecError> {
+    let err = |reason: String| SpecError { spec: spec.to_string(), reason };
+    let params = parse_params(rest, spec)?;
+    let mut p = Params { spec, model: model.clone(), params, used: vec![] };
+    p.check_known()?;
+    let parsed = match model.as_str() {
+        "lambert" => {
+            let albedo = p.optional("albedo", 1.0)?;
+            if !(0.0..=1.0).contains(&albedo) {
+                return Err(err(format!("lambert albedo must be in [0, 1], got {albedo}")));
+            }
+            Brdf::Lambert(Lambert { albedo })
+        }
+        "phong" => {
+            let s = p.positive("s")?;
+            p.peak("the lobe's peak (s+1)/(2π)", (s + 1.0) / (2.0 * PI), "s <=", 2.0 * PI * MAX_BRDF_PEAK - 1.0)?;
+            Brdf::Phong(Phong { exponent: s })
+        }
+        "blinn-phong" => {
+            let s = p.positive("s")?;
+            p.peak("the lobe's peak (s+2)/(8π)", (s + 2.0) / (8.0 * PI), "s <=", 8.0 * PI * MAX_BRDF_PEAK - 2.0)?;
+            Brdf::BlinnPhong(BlinnPhong { exponent: s })
+        }
+        "torrance-sparrow" => {
+            let sigma = p.positive("sigma")?;
+            let min_sigma = 1.0 / (4.0 * PI * MAX_BRDF_PEAK).sqrt();
+            p.peak("the lobe's peak 1/(4πσ²)", 1.0 / (4.0 * PI * sigma * sigma), "sigma >=", min_sigma)?;
+            if sigma > MAX_TORRANCE_SPARROW_SIGMA {
+                return Err(err(format!(
+                    "sigma={sigma} is above the ceiling of {MAX_TORRANCE_SPARROW_SIGMA} (the lobe is flat long before; see docs/limits.md)"
+                )));
+            }
+            Brdf::TorranceSparrow(TorranceSparrow { sigma })
+        }
+        "kajiya-kay" => {
+            let s = p.positive("s")?;
+            p.peak("the lobe's peak (s+1)/(2π)", (s + 1.0) / (2.0 * PI), "s <=", 2.0 * PI * MAX_BRDF_PEAK - 1.0)?;
+            Brdf::KajiyaKay(KajiyaKay { exponent: s })
+        }
+        "ggx" => {
+            let r = p.positive("roughness")?;
+            if r > 1.0 {
+                return Err(err(format!("ggx roughness must be in (0, 1], got {r}")));
+            }
+            let min_r = (4.0 * PI * MAX_BRDF_PEAK).powf(-0.25);
+            p.peak(
+                "the peak at normal incidence 1/(4πα²), α = r²",
+                GgxMicrofacet::normal_peak(r),
+                "roughness >=",
+                min_r,
+            )?;
+            Brdf::Ggx(GgxMicrofacet::new(r).map_err(|e| err(e.to_string()))?)
+        }
+        "lafortune" => {
+            let kd = p.optional("kd", 0.0)?;
+            if kd < 0.0 {
+                return Err(err(format!("lafortune kd must be >= 0, got {kd}")));
+            }
+            p.peak("the diffuse term kd/π", kd / PI, "kd <=", PI * MAX_BRDF_PEAK)?;
+            let lobes = p.lobes()?;
+            for l in &lobes {
+                // max |C·(ω_i ⊙ ω_o)| ≤ max |C| for unit directions: the lobe's peak is at
+                // most (max |C|)^n (compared in logarithms: the power itself may overflow).
+                let c = l.cx.abs().max(l.cy.abs()).max(l.cz.abs());
+                if c > 0.0 && l.exponent * c.ln() > MAX_BRDF_PEAK.ln() {
+                    return Err(err(format!(
+                        "lobe {}/{}/{}/{}: its peak (max |C|)^n = {c}^{} is above the ceiling of {MAX_BRDF_PEAK:e} sr^-1 \
+                         (see docs/limits.md)",
+                        l.cx, l.cy, l.cz, l.exponent, l.exponent
+                    )));
+                }
+            }
+            Brdf::Lafortune(Lafortune { kd, lobes })
+        }
+        "" => return Err(err(format!("empty model name; accepted: {ACCEPTED}"))),
+        other => return Err(err(format!("unknown BRDF model {other:?}; accepted: {ACCEPTED}"))),
+    };
+    p.finish()?;
+    Ok(parsed)
+}
+
+/// The canonical spec string (parses back to the same BRDF).
+impl fmt::Display for Brdf {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            BrdfSpec::Lambert(m) if m.albedo == 1.0 => write!(f, "lambert"),
-            BrdfSpec::Lambert(m) => write!(f, "lambert:albedo={}", m.albedo),
-            BrdfSpec::Phong(m) => write!(f, "phong:s={}", m.exponent),
-            BrdfSpec::BlinnPhong(m) => write!(f, "blinn-phong:s={}", m.exponent),
-            BrdfSpec::TorranceSparrow(m) => write!(f, "torrance-sparrow:sigma={}", m.sigma),
-            BrdfSpec::KajiyaKay(m) => write!(f, "kajiya-kay:s={}", m.exponent),
-            BrdfSpec::Lafortune(m) => {
+            Brdf::Lambert(m) if m.albedo == 1.0 => write!(f, "lambert"),
+            Brdf::Lambert(m) => write!(f, "lambert:albedo={}", m.albedo),
+            Brdf::Phong(m) => write!(f, "phong:s={}", m.exponent),
+            Brdf::BlinnPhong(m) => write!(f, "blinn-phong:s={}", m.exponent),
+            Brdf::TorranceSparrow(m) => write!(f, "torrance-sparrow:sigma={}", m.sigma),
+            Brdf::KajiyaKay(m) => write!(f, "kajiya-kay:s={}", m.exponent),
+            Brdf::Lafortune(m) => {
                 write!(f, "lafortune:kd={}", m.kd)?;
                 for l in &m.lobes {
                     if l.cx == l.cy {
@@ -185,7 +151,8 @@ impl fmt::Display for BrdfSpec {
                 }
                 Ok(())
             }
-            BrdfSpec::Merl(p) => write!(f, "merl:{}", p.display()),
+            Brdf::Ggx(m) => write!(f, "ggx:roughness={}", m.roughness()),
+            Brdf::Merl(m) => write!(f, "merl:{}", m.path().display()),
         }
     }
 }
@@ -223,6 +190,7 @@ impl Params<'_> {
             "lambert" => "albedo (in [0, 1], default 1)",
             "phong" | "blinn-phong" | "kajiya-kay" => "s (exponent > 0)",
             "torrance-sparrow" => "sigma (roughness > 0, radians)",
+            "ggx" => "roughness (perceptual roughness in (0, 1], alpha = roughness^2)",
             "lafortune" => "kd (>= 0, default 0) and lobe=CXY/CZ/N or lobe=CX/CY/CZ/N (N > 0), repeatable",
             _ => "",
         }
@@ -234,6 +202,7 @@ impl Params<'_> {
             "lambert" => &["albedo"],
             "phong" | "blinn-phong" | "kajiya-kay" => &["s"],
             "torrance-sparrow" => &["sigma"],
+            "ggx" => &["roughness"],
             "lafortune" => &["kd", "lobe"],
             _ => return Ok(()),
         };
@@ -269,11 +238,11 @@ impl Params<'_> {
     }
 
     /// Refuses parameters whose BRDF peak exceeds [`MAX_BRDF_PEAK`] (`docs/limits.md`):
-    /// `limit` is the ceiling of parameter `key` it amounts to.
+    /// `key` and `limit` say the bound on the parameter it amounts to (e.g. "s <=", 6.3e8).
     fn peak(&self, what: &str, peak: f64, key: &str, limit: f64) -> Result<(), SpecError> {
         if peak > MAX_BRDF_PEAK {
             return Err(self.err(format!(
-                "{what} = {peak:.3e} is above the ceiling of {MAX_BRDF_PEAK:e} sr^-1 ({key} {limit:.3e} at most; \
+                "{what} = {peak:.3e} is above the ceiling of {MAX_BRDF_PEAK:e} sr^-1 ({key} {limit:.3e}; \
                  no stage resolves a narrower lobe, see docs/limits.md)"
             )));
         }
@@ -339,19 +308,21 @@ mod tests {
             "kajiya-kay:s=32",
             "lafortune:kd=0.1,lobe=-1/1/20",
             "lafortune:kd=0,lobe=-1/-0.5/1/20,lobe=-0.8/0.8/4",
-            "merl:some dir/gold-metallic-paint.binary",
+            "ggx:roughness=0.5",
+            "ggx:roughness=1",
         ] {
-            let spec = BrdfSpec::parse(s).unwrap();
-            let again = BrdfSpec::parse(&spec.to_string()).unwrap();
-            assert_eq!(spec, again, "{s}");
+            let spec = Brdf::parse(s).unwrap().spec();
+            assert_eq!(Brdf::parse(&spec).unwrap().spec(), spec, "{s}");
         }
-        assert_eq!(BrdfSpec::parse(" Phong : s = 30 ").unwrap(), BrdfSpec::Phong(Phong { exponent: 30.0 }));
+        assert_eq!(Brdf::parse(" Phong : s = 30 ").unwrap().spec(), "phong:s=30");
+        assert_eq!(Brdf::parse("GGX: Roughness = 0.25").unwrap().spec(), "ggx:roughness=0.25");
     }
 
     #[test]
     fn errors_say_what_is_wrong_and_what_is_accepted() {
-        let e = |s: &str| BrdfSpec::parse(s).unwrap_err().to_string();
+        let e = |s: &str| Brdf::parse(s).unwrap_err().to_string();
         assert!(e("glossy:s=3").contains("unknown BRDF model \"glossy\"") && e("glossy").contains("phong:s=S"));
+        assert!(e("glossy").contains("ggx:roughness=R"));
         assert!(e("phong").contains("phong needs s"));
         assert!(e("phong:s=0").contains("s must be > 0"));
         assert!(e("phong:s=-3").contains("s must be > 0"));
@@ -365,6 +336,10 @@ mod tests {
         assert!(e("lambert:albedo=2").contains("[0, 1]"));
         assert!(e("merl:").contains("merl needs a file"));
         assert!(e("phong:30").contains("key=value"));
+        assert!(e("ggx").contains("ggx needs roughness"));
+        assert!(e("ggx:roughness=0").contains("roughness must be > 0"));
+        assert!(e("ggx:roughness=1.5").contains("in (0, 1]"));
+        assert!(e("ggx:alpha=0.2").contains("does not take parameter \"alpha\""));
         // Ceilings (docs/limits.md): a lobe too tall for f64 energy sums, or too flat to matter.
         assert!(e("phong:s=1e308").contains("above the ceiling of 1e8"), "{}", e("phong:s=1e308"));
         assert!(e("blinn-phong:s=1e10").contains("ceiling"));
@@ -373,8 +348,22 @@ mod tests {
         assert!(e("torrance-sparrow:sigma=1e200").contains("ceiling of 100"));
         assert!(e("lafortune:kd=1e300,lobe=-1/1/2").contains("kd/π"));
         assert!(e("lafortune:lobe=-2/2/1e9").contains("(max |C|)^n"));
-        for ok in ["phong:s=1e8", "blinn-phong:s=1e8", "torrance-sparrow:sigma=1e-4", "lafortune:lobe=-0.5/0.5/1e12"] {
-            assert!(BrdfSpec::parse(ok).is_ok(), "{ok}");
+        // GGX: 1/(4πα²) ≤ 10⁸ holds for r ≥ (4π·10⁸)^(-1/4) ≈ 5.3e-3.
+        assert!(e("ggx:roughness=1e-3").contains("roughness >= 5.3"), "{}", e("ggx:roughness=1e-3"));
+        for ok in [
+            "phong:s=1e8",
+            "blinn-phong:s=1e8",
+            "torrance-sparrow:sigma=1e-4",
+            "lafortune:lobe=-0.5/0.5/1e12",
+            "ggx:roughness=6e-3",
+        ] {
+            assert!(Brdf::parse(ok).is_ok(), "{ok}");
         }
+    }
+
+    #[test]
+    fn merl_paths_are_read_relative_to_the_base() {
+        let e = parse("merl:no-such.binary", Path::new("/nonexistent/dir")).unwrap_err().to_string();
+        assert!(e.contains("/nonexistent/dir/no-such.binary") && e.contains("cannot read"), "{e}");
     }
 }

@@ -10,7 +10,7 @@ use crate::brdf::Brdf;
 use crate::factor::count::{self, CountConfig, Material};
 use crate::factor::{manifest, plot};
 use crate::io::Output;
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 pub use args::*;
 
 impl TryFrom<&Args> for CountConfig {
@@ -30,7 +30,8 @@ impl TryFrom<&Args> for CountConfig {
 
 impl Args {
     /// The materials: each --brdf (named by its spec, or the MERL file's stem), then the
-    /// manifest's lines (their MERL files read here, errors naming the manifest line).
+    /// manifest's lines (their MERL files read as the manifest is parsed, errors naming the
+    /// manifest's line and column).
     fn materials(&self) -> Result<Vec<Material>> {
         let budget = self.max_terms.map(|b| b as usize);
         let channel = self.matrix.channel;
@@ -46,12 +47,8 @@ impl Args {
             })
             .collect();
         if let Some(path) = &self.manifest {
-            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-            let base = path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
-            for e in manifest::parse(&text, &path.display().to_string(), &base)? {
-                let brdf =
-                    e.spec.load().with_context(|| format!("{}:{}: material {}", path.display(), e.line, e.name))?;
-                out.push(Material { name: e.name, brdf, channel, budget: e.budget.or(budget) });
+            for e in manifest::read(path)? {
+                out.push(Material { name: e.name, brdf: e.brdf, channel, budget: e.budget.or(budget) });
             }
         }
         Ok(out)

@@ -45,12 +45,24 @@ impl TryFrom<&Args> for Mode {
             return Ok(Mode::Decode(config, input, output.context("--decode needs --output (normals)")?));
         }
         if outputs.iter().filter(|o| o.as_ref() == Some(&Output::Stdout)).count() + usize::from(a.json) > 1 {
-            bail!("only one of --output -, --report - and --json can use stdout");
+            bail!("only one of --output -, --report - and --json can use standard output");
         }
         let name = |i: usize| outputs[i].as_ref().map(Output::display);
         let (scheme, on_invalid, histogram_bins) = (a.scheme, a.on_invalid, a.bins as usize);
         let files = encode::Files::new(&input, name(0), name(2));
-        Ok(Mode::Encode(encode::Config { scheme, bits, stream, on_invalid, histogram_bins, files }, input, outputs))
+        Ok(Mode::Encode(
+            encode::Config {
+                scheme,
+                bits,
+                stream,
+                on_invalid,
+                histogram_bins,
+                files,
+                args: std::env::args().collect(),
+            },
+            input,
+            outputs,
+        ))
     }
 }
 

@@ -10,38 +10,26 @@
 //! Fields are separated by spaces or tabs; a field may be double-quoted to hold spaces (no
 //! escapes); `#` starts a comment outside quotes; blank lines are ignored. The budget is a
 //! positive integer or `-` (none: `--max-terms` applies). Relative MERL paths are relative to
-//! the manifest's directory. Names must be unique.
+//! the manifest's directory, and MERL files are read as their line is parsed, so that a missing
+//! or garbled file is reported at its line and column. Names must be unique.
 
-use crate::brdf::{Brdf, BrdfSpec};
+use crate::brdf::{Brdf, BrdfError};
 use crate::io::IoError;
 use std::path::Path;
 
 /// One manifest entry.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Entry {
     /// Material name.
     pub name: String,
     /// Its BRDF.
-    pub spec: BrdfSpec,
+    pub brdf: Brdf,
     /// Term budget, if given.
     pub budget: Option<usize>,
     /// 1-based line number.
     pub line: usize,
     /// 1-based column of the spec field.
     pub spec_column: usize,
-}
-
-impl Entry {
-    /// Builds the entry's BRDF (reading MERL data); an error (a missing or garbled MERL file)
-    /// names the manifest `file`, this entry's line and the column of its spec first.
-    pub fn load(&self, file: &str) -> Result<Brdf, ManifestError> {
-        self.spec.load().map_err(|e| ManifestError {
-            file: file.to_string(),
-            line: self.line,
-            column: self.spec_column,
-            reason: format!("material {:?}: {e}", self.name),
-        })
-    }
 }
 
 /// A manifest error at line:column (1-based; line 0: the file as a whole).
@@ -116,7 +104,8 @@ pub fn read(path: &Path) -> Result<Vec<Entry>, ManifestError> {
     parse(&text, &file, path.parent().unwrap_or(Path::new("")))
 }
 
-/// Parses manifest text; `file` names it in errors and `base` resolves relative MERL paths.
+/// Parses manifest text, reading its MERL files; `file` names it in errors and `base`
+/// resolves relative MERL paths.
 pub fn parse(text: &str, file: &str, base: &Path) -> Result<Vec<Entry>, ManifestError> {
     let err =
         |line: usize, column: usize, reason: String| ManifestError { file: file.to_string(), line, column, reason };
@@ -138,7 +127,11 @@ pub fn parse(text: &str, file: &str, base: &Path) -> Result<Vec<Entry>, Manifest
         if let Some(prev) = entries.iter().find(|e| e.name == name) {
             return Err(err(n, *name_col, format!("material {name:?} is already defined on line {}", prev.line)));
         }
-        let spec = BrdfSpec::parse(&f[1].1).map_err(|e| err(n, f[1].0, e.to_string()))?.resolve_relative_to(base);
+        // A spec error quotes the spec; a MERL file's error names the material.
+        let brdf = Brdf::parse_relative_to(&f[1].1, base).map_err(|e| match e {
+            BrdfError::Spec(e) => err(n, f[1].0, e.to_string()),
+            merl => err(n, f[1].0, format!("material {name:?}: {merl}")),
+        })?;
         let budget = match f.get(2) {
             None => None,
             Some((_, b)) if b == "-" => None,
@@ -147,7 +140,7 @@ pub fn parse(text: &str, file: &str, base: &Path) -> Result<Vec<Entry>, Manifest
                 _ => return Err(err(n, *c, format!("budget {b:?} is not a positive integer (or `-` for none)"))),
             },
         };
-        entries.push(Entry { name, spec, budget, line: n, spec_column: f[1].0 });
+        entries.push(Entry { name, brdf, budget, line: n, spec_column: f[1].0 });
     }
     if entries.is_empty() {
         return Err(err(1, 1, "the manifest lists no material".into()));
@@ -162,12 +155,13 @@ mod tests {
     #[test]
     fn parses_fields_quotes_comments_and_budgets() {
         let text =
-            "# header\n\nglossy phong:s=30 80\n\"matte floor\"\tlambert   # no budget\npaint merl:a/b.binary -\n";
+            "# header\n\nglossy phong:s=30 80\n\"matte floor\"\tlambert   # no budget\nrough ggx:roughness=0.5 -\n";
         let e = parse(text, "m.txt", Path::new("/data")).unwrap();
         assert_eq!(e.len(), 3);
         assert_eq!((e[0].name.as_str(), e[0].budget, e[0].line), ("glossy", Some(80), 3));
-        assert_eq!((e[1].name.as_str(), e[1].budget), ("matte floor", None));
-        assert_eq!(e[2].spec, BrdfSpec::Merl("/data/a/b.binary".into()));
+        assert_eq!(e[0].brdf.spec(), "phong:s=30");
+        assert_eq!((e[1].name.as_str(), e[1].budget, e[1].spec_column), ("matte floor", None, 15));
+        assert_eq!((e[2].brdf.spec().as_str(), e[2].budget), ("ggx:roughness=0.5", None));
     }
 
     #[test]
@@ -187,11 +181,11 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let m = dir.path().join("materials.txt");
         std::fs::write(&m, "# materials\nglossy phong:s=30\n  gold   merl:brdfs/gold.binary 64\n").unwrap();
-        let entries = read(&m).unwrap();
-        assert!(entries[0].load("materials.txt").is_ok());
-        let e = entries[1].load(&m.display().to_string()).unwrap_err().to_string();
+        let e = read(&m).unwrap_err().to_string();
         let want = format!("{}:3:10: material \"gold\": ", m.display());
         assert!(e.starts_with(&want) && e.contains("gold.binary") && e.contains("cannot read"), "{e}");
+        // Relative to the manifest's directory.
+        assert!(e.contains(&dir.path().join("brdfs").display().to_string()), "{e}");
         let e = read(&dir.path().join("none.txt")).unwrap_err().to_string();
         assert!(e.contains("none.txt: ") && !e.contains(":0:"), "{e}");
     }

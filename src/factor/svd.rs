@@ -176,22 +176,6 @@ pub fn memory_estimate(sampling: &Sampling, method: Method, terms: usize) -> u12
     }
 }
 
-/// Formats a byte count as KiB/MiB/GiB/TiB.
-pub fn human_bytes(b: u128) -> String {
-    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    let mut v = b as f64;
-    let mut u = 0;
-    while v >= 1024.0 && u + 1 < units.len() {
-        v /= 1024.0;
-        u += 1;
-    }
-    if u == 0 {
-        format!("{b} bytes")
-    } else {
-        format!("{v:.1} {}", units[u])
-    }
-}
-
 /// Chooses the method for `brdf`: `Auto` → FFT when isotropic, else dense.
 pub fn resolve_method(brdf: &Brdf, method: Method) -> Result<Method, FactorError> {
     match method {
@@ -218,8 +202,8 @@ pub fn check_budget(sampling: &Sampling, method: Method, terms: usize, max_memor
             domain: sampling.domain,
             dirs,
             method,
-            need: human_bytes(need),
-            limit: human_bytes(max_memory),
+            need: crate::limits::human_bytes(need),
+            limit: crate::limits::human_bytes(max_memory),
             hint: if method == Method::Dense { ", use an isotropic BRDF with --method fft" } else { "" },
         });
     }

@@ -26,6 +26,8 @@ pub struct Config {
     pub histogram_bins: usize,
     /// The files the report names (the library reads and writes none).
     pub files: Files,
+    /// The command line recorded in the report's provenance (argv, argv[0] included).
+    pub args: Vec<String>,
 }
 
 /// File names recorded in the report.
@@ -113,7 +115,7 @@ pub fn run(config: &Config, normals: &[[f32; 3]], progress: &dyn Progress) -> Re
         histogram,
         replaced: Replaced { count: replaced.len() as u64, indices: replaced.iter().copied().take(100).collect() },
     };
-    let provenance = Provenance::current("encode-normals", vec![config.files.input.clone()]);
+    let provenance = Provenance::new("encode-normals", &config.args, vec![config.files.input.clone()]);
     Ok(Output {
         stream: config.stream.to_bytes(&codes, codec.bits()),
         codes,
@@ -138,6 +140,7 @@ mod tests {
             on_invalid: InvalidPolicy::Replace,
             histogram_bins: 4,
             files: Files::default(),
+            args: Vec::new(),
         };
         let out = run(&config, &normals, &NoProgress).unwrap();
         let r = &out.report.body;

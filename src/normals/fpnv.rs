@@ -102,9 +102,9 @@ mod tests {
 
     #[test]
     fn mantissa_rounding_matches_hardware_casts() {
-        let mut s = 11u64;
+        let mut s = crate::rng::SplitMix64::new(11);
         for _ in 0..100_000 {
-            let x = (super::super::rng::next_f64(&mut s) - 0.5) * 4.0;
+            let x = (s.next_f64() - 0.5) * 4.0;
             assert_eq!(round_to_mantissa(x, 23), x as f32 as f64, "{x}");
             assert_eq!(round_to_mantissa(x, 52), x);
         }

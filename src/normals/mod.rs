@@ -36,14 +36,12 @@ pub mod pp;
 mod properties;
 pub mod radix;
 pub mod report;
-pub mod rng;
 pub mod sc;
 pub mod sextant;
 pub mod shader;
 pub mod sources;
 pub mod spp;
 pub mod table;
-mod vec;
 
 use glam::DVec3;
 use radix::GridLayout;

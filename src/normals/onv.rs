@@ -368,11 +368,7 @@ mod tests {
     use super::*;
     use crate::normals::fixed::{mask, snorm_floor, to_field};
     use crate::normals::metrics::angle_between;
-    use crate::normals::rng::{next_u64, uniform_direction};
-
-    fn random_direction(state: &mut u64) -> DVec3 {
-        DVec3::from(uniform_direction(state))
-    }
+    use crate::rng::SplitMix64;
 
     #[test]
     fn fold_is_continuous() {
@@ -396,9 +392,9 @@ mod tests {
 
     #[test]
     fn inverse_on_the_octahedron() {
-        let mut state = 7u64;
+        let mut state = SplitMix64::new(7);
         for _ in 0..10_000 {
-            let n = random_direction(&mut state);
+            let n = state.direction();
             let p = oct_from_dir(n);
             let m = dir_from_oct(p);
             assert!(n.distance_squared(m) < 1e-28, "{n:?}");
@@ -407,11 +403,11 @@ mod tests {
 
     #[test]
     fn f32_batch_decoder_matches_the_f64_decoder() {
-        let mut state = 3u64;
+        let mut state = SplitMix64::new(3);
         for bits in 8..=32 {
             let layout = OnvLayout::new(bits);
             for _ in 0..20_000 {
-                let code = next_u64(&mut state) & mask(bits);
+                let code = state.next_u64() & mask(bits);
                 let a = decode(code, layout);
                 let b = DVec3::from(decode_f32(code, layout).map(f64::from));
                 assert!(angle_between(a, b) < 3e-7, "{bits} {code:#x}");
@@ -422,11 +418,11 @@ mod tests {
     #[test]
     fn range_choice_by_sine_matches_choice_by_chord() {
         // Reference: the slow, obviously right rule (normalize, compare squared chords).
-        let mut state = 13u64;
+        let mut state = SplitMix64::new(13);
         for bits in [8, 16, 24, 32, 48, 64] {
             let layout = OnvLayout::new(bits);
             for _ in 0..20_000 {
-                let n = random_direction(&mut state);
+                let n = state.direction();
                 let p = oct_from_dir(n);
                 let (u0, v0) = (snorm_floor(p[0], layout.u_bits), snorm_floor(p[1], layout.v_bits));
                 let best = [(u0, v0), (u0 + 1, v0), (u0, v0 + 1), (u0 + 1, v0 + 1)]

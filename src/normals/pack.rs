@@ -129,9 +129,9 @@ mod tests {
 
     #[test]
     fn round_trips_and_sizes() {
-        let mut s = 3u64;
+        let mut s = crate::rng::SplitMix64::new(3);
         for bits in 8..=64 {
-            let codes: Vec<u64> = (0..37).map(|_| crate::normals::rng::next_u64(&mut s) & mask(bits)).collect();
+            let codes: Vec<u64> = (0..37).map(|_| s.next_u64() & mask(bits)).collect();
             let words = to_words(&codes, bits);
             assert_eq!(words.len(), 37 * word_bytes(bits));
             assert_eq!(from_words(&words, bits).unwrap(), codes);

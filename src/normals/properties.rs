@@ -1,8 +1,8 @@
 //! Property tests over every scheme and every budget 8..=64 (Meyer et al. 2010, §§4–5).
 
 use super::metrics::angle_between;
-use super::rng::{next_u64, uniform_direction};
 use super::{adversarial, Codec, Scheme, MAX_BITS, MIN_BITS};
+use crate::rng::SplitMix64;
 use glam::DVec3;
 
 /// The closed-form bound plus slack: `bound·(1 + slack) + 1e-15` rad. The absolute term covers
@@ -15,10 +15,6 @@ use glam::DVec3;
 ///   5 × 7 points per face of 8 bits are too coarse for: +6.6 % there (`0.53·ε²`), never
 ///   exceeded from 9 bits on; we allow `ε²`;
 /// - ONV_range (eq. 11's leading term), SC, PP, CM: never exceeded; a tiny `1e-12` only.
-fn random_direction(state: &mut u64) -> DVec3 {
-    DVec3::from(uniform_direction(state))
-}
-
 fn allowed(codec: &Codec) -> f64 {
     codec.bound() * (1.0 + slack(codec)) + 1e-15
 }
@@ -44,8 +40,8 @@ fn worst(codec: &Codec, dirs: &[DVec3]) -> (f64, DVec3) {
 
 #[test]
 fn round_trip_error_within_closed_form_bound_all_schemes_all_budgets() {
-    let mut state = 42u64;
-    let random: Vec<DVec3> = (0..3000).map(|_| random_direction(&mut state)).collect();
+    let mut state = SplitMix64::new(42);
+    let random: Vec<DVec3> = (0..3000).map(|_| state.direction()).collect();
     let mut report = String::new();
     for scheme in Scheme::ALL {
         let mut worst_ratio: (f64, u32) = (0.0, 0);
@@ -83,11 +79,11 @@ fn adversarial_directions_reach_the_bound() {
 
 #[test]
 fn range_rounding_never_worse_than_domain_rounding() {
-    let mut state = 5u64;
+    let mut state = SplitMix64::new(5);
     for bits in MIN_BITS..=MAX_BITS {
         let range = Codec::new(Scheme::OnvRange, bits).unwrap();
         let domain = Codec::new(Scheme::OnvDomain, bits).unwrap();
-        let mut dirs: Vec<DVec3> = (0..2000).map(|_| random_direction(&mut state)).collect();
+        let mut dirs: Vec<DVec3> = (0..2000).map(|_| state.direction()).collect();
         dirs.extend(adversarial::directions(&domain));
         for d in dirs {
             let er = angle_between(d, range.decode(range.encode(d)));
@@ -100,11 +96,11 @@ fn range_rounding_never_worse_than_domain_rounding() {
 
 #[test]
 fn every_code_decodes_to_a_unit_vector() {
-    let mut state = 9u64;
+    let mut state = SplitMix64::new(9);
     for scheme in Scheme::ALL {
         for bits in MIN_BITS..=MAX_BITS {
             let codec = Codec::new(scheme, bits).unwrap();
-            let mut codes: Vec<u64> = (0..500).map(|_| next_u64(&mut state)).collect();
+            let mut codes: Vec<u64> = (0..500).map(|_| state.next_u64()).collect();
             // Extremes of every field: all zeros, all ones, each field at its min/max.
             codes.extend([0, u64::MAX, 1, 2, 3, 4, 5, 6, 7]);
             // Every digit at 0, its middle and its largest value, the others at 0 or largest,
@@ -188,12 +184,12 @@ fn diagonals_are_mirror_symmetric() {
 fn octahedron_fold_is_handled() {
     // Directions on the equator (z = ±0) lie on the fold |u|+|v| = 1: both signs of zero give the
     // same code, and neighbours just above/below the fold round to neighbouring codes.
-    let mut state = 77u64;
+    let mut state = SplitMix64::new(77);
     for bits in [8, 16, 24, 32, 33, 48, 64] {
         for scheme in [Scheme::OnvRange, Scheme::OnvDomain] {
             let codec = Codec::new(scheme, bits).unwrap();
             for _ in 0..2000 {
-                let phi = std::f64::consts::TAU * super::rng::next_f64(&mut state);
+                let phi = std::f64::consts::TAU * state.next_f64();
                 let (y, x) = phi.sin_cos();
                 assert_eq!(codec.encode(DVec3::new(x, y, 0.0)), codec.encode(DVec3::new(x, y, -0.0)));
                 let tiny = 1e-12;
@@ -211,8 +207,8 @@ fn octahedron_fold_is_handled() {
 
 #[test]
 fn f32_block_encoder_gives_the_scalar_codes() {
-    let mut state = 8u64;
-    let mut normals: Vec<[f32; 3]> = (0..20_000).map(|_| random_direction(&mut state).as_vec3().to_array()).collect();
+    let mut state = SplitMix64::new(8);
+    let mut normals: Vec<[f32; 3]> = (0..20_000).map(|_| state.direction().as_vec3().to_array()).collect();
     normals.extend([[0.0, 0.0, -1.0], [-0.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.5, -0.5, 0.0], [-0.0, -0.0, -1.0]]);
     for scheme in [Scheme::OnvDomain, Scheme::OnvRange] {
         for bits in [8, 15, 16, 32, 47, 64] {
@@ -229,11 +225,11 @@ fn f32_block_encoder_gives_the_scalar_codes() {
 #[test]
 fn f32_block_decoder_gives_the_scalar_normals() {
     // The batch decoder may run with other SIMD widths (AVX2 dispatch): bit-identical results.
-    let mut state = 4u64;
+    let mut state = SplitMix64::new(4);
     for bits in [8, 15, 16, 24, 31, 32] {
         let codec = Codec::new(Scheme::OnvRange, bits).unwrap();
         let layout = super::onv::OnvLayout::new(bits);
-        let codes: Vec<u64> = (0..10_007).map(|_| next_u64(&mut state) & super::fixed::mask(bits)).collect();
+        let codes: Vec<u64> = (0..10_007).map(|_| state.next_u64() & super::fixed::mask(bits)).collect();
         let mut normals = vec![[0f32; 3]; codes.len()];
         codec.decode_all_f32(&codes, &mut normals);
         for (c, n) in codes.iter().zip(&normals) {
@@ -244,8 +240,8 @@ fn f32_block_decoder_gives_the_scalar_normals() {
 
 #[test]
 fn batch_encode_is_independent_of_chunking() {
-    let mut state = 1u64;
-    let dirs: Vec<DVec3> = (0..50_000).map(|_| random_direction(&mut state)).collect();
+    let mut state = SplitMix64::new(1);
+    let dirs: Vec<DVec3> = (0..50_000).map(|_| state.direction()).collect();
     let codec = Codec::new(Scheme::OnvRange, 32).unwrap();
     let mut codes = vec![0; dirs.len()];
     codec.encode_all(&dirs, &mut codes);
@@ -266,8 +262,8 @@ fn choosing_range_candidates_by_f32_dot_product_breaks_where_ours_does_not() {
         let layout = OnvLayout::new(bits);
         let codec = Codec::new(Scheme::OnvRange, bits).unwrap();
         let mut dirs = adversarial::directions(&codec);
-        let mut state = 21u64;
-        dirs.extend((0..20_000).map(|_| random_direction(&mut state)));
+        let mut state = SplitMix64::new(21);
+        dirs.extend((0..20_000).map(|_| state.direction()));
         let (mut naive, mut ours) = (0f64, 0f64);
         for n in dirs {
             let p = oct_from_dir(n);

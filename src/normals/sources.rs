@@ -545,7 +545,7 @@ mod tests {
     #[test]
     fn garbled_files_give_errors_not_panics() {
         let dir = tempfile::tempdir().unwrap();
-        let mut state = 99u64;
+        let mut state = crate::rng::SplitMix64::new(99);
         let headers = [
             "ply\nformat binary_little_endian 1.0\nelement face 3\nproperty list uchar int vertex_indices\nelement vertex 4\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n",
             "ply\nformat binary_big_endian 1.0\nelement vertex 99999999999\nproperty double nx\nproperty double ny\nproperty double nz\nend_header\n",
@@ -555,9 +555,9 @@ mod tests {
         ];
         for (h, header) in headers.iter().enumerate() {
             for trial in 0..100 {
-                let len = (crate::normals::rng::next_u64(&mut state) % 64) as usize;
+                let len = (state.next_u64() % 64) as usize;
                 let mut bytes = header.as_bytes().to_vec();
-                bytes.extend((0..len).map(|_| crate::normals::rng::next_u64(&mut state) as u8));
+                bytes.extend((0..len).map(|_| state.next_u64() as u8));
                 for ext in ["ply", "obj", "raw"] {
                     let p = dir.path().join(format!("g{h}_{trial}.{ext}"));
                     std::fs::write(&p, &bytes).unwrap();

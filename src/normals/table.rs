@@ -11,9 +11,9 @@ use super::bounds;
 use super::fpnv::{self, FloatFormat};
 use super::metrics::angle_between;
 use super::metrics::ErrorStats;
-use super::rng::{chunk_state, uniform_direction};
 use super::{adversarial, Codec, NormalsError, Scheme};
 use crate::progress::Progress;
+use crate::rng::SplitMix64;
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -105,8 +105,8 @@ pub fn run(config: &TableConfig, progress: &dyn Progress) -> Result<Vec<Row>, No
     let per_chunk: Vec<(Vec<ErrorStats>, Vec<ErrorStats>)> = (0..chunks)
         .into_par_iter()
         .map(|chunk| {
-            let mut state = chunk_state(config.seed, chunk);
-            let dirs: Vec<DVec3> = (0..CHUNK).map(|_| DVec3::from(uniform_direction(&mut state))).collect();
+            let mut state = SplitMix64::for_chunk(config.seed, chunk);
+            let dirs: Vec<DVec3> = (0..CHUNK).map(|_| state.direction()).collect();
             let base = chunk * CHUNK;
             let schemes = codecs.iter().map(|codec| measure(codec, &dirs, base)).collect();
             let floats = formats
@@ -212,8 +212,8 @@ fn onv_range_max(bits: u32, seed: u64) -> Result<f64, NormalsError> {
     let random: f64 = (0..16u64)
         .into_par_iter()
         .map(|chunk| {
-            let mut state = chunk_state(seed ^ 0x5151, chunk);
-            let dirs: Vec<DVec3> = (0..CHUNK).map(|_| DVec3::from(uniform_direction(&mut state))).collect();
+            let mut state = SplitMix64::for_chunk(seed ^ 0x5151, chunk);
+            let dirs: Vec<DVec3> = (0..CHUNK).map(|_| state.direction()).collect();
             max_error(&codec, &dirs)
         })
         .collect::<Vec<f64>>()

@@ -234,6 +234,20 @@ pub fn from_radial(u: impl Fn(f64) -> [f64; 3], f: usize, nodes: usize) -> BrdfS
     out
 }
 
+/// The radial form of a grey lobe given by its zonal SH coefficients k_l = ∫ u(cos γ) Y_l0 dω
+/// and its energy ∫ u² dω, for lobes whose own quadrature computes them (the GGX split-sum
+/// lobe): ρ̂_l00 = √(4π) k_l and the energy of all three channels, as [`from_radial`] would
+/// find by Gauss–Legendre.
+pub fn from_zonal(k: &[f64], lobe_energy: f64) -> BrdfSh {
+    let scale = (4.0 * PI).sqrt();
+    BrdfSh {
+        f: k.len() - 1,
+        p: 0,
+        coeffs: k.iter().map(|&k| [scale * k; 3]).collect(),
+        total_energy: 3.0 * 4.0 * PI * lobe_energy,
+    }
+}
+
 /// Gauss–Legendre nodes in θ ∈ [0, π] with weights that include sin θ.
 fn angle_nodes(n: usize) -> Vec<(f64, f64)> {
     gauss_legendre(n.max(1))

@@ -3,6 +3,12 @@
 //! - Radially symmetric lobes take the 1-D path: Phong is ρ̂ = (s+1)/2π (R·L)^s about the
 //!   reflection vector, used as the paper does (§6.3, without an extra N·L); Lambert is
 //!   ρ̂ = (albedo/π) max(N·L, 0) about the normal, so its "reflection map" is indexed by N.
+//! - GGX takes the 1-D path too, with the split-sum lobe of glTF engines (Karis 2013): under
+//!   Karis' assumption N = V = R its kernel about R is k(θ) = D(cos(θ/2)) max(cos θ, 0)/Z,
+//!   normalized to ∫ k dω = 1 ([`crate::ibl::ggx::SplitSumLobe`]). The map is then the
+//!   prefiltered radiance an engine multiplies by its DFG scale and bias, not ∫ L ρ cos θ of the
+//!   BRDF for any one view: the view dependence of GGX (its Smith and Jacobian terms away from
+//!   N = V) is what the split sum moves into the DFG table.
 //! - Every other isotropic BRDF takes the general path, in the frame whose +Z is the reflection
 //!   vector R: with N = normalize(R + ω_o), ρ̂(ω_i, ω_o) = ρ(ω_i, ω_o)·max(N·ω_i, 0) in N's
 //!   frame (eq. 1–2, ρ̂ = ρ cos θ_i). `cosine: false` drops the max(N·ω_i, 0), for models the
@@ -10,6 +16,7 @@
 
 use super::brdf_sh::{self, BrdfGrid, BrdfSh};
 use crate::brdf::Brdf;
+use crate::ibl::ggx::SplitSumLobe;
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -19,6 +26,9 @@ pub enum ModelError {
     /// Anisotropic BRDFs other than the tangent-reparameterized Kajiya–Kay are out of scope.
     #[error("{0} is anisotropic: the prefilter handles isotropic BRDFs (R&H 2002 §3)")]
     Anisotropic(String),
+    /// The BRDF's parameters admit no prefilter lobe.
+    #[error("{0}")]
+    Brdf(String),
     /// No order up to the search limit reaches the tolerance.
     #[error("no orders up to F = {f}, P = {p} keep 1 - {epsilon} of the energy of {brdf} (they leave {achieved:.3e}); use a larger --epsilon")]
     Unreachable {
@@ -59,6 +69,8 @@ pub struct Model {
     brdf: Brdf,
     cosine: bool,
     tangent: bool,
+    /// GGX's split-sum kernel about R.
+    split_sum: Option<SplitSumLobe>,
 }
 
 impl Model {
@@ -70,7 +82,12 @@ impl Model {
         if !brdf.is_isotropic() && !tangent {
             return Err(ModelError::Anisotropic(brdf.spec()));
         }
-        Ok(Model { brdf, cosine, tangent })
+        let split_sum = match &brdf {
+            // The parser admits roughness in (0, 1] only, the lobe's domain.
+            Brdf::Ggx(m) => Some(SplitSumLobe::new(m.roughness()).map_err(|e| ModelError::Brdf(e.to_string()))?),
+            _ => None,
+        };
+        Ok(Model { brdf, cosine, tangent, split_sum })
     }
 
     /// True for a BRDF reparameterized by the fibre tangent (Kajiya–Kay): texels are indexed by
@@ -93,6 +110,7 @@ impl Model {
     pub fn centre(&self) -> Option<Centre> {
         match &self.brdf {
             Brdf::Lambert(_) => Some(Centre::Normal),
+            Brdf::Ggx(_) => Some(Centre::Reflection),
             b if b.is_radially_symmetric() && !self.tangent => Some(Centre::Reflection),
             _ => None,
         }
@@ -100,6 +118,9 @@ impl Model {
 
     /// The 1-D lobe u(cos γ) of a radially symmetric BRDF (γ from its centre).
     pub fn lobe(&self, cos_gamma: f64) -> [f64; 3] {
+        if let Some(lobe) = &self.split_sum {
+            return [lobe.kernel(cos_gamma); 3];
+        }
         let v = match &self.brdf {
             Brdf::Lambert(_) => self.brdf.reflection_lobe(cos_gamma).unwrap_or(0.0) * cos_gamma.max(0.0),
             b => b.reflection_lobe(cos_gamma).unwrap_or(0.0),
@@ -175,6 +196,11 @@ impl Model {
 
     /// ρ̂_lpq up to (F, P) (p = 0 only for radially symmetric BRDFs).
     pub fn coefficients(&self, f: usize, p: usize) -> BrdfSh {
+        if let Some(lobe) = &self.split_sum {
+            // The lobe's own quadrature resolves kernels of any width (GGX's α² may be below
+            // the spacing of Gauss–Legendre nodes in cos γ).
+            return brdf_sh::from_zonal(&lobe.zonal_coefficients(f), split_sum_energy(lobe));
+        }
         if self.centre().is_some() {
             // Gauss–Legendre is exact for polynomial lobes of degree < 2n − F; 1024 nodes cover
             // Phong exponents into the thousands.
@@ -217,6 +243,16 @@ impl Model {
             f *= 2;
         }
     }
+}
+
+/// ∫ k² dω of the split-sum kernel, on the lobe-adapted pieces of [`crate::ibl::ggx`]'s
+/// quadratures (width 2α in θ; the kernel vanishes past θ = π/2).
+fn split_sum_energy(lobe: &SplitSumLobe) -> f64 {
+    let width = 2.0 * lobe.ggx().alpha();
+    crate::ibl::ggx::lobe_rule(width, 0.0, PI / 2.0, PI / 16.0, 32, &[])
+        .iter()
+        .map(|&(t, w)| w * 2.0 * PI * lobe.kernel_at_angle(t).powi(2) * t.sin())
+        .sum()
 }
 
 /// Conservative residual-energy bound of App. B: with lighting and BRDF residual energies
@@ -298,5 +334,27 @@ mod tests {
         let (ti, to) = (0.6f64, std::f64::consts::PI - 0.6);
         let v = model.rho_hat(crate::sphere::direction(ti, 0.0), crate::sphere::direction(to, 1.0))[0];
         assert!((v - 9.0 / (2.0 * PI)).abs() < 1e-12, "{v}");
+    }
+
+    #[test]
+    fn ggx_is_prefiltered_with_the_split_sum_lobe_about_the_reflection_vector() {
+        let model = Model::new(Brdf::parse("ggx:roughness=0.5").unwrap(), true).unwrap();
+        assert_eq!(model.centre(), Some(Centre::Reflection));
+        // The lobe is the normalized split-sum kernel: ∫ k dω = 1 (Gauss–Legendre in cos γ).
+        let f = 24;
+        let by_nodes = brdf_sh::from_radial(|x| model.lobe(x), f, 2048);
+        let c = model.coefficients(f, 4);
+        assert_eq!((c.f, c.p), (f, 0));
+        assert!((by_nodes.get(0, 0, 0)[0] - 1.0).abs() < 1e-9, "√(4π) k_0 = ∫ k dω = {:?}", by_nodes.get(0, 0, 0));
+        // The lobe's own quadrature (ibl::ggx, in θ) against Gauss–Legendre in cos γ.
+        for l in 0..=f {
+            let (a, b) = (c.get(l, 0, 0)[0], by_nodes.get(l, 0, 0)[0]);
+            assert!((a - b).abs() < 1e-9, "l={l}: {a} vs {b}");
+        }
+        let rel = (c.total_energy - by_nodes.total_energy).abs() / by_nodes.total_energy;
+        assert!(rel < 1e-9, "energy {} vs {}", c.total_energy, by_nodes.total_energy);
+        // A narrow lobe still has k_0 = 1/√(4π): the quadrature follows its width.
+        let sharp = Model::new(Brdf::parse("ggx:roughness=0.02").unwrap(), true).unwrap().coefficients(8, 0);
+        assert!((sharp.get(0, 0, 0)[0] - 1.0).abs() < 1e-9);
     }
 }

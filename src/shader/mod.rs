@@ -8,7 +8,6 @@ pub mod lexer;
 pub mod noise;
 pub mod parser;
 pub mod report;
-pub mod rng;
 pub mod sampler;
 pub mod stage;
 
@@ -70,13 +69,13 @@ pub struct Shader {
 }
 
 /// A parameter's current value, for reports.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ParamValue {
     /// Name.
     pub name: String,
     /// Type name.
     #[serde(rename = "type")]
-    pub ty: &'static str,
+    pub ty: String,
     /// Value (1 or 3 numbers).
     pub value: Vec<f64>,
 }
@@ -140,7 +139,7 @@ impl Shader {
             .zip(&self.params)
             .map(|(p, v)| ParamValue {
                 name: p.name.clone(),
-                ty: p.ty.name(),
+                ty: p.ty.name().to_string(),
                 value: match v {
                     Value::F(x) => vec![*x],
                     Value::T(t) => t.to_vec(),

@@ -16,10 +16,10 @@
 //! g·d with gradient components in {−1, 0, 1}, at most two non-zero, and |dᵢ| ≤ 1, so
 //! |snoise| ≤ 2 in 2-D and 3-D and ≤ 1 in 1-D (gradients of magnitude ≤ 1).
 
-use super::rng::SplitMix64;
 use crate::affine::approx::{fade_point, fade_slack, UNIT_ROUNDOFF};
 use crate::affine::interval::up;
 use crate::affine::{Interval, Real};
+use crate::rng::SplitMix64;
 use std::sync::OnceLock;
 
 /// Most lattice cells evaluated one by one for a range.

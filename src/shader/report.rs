@@ -2,11 +2,11 @@
 //! the error histogram of the paper's Fig. 3, node and evaluation counts, and a check of the
 //! bounds against random point evaluations inside every leaf.
 
-use super::rng::SplitMix64;
 use super::sampler::{point_value, Domain, Node, Raster, Sampled};
 use super::{Shader, ShaderError};
+use crate::rng::SplitMix64;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize};
 
 /// Bin width of the error histogram (Fig. 3 uses 0 … 0.5).
 pub const HISTOGRAM_BIN: f64 = 0.025;
@@ -14,20 +14,29 @@ pub const HISTOGRAM_BIN: f64 = 0.025;
 pub const HISTOGRAM_BINS: usize = 20;
 
 /// Width statistics over pixels (the width of a pixel is the largest channel's upper − lower).
-#[derive(Clone, Debug, Serialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct WidthStats {
-    /// Median.
+    /// Median (`null` in JSON when unbounded).
+    #[serde(deserialize_with = "null_as_infinity")]
     pub median: f64,
-    /// 95th percentile.
+    /// 95th percentile (`null` in JSON when unbounded).
+    #[serde(deserialize_with = "null_as_infinity")]
     pub p95: f64,
     /// Maximum (`null` in JSON when unbounded).
+    #[serde(deserialize_with = "null_as_infinity")]
     pub max: f64,
     /// Mean over the pixels with finite width.
     pub mean: f64,
 }
 
+/// Reads a width back: JSON has no infinity, so serde_json writes an unbounded width (∞; NaN
+/// widths are counted as ∞ by [`width_stats`]) as `null`, and `null` reads back as ∞.
+pub(crate) fn null_as_infinity<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
+}
+
 /// Error histogram (Fig. 3): pixel counts per width bin.
-#[derive(Clone, Debug, Serialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Histogram {
     /// Bin width.
     pub bin_width: f64,
@@ -85,7 +94,7 @@ pub fn depth_histogram(leaves: &[Node], max_depth: u32) -> Vec<u64> {
 }
 
 /// Result of checking bounds against point evaluations.
-#[derive(Clone, Debug, Serialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Verification {
     /// Leaves checked (all of them).
     pub leaves: usize,

@@ -5,10 +5,10 @@
 //! random point samples per node instead (the paper's Monte-Carlo comparison, Table 1).
 
 use super::interp::Globals;
-use super::rng::SplitMix64;
 use super::{Shader, ShaderError};
 use crate::affine::{Affine, Interval, Real};
 use crate::progress::Progress;
+use crate::rng::SplitMix64;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 

@@ -7,7 +7,7 @@ use super::sampler::{self, Arith, Domain, Raster, SampleConfig};
 use super::{ParamValue, Shader, ShaderError};
 use crate::io::{Document, Provenance, RgbImage};
 use crate::progress::Progress;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// Document kind of the statistics.
@@ -64,7 +64,7 @@ pub struct Output {
 }
 
 /// The statistics body (`docs/formats/shader-stats.md`).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Stats {
     /// Shader name.
     pub shader: String,
@@ -106,7 +106,7 @@ pub struct Stats {
 }
 
 /// One row of the comparison table.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct CompareRow {
     /// affine, interval or point.
     pub arith: String,
@@ -116,11 +116,14 @@ pub struct CompareRow {
     pub leaves: usize,
     /// Shader evaluations.
     pub evaluations: u64,
-    /// Median per-pixel width.
+    /// Median per-pixel width (`null` in JSON when unbounded).
+    #[serde(deserialize_with = "super::report::null_as_infinity")]
     pub median_width: f64,
-    /// 95th percentile.
+    /// 95th percentile (`null` when unbounded).
+    #[serde(deserialize_with = "super::report::null_as_infinity")]
     pub p95_width: f64,
-    /// Maximum.
+    /// Maximum (`null` when unbounded).
+    #[serde(deserialize_with = "super::report::null_as_infinity")]
     pub max_width: f64,
     /// Wall-clock seconds.
     pub seconds: f64,

@@ -1,6 +1,6 @@
 //! What the integration tests share: a stage's binary, one synthetic sky (and any lat-long map
-//! of a function), writing images as PFM or EXR, the prefilter → render chain, and reading JSON
-//! outputs into the library's types.
+//! of a function), one set of normals, writing images as PFM or EXR, the prefilter → render
+//! chain, and reading JSON outputs into the library's types.
 
 // Each test binary compiles this module and uses a part of it.
 #![allow(dead_code)]
@@ -26,6 +26,17 @@ pub fn bin_path(stage: &str) -> PathBuf {
 /// running process (signals, pipes).
 pub fn process(stage: &str) -> std::process::Command {
     std::process::Command::new(bin_path(stage))
+}
+
+/// `n` unit normals on a Fibonacci spiral (z uniform, golden-angle steps in φ), as f32.
+pub fn spiral_normals(n: usize) -> Vec<[f32; 3]> {
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let (r, phi) = ((1.0 - z * z).sqrt(), i as f64 * 2.399_963_229_728_653);
+            [(r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32]
+        })
+        .collect()
 }
 
 /// A lat-long image of `f(direction)` at the texel centres.

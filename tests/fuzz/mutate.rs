@@ -4,7 +4,7 @@
 //! and manifest lines, BRDF spec grammar). Each takes a seeded generator, so a run is
 //! reproducible from its seed.
 
-pub use prtkit::shader::rng::SplitMix64 as Rng;
+pub use prtkit::rng::SplitMix64 as Rng;
 
 /// Integers that break size arithmetic: zero, one, sign and width boundaries, and sizes just
 /// past prtkit's ceilings.
