@@ -59,6 +59,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         resolution: None,
         cell_samples: 2,
         normal_table: (32, 16),
+        bright: prtkit::envmap::bright::BrightRule::Auto,
     };
     config.compare = Some((reference_file.display().to_string(), reference.clone()));
     config.panel = Some(vec![PanelItem { label: "reference".into(), image: Some(reference) }]);

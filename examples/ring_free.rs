@@ -54,10 +54,14 @@ fn main() -> anyhow::Result<()> {
         let name = probe_name(probe);
         for spec in BRDFS {
             let brdf = Brdf::parse(spec)?;
-            let views: &[(&str, DVec3)] =
-                if spec.starts_with("phong") { &[("any", DVec3::Z)] } else { &[("+Z", DVec3::Z), ("grazing", grazing)] };
+            let views: &[(&str, DVec3)] = if spec.starts_with("phong") {
+                &[("any", DVec3::Z)]
+            } else {
+                &[("+Z", DVec3::Z), ("grazing", grazing)]
+            };
             for &(view_name, view) in views {
-                let reference = reference(&map, &brdf, view, &Path::new(cache).join(format!("{name}-{spec}-{view_name}.exr")))?;
+                let reference =
+                    reference(&map, &brdf, view, &Path::new(cache).join(format!("{name}-{spec}-{view_name}.exr")))?;
                 let (default, default_s, f_b, p_b) = bake(&map, &brdf, view, defaults)?;
                 let (_, paper_s, ..) = bake(&map, &brdf, view, paper)?;
                 let (m, _) = compare(&default, &reference, &[])?;
@@ -108,7 +112,16 @@ fn main() -> anyhow::Result<()> {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn row(probe: &str, spec: &str, view: &str, f_b: usize, p_b: usize, m: &Metrics, default_s: f64, paper_s: f64) -> String {
+fn row(
+    probe: &str,
+    spec: &str,
+    view: &str,
+    f_b: usize,
+    p_b: usize,
+    m: &Metrics,
+    default_s: f64,
+    paper_s: f64,
+) -> String {
     format!(
         "| {probe} | `{spec}` | {view} | {f_b} | {p_b} | {:.2} % | {:.2} % | {:.2} % ({}, {}) | {:.2} % | {default_s:.3} | {paper_s:.3} | {:.1}× |",
         100.0 * m.negative_fraction,
@@ -141,7 +154,12 @@ fn defaults(config: Config) -> Config {
 }
 
 fn paper(config: Config) -> Config {
-    Config { order_rule: OrderRule::Energy, bright: prtkit::envmap::bright::BrightRule::Off, window: Window::None, ..config }
+    Config {
+        order_rule: OrderRule::Energy,
+        bright: prtkit::envmap::bright::BrightRule::Off,
+        window: Window::None,
+        ..config
+    }
 }
 
 /// One bake of the reflection map for `view` at 256×128: (map, seconds, F_B, P_B).

@@ -354,6 +354,7 @@ fn render_library_and_binary_write_the_same_bytes() {
             resolution: None,
             cell_samples: 2,
             normal_table: (32, 16),
+            bright: prtkit::envmap::bright::BrightRule::Auto,
         },
         compare: None,
         panel: None,

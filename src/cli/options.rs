@@ -252,3 +252,15 @@ pub fn read_sh_document(path: &Path) -> Result<crate::sh::ShCoeffs> {
     let doc = crate::sh::document::parse(&text).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     Ok(doc.body.coeffs())
 }
+
+/// `auto`, `off` or a luminance threshold.
+pub fn parse_bright(s: &str) -> Result<crate::envmap::bright::BrightRule, String> {
+    match s {
+        "auto" => Ok(crate::envmap::bright::BrightRule::Auto),
+        "off" => Ok(crate::envmap::bright::BrightRule::Off),
+        v => match v.parse::<f64>() {
+            Ok(t) if t.is_finite() && t > 0.0 => Ok(crate::envmap::bright::BrightRule::Threshold(t)),
+            _ => Err(format!("expected auto, off or a positive luminance threshold, got {s:?}")),
+        },
+    }
+}

@@ -44,6 +44,7 @@ impl Args {
                     resolution: self.factor_resolution,
                     cell_samples: self.cell_samples,
                     normal_table: self.normal_table,
+                    bright: self.bright,
                 }
             }
             ShadingArg::Reference => Shading::Reference { integrand: self.integrand },

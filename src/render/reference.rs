@@ -41,6 +41,17 @@ impl<'a> Reference<'a> {
                 texels.push((t.dir, t.solid_angle, t.rgb.map(|v| v as f64)));
             }
         });
+        Self::from_texels(texels, brdf, integrand, scene)
+    }
+
+    /// The same sum over given texels (direction, solid angle, radiance): the bright sources a
+    /// factored render shades exactly.
+    pub fn from_texels(
+        texels: Vec<(DVec3, f64, [f64; 3])>,
+        brdf: Brdf,
+        integrand: Integrand,
+        scene: &'a Scene,
+    ) -> Result<Self, String> {
         let model = match integrand {
             Integrand::Prefilter => Some(Model::new(brdf.clone(), true).map_err(|e| e.to_string())?),
             Integrand::BrdfCosine => None,

@@ -9,6 +9,7 @@ use super::reference::{Integrand, Reference};
 use super::reflection::ShrmShader;
 use super::{render, Camera, Frame, Scene, Shade};
 use crate::brdf::Brdf;
+use crate::envmap::bright::{split, BrightRule};
 use crate::envmap::EnvMap;
 use crate::factor::{Channel, Domain, Factorization, Method, Sampling};
 use crate::io::{Document, Provenance, RgbImage};
@@ -59,6 +60,8 @@ pub enum Shading {
         cell_samples: usize,
         /// Size of the lat-long table of normals (sphere).
         normal_table: (usize, usize),
+        /// Bright sources apart: shaded exactly, the remainder through the factors.
+        bright: BrightRule,
     },
     /// Ground truth: a sum over every environment texel.
     Reference {
@@ -181,9 +184,31 @@ pub struct Summary {
     /// K and the energy of K terms (factored).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub terms: Option<(usize, f64)>,
+    /// The bright sources shaded exactly (factored).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bright: Option<BrightShare>,
     /// Metrics against the reference, if compared.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub metrics: Option<Metrics>,
+}
+
+/// The bright texels a factored render shades exactly, and their share of the map's energy.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct BrightShare {
+    /// Texels shaded exactly.
+    pub texels: usize,
+    /// Their excess over the threshold, as a share of the map's radiant energy.
+    pub energy_fraction: f64,
+}
+
+/// Two shaders' radiance added: the smooth part and the bright sources' exact part.
+struct Sum<'a>(&'a dyn Shade, &'a dyn Shade);
+
+impl Shade for Sum<'_> {
+    fn shade(&self, hit: &super::Hit, wo: glam::DVec3) -> [f64; 3] {
+        let (a, b) = (self.0.shade(hit, wo), self.1.shade(hit, wo));
+        [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+    }
 }
 
 /// Errors of the stage.
@@ -233,6 +258,7 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
         orders: None,
         epsilon_achieved: None,
         terms: None,
+        bright: None,
         metrics: None,
     };
     let (frame, label) = match &config.shading {
@@ -264,7 +290,7 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 ShrmShader::new(shrm.clone(), body.parameterization == "normal", config.camera.view_direction());
             (render(scene, &config.camera, env, &shader, progress), format!("SHRM F={} P={}", body.f_b, body.p_b))
         }
-        Shading::Factored { terms, factors, resolution, cell_samples, normal_table } => {
+        Shading::Factored { terms, factors, resolution, cell_samples, normal_table, bright } => {
             if *terms == 0 {
                 return Err(bad("--terms must be at least 1".into()));
             }
@@ -315,9 +341,16 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
             };
             let energy = f.cumulative_energy().get(terms - 1).copied().unwrap_or(1.0);
             summary.terms = Some((*terms, energy));
-            let shader = Factored::new(&f, *terms, cosine_in_factors, transport, env, *cell_samples);
+            // A truncated factorization spreads a sun 10⁴ times the sky into blotches and negative
+            // texels: the bright texels are shaded exactly, the smooth remainder by the factors.
+            let (remainder, sources) = split(env, *bright);
+            let shader = Factored::new(&f, *terms, cosine_in_factors, transport, &remainder, *cell_samples);
             let label = format!("K={}", shader.terms());
-            (render(scene, &config.camera, env, &shader, progress), label)
+            let exact = sources.texels.iter().map(|t| (t.dir, t.solid_angle, t.excess)).collect();
+            let exact = Reference::from_texels(exact, brdf.clone(), Integrand::BrdfCosine, scene).map_err(bad)?;
+            summary.bright = (!sources.is_empty())
+                .then_some(BrightShare { texels: sources.texels.len(), energy_fraction: sources.energy_fraction });
+            (render(scene, &config.camera, env, &Sum(&shader, &exact), progress), label)
         }
         Shading::Reference { integrand } => {
             let shader = Reference::new(env, brdf.clone(), *integrand, scene).map_err(bad)?;

@@ -2,7 +2,7 @@
 //! how they name the files.
 
 use crate::brdf::Brdf;
-use crate::cli::options::{parse_brdf, parse_direction, parse_output, parse_size};
+use crate::cli::options::{parse_brdf, parse_bright, parse_direction, parse_output, parse_size};
 use crate::cli::options::{Execution, Exposure};
 use crate::envmap::bright::BrightRule;
 use crate::envmap::Layout;
@@ -229,17 +229,5 @@ impl Args {
             (None, false) => Some(Output::Stdout),
             (None, true) => None,
         }
-    }
-}
-
-/// `auto`, `off` or a luminance threshold.
-fn parse_bright(s: &str) -> Result<BrightRule, String> {
-    match s {
-        "auto" => Ok(BrightRule::Auto),
-        "off" => Ok(BrightRule::Off),
-        v => match v.parse::<f64>() {
-            Ok(t) if t.is_finite() && t > 0.0 => Ok(BrightRule::Threshold(t)),
-            _ => Err(format!("expected auto, off or a positive luminance threshold, got {s:?}")),
-        },
     }
 }

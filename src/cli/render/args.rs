@@ -91,6 +91,13 @@ pub struct Args {
     #[arg(long, value_parser = parse_size, default_value = "128x64")]
     pub normal_table: (usize, usize),
 
+    /// factored: bright sources apart: texels of compact, very bright sources (the sun) are
+    /// shaded exactly with the BRDF (and visibility), the rest through the factorization.
+    /// auto (the threshold from the map's histogram, docs/prefilter.md), off (the paper's
+    /// method), or a luminance threshold.
+    #[arg(long, value_name = "auto|off|Y", default_value = "auto", value_parser = crate::cli::options::parse_bright)]
+    pub bright: crate::envmap::bright::BrightRule,
+
     /// reference: `brdf-cosine` (the rendering equation, ρ max(n·ω,0) V) or `prefilter` (the
     /// ρ̂ the prefilter represents: Phong's lobe about R on the whole sphere, §6.3).
     #[arg(long, value_enum, default_value_t = Integrand::BrdfCosine)]
