@@ -23,7 +23,7 @@ use prtkit::prefilter::stage::{self, Config, MapRequest, Method};
 use prtkit::progress::NoProgress;
 use prtkit::sh::window::Window;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// The acceptance figures of the table.
@@ -181,7 +181,7 @@ fn bake(
 }
 
 /// The angular reference at ε = 0.001, cached in `file`.
-fn reference(map: &EnvMap, brdf: &Brdf, view: DVec3, file: &PathBuf) -> anyhow::Result<RgbImage> {
+fn reference(map: &EnvMap, brdf: &Brdf, view: DVec3, file: &Path) -> anyhow::Result<RgbImage> {
     if let Ok(image) = read_image(file) {
         return Ok(image);
     }
