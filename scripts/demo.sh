@@ -27,12 +27,11 @@ say "2. sh-project: SH coefficients for ε = 1 %, reconstruction and irradiance"
     > "$out/sh-project.summary.json"
 
 say "3. prefilter: Phong s=32 reflection map; microfacet (σ = 0.2) SHRM and two views"
-# The sky's sun is 10^4 times brighter than the ground: at the order the BRDF-energy criterion
-# gives (F_B = 12 at ε = 1 %), truncation rings show in the dark half (docs/prefilter.md), so the
-# Phong maps use F_B = 32, where the s = 32 kernel exp(-l²/2s) has fallen to 1e-7.
-"$bin/prefilter" "$out/sky.exr" --brdf phong:s=32 --order 32 --reflection-map "$out/phong32.exr" \
+# Defaults throughout: orders from the per-texel rule for this lighting, the sun filtered in
+# angle apart from the SH remainder, the nonneg window (docs/prefilter.md, "Ring-free bakes").
+"$bin/prefilter" "$out/sky.exr" --brdf phong:s=32 --reflection-map "$out/phong32.exr" \
     --reflection-map "$out/phong32.png" --exposure -2 -o "$out/phong32.shrm.json" -q
-"$bin/prefilter" "$out/sky.exr" --brdf torrance-sparrow:sigma=0.2 --no-cosine --epsilon 0.03 \
+"$bin/prefilter" "$out/sky.exr" --brdf torrance-sparrow:sigma=0.2 --size 256x128 \
     --shrm "$out/microfacet.shrm.exr" --view 0,0,1 --reflection-map "$out/microfacet-top.png" \
     --view 1,0,0.2 --reflection-map "$out/microfacet-side.png" --exposure -2 -o "$out/microfacet.shrm.json" -q
 
@@ -42,7 +41,7 @@ say "4. count-terms: in-out BRDF terms for the demo materials (measured by SVD)"
 "$bin/count-terms" --brdf phong:s=32 --brdf torrance-sparrow:sigma=0.2 --resolution 40 >&2
 
 say "5. render: a Phong s=32 sphere from the SHRM next to the reference (panel.png)"
-"$bin/prefilter" "$out/sky.exr" --brdf phong:s=32 --order 32 --shrm "$out/phong32.shrm.exr" -o "$out/phong32-render.shrm.json" -q
+"$bin/prefilter" "$out/sky.exr" --brdf phong:s=32 --shrm "$out/phong32.shrm.exr" -o "$out/phong32-render.shrm.json" -q
 # The reference integrates what the SHRM represents (Phong's lobe about R, R&H 2002 §6.3).
 "$bin/render" "$out/sky.exr" --brdf phong:s=32 --res 128x128 --eye 0,-4,0.8 --fov 30 --integrand prefilter \
     -o "$out/ref.exr" -q

@@ -13,6 +13,13 @@
 //! **Synthesis.** Reconstructions and irradiance maps are synthesized with a window
 //! ([`super::window`]); the default `nonneg` leaves a non-negative map alone and otherwise
 //! applies the gentlest heat window that makes it non-negative. The coefficients stay raw.
+//!
+//! **Reconstruction, bright sources apart.** At any finite order a sun rings (Gibbs), and no
+//! window removes rings 10⁴ times the ground's radiance without blurring the sky away. So the
+//! reconstruction is the map as prtkit's bakes represent it: the order-F expansion of the map
+//! with its compact bright sources clipped, plus those sources' excess put back texel by texel
+//! (energy kept). The irradiance map needs no such care: the clamped cosine's coefficients fall
+//! as l⁻⁵/² and ring far below the map's detail.
 
 use super::document::{OrderSelection, ShBody, SourceMap, Synthesis, FORMAT, VERSION};
 use super::project::{project_choosing_order, OrderChoice, SelectError};
@@ -148,7 +155,10 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
         let (w, h) = image_size(map, coeffs.order, config.size);
         synthesis = Some(Synthesis { window: config.window, size: [w, h], reconstruction_t: None, irradiance_t: None });
         if config.reconstruction {
-            reconstruction = Some(windowed_synthesis(coeffs, &vec![1.0; coeffs.order + 1], config.window, w, h)?);
+            let smooth = crate::sh::project::project(&clipped, coeffs.order, progress).map_err(|e| select(e.into()))?;
+            let (mut image, t) = windowed_synthesis(&smooth, &vec![1.0; coeffs.order + 1], config.window, w, h)?;
+            add_texels(&mut image, &bright);
+            reconstruction = Some((image, t));
         }
         if config.irradiance {
             let cosine: Vec<f64> = (0..=coeffs.order).map(convolve::clamped_cosine).collect();
@@ -227,6 +237,22 @@ fn windowed_synthesis(
         min,
     );
     Ok((found.map, Some(found.t)))
+}
+
+/// Adds bright texels' excess to a lat-long image, each into the texel its direction falls in,
+/// scaled by the ratio of solid angles so the image keeps their energy.
+fn add_texels(image: &mut RgbImage, bright: &crate::envmap::bright::BrightSources) {
+    let grid = crate::sphere::LatLong::new(image.width, image.height);
+    for t in &bright.texels {
+        let (fx, fy) = grid.position(t.dir);
+        let x = (fx.floor().max(0.0) as usize).min(image.width - 1);
+        let y = (fy.floor().max(0.0) as usize).min(image.height - 1);
+        let scale = t.solid_angle / grid.row_solid_angle(y);
+        let px = &mut image.pixels[y * image.width + x];
+        for c in 0..3 {
+            px[c] += (t.excess[c] * scale) as f32;
+        }
+    }
 }
 
 /// The lat-long image size: as asked, else the input's for a lat-long input wide enough for the
