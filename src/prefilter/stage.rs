@@ -273,7 +273,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
             if config.orders.is_some() {
                 return Err(Error::Angular("takes no --order: it uses no spherical harmonics (ε is its truncation)"));
             }
-            let latlong = as_latlong(env)?;
+            let latlong = hybrid::as_latlong(env)?;
             // No SH, so no F_B to size the grid by: the input's own lat-long grid by default.
             let size = config.size.unwrap_or((latlong.image().width, latlong.image().height));
             let t = Instant::now();
@@ -393,15 +393,6 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
     })
 }
 
-/// The angular reference integrates lat-long maps: other layouts are resampled at a resolution
-/// that keeps their texel count.
-fn as_latlong(env: &EnvMap) -> Result<EnvMap, EnvMapError> {
-    if env.layout() == Layout::LatLong {
-        return Ok(env.clone());
-    }
-    let s = env.max_order().max(16);
-    envmap::resample(env, Layout::LatLong, 2 * s, s, 3)
-}
 
 /// A lat-long image in the output layout (a cross is resampled at 4n × 3n, n = H/2).
 fn to_output_layout(image: &RgbImage, layout: Layout) -> Result<RgbImage, EnvMapError> {
