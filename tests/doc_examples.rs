@@ -2,8 +2,8 @@
 //!
 //! Each fenced ```` ```sh ```` block of `README.md` and `docs/**/*.md` is run by `bash` with
 //! `set -euo pipefail`, as a user would paste it, in a fresh scratch directory that holds what a
-//! clone holds: `testdata/` (the project's), `target/release/` (the binaries this test was built
-//! with) and `../shared/testdata` (the external data, when present). The binaries are on `PATH`,
+//! clone holds: `testdata/` (the project's), `examples/bake/`, `target/release/` (the binaries
+//! this test was built with) and `../shared/testdata` (the external data, when present). The binaries are on `PATH`,
 //! as `docs/cli.md` says to put them. A block passes when it exits 0 without a panic; its outputs
 //! are the stages' own business (their tests check the numbers).
 //!
@@ -16,6 +16,8 @@
 //! Run only with `PRTKIT_DOC_EXAMPLES=all`: the few examples in [`SLOW`], which take minutes
 //! (CI's whole suite must stay under 30 minutes). A block that calls a tool not on `PATH` (`jq`,
 //! `cmft`) or reads `../shared/testdata` when it is absent is skipped with a message.
+
+mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -156,6 +158,8 @@ fn scratch(root: &Path, bin_dir: &Path, shared: &Path) -> PathBuf {
     std::fs::create_dir_all(work.join("target")).unwrap();
     symlink(repo().join("testdata"), work.join("testdata")).unwrap();
     symlink(bin_dir, work.join("target/release")).unwrap();
+    // Copied, not linked: docs/bake.md's make writes its outputs beside the Makefile.
+    common::copy_tree(&repo().join("examples/bake"), &work.join("examples/bake"), &["out"]);
     if shared.is_dir() {
         symlink(shared, root.join("shared")).unwrap();
     }
