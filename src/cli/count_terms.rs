@@ -10,7 +10,7 @@ use crate::brdf::Brdf;
 use crate::factor::count::{self, CountConfig, Material};
 use crate::factor::{manifest, plot};
 use crate::io::Output;
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 pub use args::*;
 
 impl TryFrom<&Args> for CountConfig {
@@ -46,11 +46,11 @@ impl Args {
             })
             .collect();
         if let Some(path) = &self.manifest {
-            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-            let base = path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
-            for e in manifest::parse(&text, &path.display().to_string(), &base)? {
-                let brdf =
-                    e.spec.load().with_context(|| format!("{}:{}: material {}", path.display(), e.line, e.name))?;
+            // The library's reader (within the document ceiling) and loader (errors at the
+            // manifest's line and column).
+            let file = path.display().to_string();
+            for e in manifest::read(path)? {
+                let brdf = e.load(&file)?;
                 out.push(Material { name: e.name, brdf, channel, budget: e.budget.or(budget) });
             }
         }

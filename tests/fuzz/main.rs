@@ -48,9 +48,6 @@ struct Plan {
 /// check until the CLI uses the library's way (each names its fix; remove the entry with it):
 /// (binary, target, words of the message).
 const KNOWN_CLI_ISSUES: &[(&str, &str, &str)] = &[
-    // cli/count_terms.rs loads manifest entries with spec.load(); Entry::load(manifest) names
-    // the manifest line.
-    ("count-terms", "manifest", "invalid MERL BRDF file"),
     // render/reflection.rs reads the SHRM's EXR with io::read_bytes; io::document::
     // read_named_layers names the document first.
     ("render", "shrm", "No such file or directory"),
