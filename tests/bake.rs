@@ -38,13 +38,8 @@ fn clone() -> tempfile::TempDir {
 
 /// `make ARGS` in the clone's bake directory, with the stages on PATH.
 fn make(root: &Path, args: &[&str]) -> Command {
-    let bin_dir = Path::new(env!("CARGO_BIN_EXE_prtkit")).parent().unwrap();
-    let path = std::env::join_paths(
-        std::iter::once(bin_dir.to_owned()).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())),
-    )
-    .unwrap();
     let mut cmd = Command::new("make");
-    cmd.args(args).current_dir(root.join("examples/bake")).env("PATH", path);
+    cmd.args(args).current_dir(root.join("examples/bake")).env("PATH", common::path_with_stages());
     cmd
 }
 

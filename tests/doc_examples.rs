@@ -168,12 +168,9 @@ fn scratch(root: &Path, bin_dir: &Path, shared: &Path) -> PathBuf {
 
 #[test]
 fn every_documented_example_runs_as_written() {
-    let bin_dir = Path::new(env!("CARGO_BIN_EXE_prtkit")).parent().unwrap().to_owned();
+    let bin_dir = common::bin_dir();
     let shared = repo().join("../shared");
-    let path = std::env::join_paths(
-        std::iter::once(bin_dir.clone()).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())),
-    )
-    .unwrap();
+    let path = common::path_with_stages();
     let mut failures = Vec::new();
     let mut ran = 0;
     for file in documents() {

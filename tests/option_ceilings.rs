@@ -42,11 +42,7 @@ fn every_row_of_the_option_ceilings_table_behaves_as_documented() {
     std::os::unix::fs::symlink(Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata"), dir.path().join("testdata"))
         .unwrap();
     let before = common::entries(dir.path());
-    let bin_dir = Path::new(env!("CARGO_BIN_EXE_prtkit")).parent().unwrap();
-    let path = std::env::join_paths(
-        std::iter::once(bin_dir.to_owned()).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())),
-    )
-    .unwrap();
+    let path = common::path_with_stages();
     let rows = rows();
     assert!(rows.len() >= 15, "{} rows", rows.len());
     for row in rows {

@@ -163,3 +163,14 @@ pub fn copy_tree(from: &Path, to: &Path, skip: &[&str]) {
         }
     }
 }
+
+/// The directory of the stages' binaries (the ones these tests run).
+pub fn bin_dir() -> PathBuf {
+    bin_path("prtkit").parent().expect("a binary is in a directory").to_owned()
+}
+
+/// `PATH` with the stages' binaries first, for scripts that call them by name.
+pub fn path_with_stages() -> std::ffi::OsString {
+    let rest = std::env::var_os("PATH").unwrap_or_default();
+    std::env::join_paths(std::iter::once(bin_dir()).chain(std::env::split_paths(&rest))).expect("PATH entries")
+}
