@@ -747,6 +747,9 @@ fn unwritable_paths(dir: &Path, name: &str) -> Vec<String> {
 fn all_or_nothing_an_unwritable_output_leaves_the_others_untouched() {
     let w = world();
     let wood = testdata("shaders/wood.sl");
+    let normals = w.root.join("normals.obj");
+    std::fs::write(&normals, "vn 0 0 1\nvn 0.6 0.8 0\n").unwrap();
+    let normals = text(&normals);
     // Each run with two outputs; each output in turn made unwritable.
     let cases = [
         (run("sh-project", &[&w.sky, "-F", "2"]), ("-o", "d.json"), ("--reconstruct", "r.exr")),
@@ -764,6 +767,7 @@ fn all_or_nothing_an_unwritable_output_leaves_the_others_untouched() {
         (run("sample-shader", &[&wood, "--res", "16x16"]), ("-o", "t.exr"), ("--stats", "s.json")),
         (run("render", &[&w.sky, "--res", "16x16"]), ("-o", "r.exr"), ("--png", "r.png")),
         (run("convert", &[&w.sky]), ("-o", "c.exr"), ("-o", "c.exr")),
+        (run("encode-normals", &[&normals]), ("-o", "n.codes"), ("--report", "n.json")),
     ];
     for (k, (base, first, second)) in cases.iter().enumerate() {
         for (kept, broken) in [(first, second), (second, first)] {
