@@ -11,7 +11,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-out/demo}
 mkdir -p "$out"
-cargo build --release --quiet
+# A fresh clone compiles prtkit and its dependencies first (a few minutes on 2 cores): say so,
+# and leave cargo's own progress on stderr so the wait does not look like a hang.
+printf '== 0. building prtkit (cargo build --release; a few minutes the first time)\n' >&2
+cargo build --release
 bin=target/release
 say() { printf '\n== %s\n' "$*" >&2; }
 

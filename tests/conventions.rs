@@ -638,11 +638,11 @@ fn brdf_specs_are_parsed_once_and_an_invalid_one_names_what_is_accepted() {
     }
 }
 
-/// Sends SIGINT (`kill -INT`) to a running child.
+/// Sends `signal` (`kill -INT`, `kill -TERM`) to a running child.
 #[cfg(unix)]
-fn interrupt(child: &std::process::Child) {
-    let status = std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
-    assert!(status.success(), "kill -INT failed");
+fn signal(child: &std::process::Child, signal: &str) {
+    let status = std::process::Command::new("kill").args([signal, &child.id().to_string()]).status().unwrap();
+    assert!(status.success(), "kill {signal} failed");
 }
 
 /// Waits for `child` at most `limit`, killing it after that.
@@ -660,30 +660,73 @@ fn wait_at_most(child: &mut std::process::Child, limit: Duration) -> std::proces
     }
 }
 
+/// `n` unit normals spread over the sphere (a Fibonacci spiral), as raw little-endian f32 xyz.
+fn raw_normals(n: usize) -> Vec<u8> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .flat_map(|i| {
+            let z = 1.0 - (2 * i + 1) as f64 / n as f64;
+            let (r, phi) = ((1.0 - z * z).sqrt(), golden * i as f64);
+            [r * phi.cos(), r * phi.sin(), z].map(|c| c as f32)
+        })
+        .flat_map(f32::to_le_bytes)
+        .collect()
+}
+
+/// Every stage, interrupted in the middle of a run of seconds by SIGINT and by SIGTERM: exit
+/// status 130, the existing output (`old.*`, given as one of the run's outputs) untouched, no
+/// new output, no temporary file.
 #[cfg(unix)]
 #[test]
-fn sigint_exits_130_leaving_outputs_untouched_and_no_temporary_file() {
+fn signals_exit_130_leaving_outputs_untouched_and_no_temporary_file() {
     let w = world();
-    let big_sky = text(&common::sky_pfm(&w.run_dir("big"), 256, 128));
-    // Runs of many seconds, interrupted after the first hundreds of milliseconds.
+    let big = w.run_dir("big");
+    let big_sky = text(&common::sky_pfm(&big, 512, 256));
+    let normals = big.join("normals.raw");
+    std::fs::write(&normals, raw_normals(6_000_000)).unwrap();
+    let eroded = testdata("shaders/eroded.sl");
+    // Runs of several seconds each (on 2 cores), the existing output first.
     let runs =
         [
-            run("render", &[&big_sky, "--res", "512x512", "--brdf", "phong:s=8", "-o", "old.exr", "--png", "new.png"]),
+            run("convert", &[&big_sky, "--size", "2048x1024", "--supersample", "4", "-o", "old.exr"]),
+            run("sh-project", &[&big_sky, "--order", "255", "-o", "old.json", "--size", "4096x2048"]).with(&[
+                "--irradiance",
+                "new.exr",
+                "--reconstruct",
+                "new2.exr",
+            ]),
+            run("prefilter", &[&big_sky, "--brdf", "torrance-sparrow:sigma=0.25", "-o", "old.json"])
+                .with(&["--reflection-map", "new.exr"]),
             run("factor-brdf", &["kajiya-kay:s=8", "--resolution", "60", "--method", "dense", "-o", "old.exr"])
                 .with(&["--factors", "new.exr", "--terms", "8"]),
+            run("count-terms", &["--brdf", "kajiya-kay:s=8", "--resolution", "60", "--method", "dense"])
+                .with(&["--plot", "old.svg"]),
+            run("encode-normals", &[&text(&normals), "--bits", "48", "-o", "old.codes"]).with(&[
+                "--report",
+                "new.json",
+                "--decoded",
+                "new.raw",
+            ]),
+            run("sample-shader", &[&eroded, "--res", "512x512", "--tolerance", "0", "-o", "old.exr"])
+                .with(&["--stats", "new.json"]),
+            run("render", &[&big_sky, "--res", "256x256", "--brdf", "phong:s=8", "-o", "old.exr", "--png", "new.png"]),
         ];
-    for r in runs {
-        let dir = w.run_dir(&format!("sigint-{}", r.stage));
-        std::fs::write(dir.join("old.exr"), b"old").unwrap();
-        let mut child = r.spawn_in(&dir);
-        std::thread::sleep(Duration::from_millis(600));
-        assert!(child.try_wait().unwrap().is_none(), "{r:?} finished before the interruption: make it longer");
-        interrupt(&child);
-        let status = wait_at_most(&mut child, Duration::from_secs(30));
-        assert_eq!(status.code(), Some(130), "{r:?}: {status:?}");
-        assert_eq!(std::fs::read(dir.join("old.exr")).unwrap(), b"old", "{r:?} replaced an existing output");
-        assert_eq!(entries(&dir), ["old.exr"], "{r:?} left an output");
-        assert!(temporaries(&dir).is_empty());
+    // Interrupted early, and later (mid-computation or while writing, as the stage's pace has it).
+    for (sig, after) in [("-INT", 500), ("-TERM", 1100)] {
+        for r in &runs {
+            let old = r.args.iter().find(|a| a.starts_with("old.")).unwrap();
+            let dir = w.run_dir(&format!("signal{sig}-{}", r.stage));
+            std::fs::write(dir.join(old), b"old").unwrap();
+            let mut child = r.spawn_in(&dir);
+            std::thread::sleep(Duration::from_millis(after));
+            assert!(child.try_wait().unwrap().is_none(), "{r:?} finished before {sig}: make it longer");
+            signal(&child, sig);
+            let status = wait_at_most(&mut child, Duration::from_secs(30));
+            assert_eq!(status.code(), Some(130), "{r:?} {sig}: {status:?}");
+            assert_eq!(std::fs::read(dir.join(old)).unwrap(), b"old", "{r:?} {sig} replaced an existing output");
+            assert_eq!(entries(&dir), [old.as_str()], "{r:?} {sig} left an output");
+            assert!(temporaries(&dir).is_empty());
+        }
     }
 }
 
@@ -765,6 +808,88 @@ fn all_or_nothing_an_unwritable_output_leaves_the_others_untouched() {
     assert_eq!(out.status.code(), Some(2), "{}", common::stderr(&out));
     assert_eq!(entries(&dir.join("faces")), ["px.exr", "pz.exr"]);
     assert_eq!(std::fs::read(dir.join("faces/px.exr")).unwrap(), b"old");
+}
+
+/// A full disk (`/dev/full`) as standard output and as an output file, for every stage: exit
+/// status 2 naming what could not be written, no panic, and (a file output on the full device
+/// beside another output) the other output not written either.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_disk_is_an_error_and_writes_nothing_else() {
+    let full = Path::new("/dev/full");
+    if !full.exists() {
+        eprintln!("skipped: no /dev/full");
+        return;
+    }
+    let w = world();
+    let wood = testdata("shaders/wood.sl");
+    let tri = w.root.join("tri.obj");
+    std::fs::write(&tri, "vn 0 0 1\nvn 0.6 0.8 0\n").unwrap();
+    let tri = text(&tri);
+    // (a run, the arguments that send its output to stdout, the flag of a file output, another
+    // output of the run)
+    let cases = [
+        (run("convert", &[&w.sky]), ["-o", "-"], ["-o", "full.exr"], None),
+        (run("sh-project", &[&w.sky]), ["-o", "-"], ["-o", "full.json"], Some(["--reconstruct", "r.exr"])),
+        (
+            run("prefilter", &[&w.sky, "--brdf", "phong:s=8", "--order", "4,0"]),
+            ["-o", "-"],
+            ["-o", "full.json"],
+            Some(["--shrm", "s.exr"]),
+        ),
+        (
+            run("factor-brdf", &["lambert", "--resolution", "8", "--terms", "1"]),
+            ["-o", "-"],
+            ["-o", "full.json"],
+            Some(["--factors", "f.exr"]),
+        ),
+        (
+            run("count-terms", &["--brdf", "lambert", "--resolution", "8"]),
+            ["--json", "-q"],
+            ["--plot", "full.svg"],
+            None,
+        ),
+        (run("encode-normals", &[&tri]), ["--json", "-q"], ["-o", "full.codes"], Some(["--report", "n.json"])),
+        (
+            run("sample-shader", &[&wood, "--res", "16x16"]),
+            ["-o", "-"],
+            ["-o", "full.exr"],
+            Some(["--stats", "s.json"]),
+        ),
+        (run("render", &[&w.sky, "--res", "16x16"]), ["-o", "-"], ["-o", "full.exr"], Some(["--png", "r.png"])),
+    ];
+    // The full device under the names the stages tell formats by.
+    let devices = w.run_dir("devices");
+    for name in ["full.exr", "full.json", "full.svg", "full.codes"] {
+        std::os::unix::fs::symlink(full, devices.join(name)).unwrap();
+    }
+    for (base, to_stdout, [flag, device], other) in &cases {
+        // Standard output on the full device.
+        let r = base.with(to_stdout);
+        let dir = w.run_dir(&format!("full-stdout-{}", r.stage));
+        let out = process(r.stage)
+            .args(&r.args)
+            .current_dir(&dir)
+            .stdout(std::fs::OpenOptions::new().write(true).open(full).unwrap())
+            .output()
+            .unwrap();
+        let stderr = common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{r:?} > /dev/full: {stderr}");
+        assert!(stderr.contains("No space left on device"), "{r:?} > /dev/full: {stderr}");
+        assert!(entries(&dir).is_empty(), "{r:?} > /dev/full left {:?}", entries(&dir));
+        // A file output on the full device, beside another output.
+        let device = text(&devices.join(device));
+        let mut r = base.with(&[flag, &device]);
+        if let Some(other) = other {
+            r = r.with(other);
+        }
+        let dir = w.run_dir(&format!("full-file-{}", r.stage));
+        let out = r.output_in(&dir);
+        let stderr = common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{r:?}: {stderr}");
+        assert!(stderr.contains(&device) && stderr.contains("No space left"), "{r:?}: {stderr}");
+        assert!(entries(&dir).is_empty(), "{r:?} wrote {:?} beside the failed output", entries(&dir));
+    }
 }
 
 #[test]

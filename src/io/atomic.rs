@@ -160,37 +160,36 @@ impl OutputSet {
         Ok(())
     }
 
-    /// Renames every staged file into place, writes the in-place destinations, then standard
-    /// output. An interruption during the renames waits for them to finish.
+    /// Writes the in-place destinations (devices, FIFOs: a full disk fails here, before any
+    /// file is replaced), renames every staged file into place, then writes standard output
+    /// (last, so that a reader of the summary finds the files it names). An interruption during
+    /// the renames waits for them to finish.
     pub fn commit(mut self) -> Result<(), IoError> {
         let staged = std::mem::take(&mut self.staged);
-        self.created_dirs.clear();
-        let mut rest = Vec::new();
-        {
-            let mut list = pending();
-            let mut renames = Vec::new();
-            for item in staged {
-                match item {
-                    Staged::Renamed { temp, dest } => renames.push((temp, dest)),
-                    other => rest.push(other),
-                }
-            }
-            for (temp, dest) in renames {
-                let path: PathBuf = temp.to_path_buf();
-                list.retain(|p| *p != path);
-                temp.persist(&dest).map_err(|e| IoError::os(&dest, e.error))?;
-            }
-        }
-        for item in rest {
+        let (mut renames, mut stdout) = (Vec::new(), Vec::new());
+        for item in staged {
             match item {
                 Staged::InPlace { dest, bytes } => {
                     let mut file =
                         std::fs::OpenOptions::new().write(true).open(&dest).map_err(|e| IoError::os(&dest, e))?;
                     file.write_all(&bytes).and_then(|_| file.flush()).map_err(|e| IoError::os(&dest, e))?;
                 }
-                Staged::Stdout(bytes) => write_stdout(&bytes)?,
-                Staged::Renamed { .. } => unreachable!("renamed above"),
+                Staged::Renamed { temp, dest } => renames.push((temp, dest)),
+                Staged::Stdout(bytes) => stdout.push(bytes),
             }
+        }
+        // From here on the outputs are in place: directories made for them stay.
+        self.created_dirs.clear();
+        {
+            let mut list = pending();
+            for (temp, dest) in renames {
+                let path: PathBuf = temp.to_path_buf();
+                list.retain(|p| *p != path);
+                temp.persist(&dest).map_err(|e| IoError::os(&dest, e.error))?;
+            }
+        }
+        for bytes in stdout {
+            write_stdout(&bytes)?;
         }
         Ok(())
     }

@@ -157,3 +157,31 @@ pub fn temporaries(dir: &Path) -> Vec<PathBuf> {
     }
     found
 }
+
+/// Copies the directory tree `from` to `to`, except the entries named in `skip` (at any depth).
+pub fn copy_tree(from: &Path, to: &Path, skip: &[&str]) {
+    std::fs::create_dir_all(to).unwrap_or_else(|e| panic!("{}: {e}", to.display()));
+    for entry in std::fs::read_dir(from).unwrap_or_else(|e| panic!("{}: {e}", from.display())) {
+        let entry = entry.unwrap();
+        if skip.iter().any(|s| entry.file_name() == *s) {
+            continue;
+        }
+        let (src, dst) = (entry.path(), to.join(entry.file_name()));
+        if entry.file_type().unwrap().is_dir() {
+            copy_tree(&src, &dst, skip);
+        } else {
+            std::fs::copy(&src, &dst).unwrap_or_else(|e| panic!("{}: {e}", src.display()));
+        }
+    }
+}
+
+/// The directory of the stages' binaries (the ones these tests run).
+pub fn bin_dir() -> PathBuf {
+    bin_path("prtkit").parent().expect("a binary is in a directory").to_owned()
+}
+
+/// `PATH` with the stages' binaries first, for scripts that call them by name.
+pub fn path_with_stages() -> std::ffi::OsString {
+    let rest = std::env::var_os("PATH").unwrap_or_default();
+    std::env::join_paths(std::iter::once(bin_dir()).chain(std::env::split_paths(&rest))).expect("PATH entries")
+}

@@ -48,7 +48,13 @@ pub struct Args {
     pub emit_decoder: Option<shader::Language>,
     #[arg(long, help = "Reproduce Meyer et al. 2010, Table 1 at --bits: random + adversarial directions.")]
     pub table: bool,
-    #[arg(long, default_value_t = 10_000_000, help = "Random directions for --table.")]
+    // At most 10^9: the default 10^7 take ~12 s on 2 cores, so 10^9 about 20 minutes.
+    #[arg(
+        long,
+        default_value_t = 10_000_000,
+        value_parser = clap::value_parser!(u64).range(1..=1_000_000_000),
+        help = "Random directions for --table (at most 10^9)."
+    )]
     pub samples: u64,
     #[arg(long, default_value_t = 1, help = "Seed of the random directions for --table.")]
     pub seed: u64,
