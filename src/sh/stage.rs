@@ -147,7 +147,8 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
     if config.reconstruction || config.irradiance {
         let (w, h) = image_size(map, coeffs.order, config.size);
         synthesis = Some(Synthesis { window: config.window, size: [w, h], reconstruction_t: None, irradiance_t: None });
-        let kernels: [(&mut Option<(RgbImage, Option<f64>)>, bool, Vec<f64>); 2] = [
+        type Slot<'a> = &'a mut Option<(RgbImage, Option<f64>)>;
+        let kernels: [(Slot, bool, Vec<f64>); 2] = [
             (&mut reconstruction, config.reconstruction, vec![1.0; coeffs.order + 1]),
             (&mut irradiance, config.irradiance, (0..=coeffs.order).map(convolve::clamped_cosine).collect()),
         ];
