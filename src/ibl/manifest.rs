@@ -74,7 +74,7 @@ pub struct Level {
     pub source: String,
     /// Texel-rule sub-samples per axis (zonal), if any.
     pub rule_subsamples: Option<usize>,
-    /// Estimated cost of each method in kernel evaluations (the cost model's inputs).
+    /// Estimated seconds (one core) of each method: the cost model's inputs.
     pub estimated_cost: Option<Costs>,
     /// max relative error against the angular integral on the sampled texels (null: not
     /// measured, or r = 0).
@@ -89,7 +89,7 @@ pub struct Level {
     pub seconds: f64,
 }
 
-/// The cost model's estimates.
+/// The cost model's estimates, in seconds on one core.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Costs {
     /// Zonal path.
