@@ -126,7 +126,7 @@ fn levels_match_a_brute_force_integral_within_the_targets() {
     // RMS within 1 %, none beyond 5 %, no negative texel.
     let env = sky(64, 32);
     let img = env.image().clone();
-    for method in [MethodChoice::Auto, MethodChoice::Zonal] {
+    for method in [MethodChoice::Auto, MethodChoice::Zonal, MethodChoice::Angular] {
         let config = Config { method, ..small(32, 4) };
         let out = stage::run(&config, &env, &NoProgress).unwrap();
         let env_from_cube = config.world_from_prtkit().transpose();
