@@ -12,10 +12,11 @@
 //! - *the read-back*: B is smooth on the scale of the lobe; h ≤ w/[`INTERPOLATION_ROWS_PER_LOBE`].
 //!
 //! and at least [`MIN_ROWS`] rows, so that wide lobes still see where small bright sources are.
-//! The grid is the coarsest level of the input's box pyramid ([`LatLongPyramid`]: texels are
-//! exact means over their footprints, ∫ L dω is kept) with that many rows, or, when the input
-//! is coarser than the read-back needs, the input with every texel split f × f, which is the
-//! same piecewise-constant function (nothing is interpolated).
+//! The grid is the input box-resampled to that many rows (rounded up to a multiple of
+//! [`GRID_STEP`]; [`box_resample`]: texels are exact means over their footprints, ∫ L dω is
+//! kept), or the input itself, or — when the read-back needs more rows than the input has — the
+//! input with every texel split f × f, which is the same piecewise-constant function (nothing is
+//! interpolated).
 //!
 //! The filter keeps every texel whose centre lies within π/2 + 2h of R (the kernel vanishes
 //! beyond π/2: no truncation of the lobe) and integrates the kernel over each texel's extent by
@@ -54,88 +55,119 @@ pub const MIN_ROWS: usize = 128;
 /// Texel-rule tolerance: the rule may misplace at most this share of the kernel's weight.
 pub const RULE_TOLERANCE: f64 = 1e-4;
 
-/// A lat-long map and its box pyramid: each level halves both sides, each texel the
-/// solid-angle-weighted mean of its 2 × 2 children (the exact mean over its footprint).
+/// Working-grid heights are multiples of this (widths of twice it): FFT sizes with small factors.
+pub const GRID_STEP: usize = 16;
+
+/// A lat-long input and the working grids the zonal path filters it on.
 #[derive(Clone, Debug)]
-pub struct LatLongPyramid {
-    levels: Vec<RgbImage>,
+pub struct LatLongSource {
+    base: RgbImage,
 }
 
-impl LatLongPyramid {
-    /// The pyramid of a W × H lat-long image, halving while both sides are even and the result
-    /// has at least 8 rows.
+impl LatLongSource {
+    /// Wraps a W × H lat-long image.
     pub fn new(base: RgbImage) -> Self {
-        let mut levels = vec![base];
-        loop {
-            let last = &levels[levels.len() - 1];
-            if last.width % 2 == 1 || last.height % 2 == 1 || last.height / 2 < 8 {
-                break;
-            }
-            let next = halve(last);
-            levels.push(next);
-        }
-        LatLongPyramid { levels }
+        LatLongSource { base }
     }
 
-    /// The levels, finest first.
-    pub fn levels(&self) -> &[RgbImage] {
-        &self.levels
-    }
-
-    /// The input (finest level).
+    /// The input.
     pub fn base(&self) -> &RgbImage {
-        &self.levels[0]
+        &self.base
     }
 
     /// Rows of the working grid for a lobe of width `lobe_width` radians (module docs).
     fn working_rows(&self, lobe_width: f64) -> usize {
-        let source = ((ROWS_PER_LOBE * PI / lobe_width).ceil() as usize).min(self.base().height);
+        let source = ((ROWS_PER_LOBE * PI / lobe_width).ceil() as usize).min(self.base.height);
         let interpolation = (INTERPOLATION_ROWS_PER_LOBE * PI / lobe_width).ceil() as usize;
         source.max(interpolation).max(MIN_ROWS)
     }
 
-    /// The working grid for a lobe of width `lobe_width` radians (see the module docs): the
-    /// coarsest pyramid level with enough rows, or the base with its texels split f × f.
-    pub fn working_grid(&self, lobe_width: f64) -> RgbImage {
+    /// The dimensions of [`Self::working_grid`]: the input's; a box resampling to the rows needed
+    /// (rounded up to a multiple of [`GRID_STEP`]) when that is coarser; or the input split an
+    /// integer number of ways when the read-back needs more rows than it has.
+    pub fn working_size(&self, lobe_width: f64) -> (usize, usize) {
+        let (w, h) = (self.base.width, self.base.height);
         let rows = self.working_rows(lobe_width);
-        if let Some(level) = self.levels.iter().rev().find(|l| l.height >= rows) {
-            return level.clone();
+        if rows > h {
+            let f = rows.div_ceil(h);
+            return (w * f, h * f);
         }
-        let base = self.base();
-        let f = rows.div_ceil(base.height);
-        RgbImage::from_fn(base.width * f, base.height * f, |x, y| base.get(x / f, y / f))
+        let rows = rows.div_ceil(GRID_STEP) * GRID_STEP;
+        if rows >= h {
+            return (w, h);
+        }
+        // The input's aspect kept, the width even.
+        let cols = ((w as f64 * rows as f64 / h as f64 / 2.0).round() as usize * 2).max(2);
+        (cols, rows)
     }
 
-    /// The dimensions [`Self::working_grid`] would have, without building it.
-    pub fn working_size(&self, lobe_width: f64) -> (usize, usize) {
-        let rows = self.working_rows(lobe_width);
-        match self.levels.iter().rev().find(|l| l.height >= rows) {
-            Some(l) => (l.width, l.height),
-            None => {
-                let f = rows.div_ceil(self.base().height);
-                (self.base().width * f, self.base().height * f)
-            }
+    /// The working grid for a lobe of width `lobe_width` radians (see the module docs).
+    pub fn working_grid(&self, lobe_width: f64) -> RgbImage {
+        let (w, h) = self.working_size(lobe_width);
+        let base = &self.base;
+        if (w, h) == (base.width, base.height) {
+            return base.clone();
         }
+        if h > base.height {
+            let f = h / base.height;
+            return RgbImage::from_fn(w, h, |x, y| base.get(x / f, y / f));
+        }
+        box_resample(base, w, h)
     }
 }
 
-/// One box-pyramid step of a lat-long image with exact row solid angles.
-fn halve(img: &RgbImage) -> RgbImage {
-    let grid = LatLong::new(img.width, img.height);
-    RgbImage::from_fn(img.width / 2, img.height / 2, |x, y| {
-        let (w0, w1) = (grid.row_solid_angle(2 * y), grid.row_solid_angle(2 * y + 1));
-        let mut sum = [0.0f64; 3];
-        for (yy, w) in [(2 * y, w0), (2 * y + 1, w1)] {
-            for xx in [2 * x, 2 * x + 1] {
-                let v = img.get(xx, yy);
-                for c in 0..3 {
-                    sum[c] += w * v[c] as f64;
-                }
+/// The overlaps of the cells of two partitions of one interval, given by their increasing
+/// boundaries `a` (source) and `b` (target): (target cell, source cell, overlap length).
+fn overlaps(a: &[f64], b: &[f64]) -> Vec<(usize, usize, f64)> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i + 1 < a.len() && j + 1 < b.len() {
+        let lo = a[i].max(b[j]);
+        let hi = a[i + 1].min(b[j + 1]);
+        if hi > lo {
+            out.push((j, i, hi - lo));
+        }
+        if a[i + 1] < b[j + 1] {
+            i += 1;
+        } else {
+            j += 1;
+        }
+    }
+    out
+}
+
+/// Resamples a lat-long image to a coarser W' × H' so that each texel is the exact mean radiance
+/// over its footprint: a lat-long texel is a product of an interval in φ and one in z = cos θ,
+/// in which the solid angle is dz dφ, so two texels overlap in the product of their intervals'
+/// overlaps and the mean is separable (columns, then rows). ∫ L dω is kept.
+pub fn box_resample(img: &RgbImage, width: usize, height: usize) -> RgbImage {
+    let (w, h) = (img.width, img.height);
+    let phi = |n: usize| (0..=n).map(|k| k as f64 / n as f64).collect::<Vec<_>>();
+    // z boundaries in increasing order: row 0 is the top, so these run from the bottom row up;
+    // −cos(πk/n) increases with k, and row k spans [−cos(πk/n), −cos(π(k+1)/n)] of −z.
+    let z = |n: usize| (0..=n).map(|k| -(PI * k as f64 / n as f64).cos()).collect::<Vec<_>>();
+    let columns = overlaps(&phi(w), &phi(width));
+    let (z_in, z_out) = (z(h), z(height));
+    let rows = overlaps(&z_in, &z_out);
+    let mut wide = vec![[0.0f64; 3]; h * width];
+    for y in 0..h {
+        for &(x_out, x_in, len) in &columns {
+            let v = img.get(x_in, y);
+            for c in 0..3 {
+                wide[y * width + x_out][c] += v[c] as f64 * len * width as f64;
             }
         }
-        let total = 2.0 * (w0 + w1);
-        [(sum[0] / total) as f32, (sum[1] / total) as f32, (sum[2] / total) as f32]
-    })
+    }
+    let mut out = vec![[0.0f64; 3]; height * width];
+    for &(y_out, y_in, len) in &rows {
+        let share = len / (z_out[y_out + 1] - z_out[y_out]);
+        for x in 0..width {
+            for c in 0..3 {
+                out[y_out * width + x][c] += wide[y_in * width + x][c] * share;
+            }
+        }
+    }
+    RgbImage { width, height, pixels: out.iter().map(|p| p.map(|v| v as f32)).collect() }
 }
 
 /// A filtered sphere on a lat-long grid, read by direction.
@@ -229,7 +261,7 @@ mod tests {
     use crate::progress::NoProgress;
 
     #[test]
-    fn pyramid_keeps_the_integral() {
+    fn box_resampling_keeps_the_integral_at_any_ratio() {
         let img = RgbImage::from_fn(64, 32, |x, y| [(x * y) as f32, 1.0, (x % 3) as f32]);
         let integral = |i: &RgbImage| -> [f64; 3] {
             let g = LatLong::new(i.width, i.height);
@@ -243,27 +275,42 @@ mod tests {
             }
             s
         };
-        let p = LatLongPyramid::new(img.clone());
-        assert_eq!(p.levels().len(), 3, "32 rows halve to 16 and 8");
-        let (a, b) = (integral(&img), integral(&p.levels()[2]));
-        for c in 0..3 {
-            assert!((a[c] / b[c] - 1.0).abs() < 1e-6, "{a:?} {b:?}");
+        let a = integral(&img);
+        for (w, h) in [(32, 16), (40, 20), (26, 13)] {
+            let r = box_resample(&img, w, h);
+            let b = integral(&r);
+            for c in 0..3 {
+                assert!((a[c] / b[c] - 1.0).abs() < 1e-6, "{w}x{h}: {a:?} {b:?}");
+            }
+            // A constant channel stays exactly constant.
+            assert!(r.pixels.iter().all(|p| (p[1] - 1.0).abs() < 1e-6));
         }
+        // Halving is the 2 × 2 mean weighted by the rows' solid angles.
+        let half = box_resample(&img, 32, 16);
+        let g = LatLong::new(64, 32);
+        let (w0, w1) = (g.row_solid_angle(6), g.row_solid_angle(7));
+        let want = (w0 * (img.get(10, 6)[0] + img.get(11, 6)[0]) as f64
+            + w1 * (img.get(10, 7)[0] + img.get(11, 7)[0]) as f64)
+            / (2.0 * (w0 + w1));
+        assert!((half.get(5, 3)[0] as f64 - want).abs() < 1e-4 * want, "{} vs {want}", half.get(5, 3)[0]);
     }
 
     #[test]
     fn working_grid_splits_texels_when_the_input_is_too_coarse() {
         let img = RgbImage::from_fn(32, 16, |x, y| [x as f32, y as f32, 0.0]);
-        let p = LatLongPyramid::new(img.clone());
+        let p = LatLongSource::new(img.clone());
         // A lobe of width 0.05 rad: the source needs no more than the input's 16 rows, the
         // read-back ⌈3π/0.05⌉ = 189: the input split 12 ways.
         let g = p.working_grid(0.05);
         assert_eq!((g.width, g.height), (384, 192));
         assert_eq!(p.working_size(0.05), (384, 192));
         assert_eq!(g.get(12 + 5, 24 + 7), img.get(1, 2));
-        // A wide lobe on a fine input: the coarsest pyramid level with MIN_ROWS rows.
-        let fine = LatLongPyramid::new(RgbImage::new(1024, 512));
+        // A fine input: the rows the lobe needs, rounded up to GRID_STEP, at least MIN_ROWS.
+        let fine = LatLongSource::new(RgbImage::new(1024, 512));
         assert_eq!(fine.working_size(2.0), (2 * MIN_ROWS, MIN_ROWS));
+        // w = 0.08: ⌈4π/0.08⌉ = 158 rows → 160.
+        assert_eq!(fine.working_size(0.08), (320, 160));
+        assert_eq!(fine.working_grid(0.08).height, 160);
     }
 
     #[test]

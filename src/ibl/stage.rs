@@ -23,7 +23,7 @@
 use super::angular::{AngularError, AngularOptions, AngularPrefilter};
 use super::cube::{CubeError, CubeMap, CubeMipChain, MAX_FACE_SIZE, WORLD_FROM_PRTKIT};
 use super::dfg::{DfgError, DfgTable, DfgVariant};
-use super::frequency::{self, FilteredSphere, LatLongPyramid};
+use super::frequency::{self, FilteredSphere, LatLongSource};
 use super::ggx::{GgxError, SplitSumLobe};
 use super::manifest::{self, Costs, IblBody, Level, ShBody};
 use super::reference::Reference;
@@ -376,8 +376,8 @@ const ANGULAR_SECONDS_PER_EVALUATION: f64 = 4.3e-8;
 pub const ANGULAR_OPTIONS: AngularOptions = AngularOptions { epsilon: 1e-4, texel_ratio: 1.0 / 256.0 };
 
 /// Estimated seconds (one core) of the two exact methods for one level.
-pub fn estimate_costs(pyramid: &LatLongPyramid, lobe: &SplitSumLobe, size: usize, base_size: usize) -> Costs {
-    let (w, h) = pyramid.working_size(2.0 * lobe.ggx().alpha());
+pub fn estimate_costs(source: &LatLongSource, lobe: &SplitSumLobe, size: usize, base_size: usize) -> Costs {
+    let (w, h) = source.working_size(2.0 * lobe.ggx().alpha());
     let zonal = ZONAL_SECONDS_PER_UNIT * frequency::zonal_cost(w, h);
     // Angular ([`ANGULAR_OPTIONS`]): 6n² output texels, each summing the source texels in its cone.
     let options = ANGULAR_OPTIONS;
@@ -437,7 +437,7 @@ struct Baked {
 /// The split-sum level of roughness r > 0 and face size n.
 fn bake_level(
     config: &Config,
-    pyramid: &LatLongPyramid,
+    latlong: &LatLongSource,
     base: &CubeMap,
     (k, size, r): (usize, usize, f64),
     progress: &dyn Progress,
@@ -445,7 +445,7 @@ fn bake_level(
     let start = Instant::now();
     let env_from_cube = config.world_from_prtkit().transpose();
     let lobe = SplitSumLobe::new(r)?;
-    let costs = estimate_costs(pyramid, &lobe, size, base.size());
+    let costs = estimate_costs(latlong, &lobe, size, base.size());
     let method = match config.method {
         MethodChoice::Auto => choose_method(&costs),
         MethodChoice::Zonal => Method::Zonal,
@@ -463,7 +463,7 @@ fn bake_level(
             (cube, format!("cube {0}x{0}", src.source_size), None)
         }
         _ => {
-            let grid = pyramid.working_grid(2.0 * lobe.ggx().alpha());
+            let grid = latlong.working_grid(2.0 * lobe.ggx().alpha());
             let filtered: FilteredSphere = frequency::filter(&grid, &lobe, progress)?;
             let cube = CubeMap::from_fn(size, |d| filtered.sample(env_from_cube * d))?;
             (cube, format!("latlong {}x{}", grid.width, grid.height), Some(filtered.rule_subsamples))
@@ -493,7 +493,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     let t0 = Instant::now();
     let mut timings = manifest::Timings::default();
     let latlong = working_latlong(config, env)?;
-    let pyramid = LatLongPyramid::new(latlong.image().clone());
+    let source = LatLongSource::new(latlong.image().clone());
     let env_from_cube = config.world_from_prtkit().transpose();
     timings.prepare = t0.elapsed().as_secs_f64();
 
@@ -530,12 +530,12 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
             for k in 1..levels {
                 let r = config.roughness_map.roughness(k, levels);
                 let size = config.size >> k;
-                baked.push(bake_level(config, &pyramid, &base, (k, size, r), progress)?);
+                baked.push(bake_level(config, &source, &base, (k, size, r), progress)?);
             }
             let specular_seconds = t_spec.elapsed().as_secs_f64();
             // Irradiance: the r = 1 lobe is the clamped cosine over π, so the level is E/π.
             let t_irr = Instant::now();
-            let mut irradiance = bake_level(config, &pyramid, &base, (0, config.irradiance_size, 1.0), progress)?;
+            let mut irradiance = bake_level(config, &source, &base, (0, config.irradiance_size, 1.0), progress)?;
             irradiance.level.roughness = 1.0;
             let sh = IrradianceSh::project(&latlong, config.world_from_prtkit());
             Ok((baked, irradiance, sh, specular_seconds, t_irr.elapsed().as_secs_f64()))
