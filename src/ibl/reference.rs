@@ -11,9 +11,10 @@
 //! working grid, no interpolation, none of the code of either bake path.
 //!
 //! A level is compared on a fixed, evenly strided set of its texels, with the errors pooled
-//! as in [`super::angular::AngularPrefilter::measure`]: the relative error ‖a − r‖/‖r‖ over the
-//! texels whose reference is above 1 % of the sampled mean.
+//! by [`LevelError::pool`]: the relative error ‖a − r‖/‖r‖ over the texels whose reference is
+//! above 1 % of the sampled mean.
 
+use super::angular::LevelError;
 use super::cube::{texel_direction, CubeMap};
 use super::ggx::SplitSumLobe;
 use crate::envmap::zonal::rule_for_kernel;
@@ -86,12 +87,11 @@ impl Reference {
                 (diff, norm)
             })
             .collect();
-        let floor = 0.01 * pairs.iter().map(|p| p.1).sum::<f64>() / pairs.len().max(1) as f64;
-        let rel: Vec<f64> = pairs.iter().filter(|p| p.1 > floor).map(|p| p.0 / p.1).collect();
+        let pooled = LevelError::pool(&pairs);
         Measured {
-            samples: pairs.len(),
-            max_rel_error: rel.iter().cloned().fold(0.0, f64::max),
-            rms_rel_error: (rel.iter().map(|e| e * e).sum::<f64>() / rel.len().max(1) as f64).sqrt(),
+            samples: pooled.samples,
+            max_rel_error: pooled.max_rel_error,
+            rms_rel_error: pooled.rms_rel_error,
             min_value,
         }
     }
