@@ -174,17 +174,19 @@ fn main() {
         }
         diff / total
     };
-    let mut best = (f64::INFINITY, DMat3::IDENTITY);
-    for mirror in [1.0, -1.0] {
+    let mut best = (f64::INFINITY, DMat3::IDENTITY, 0.0, false);
+    for mirror in [false, true] {
         for step in 0..1440 {
-            let p = DMat3::from_rotation_y((step as f64 * 0.25).to_radians())
-                * DMat3::from_diagonal(DVec3::new(mirror, 1.0, 1.0));
+            let turn = step as f64 * 0.25;
+            let p = DMat3::from_rotation_y(turn.to_radians())
+                * DMat3::from_diagonal(DVec3::new(if mirror { -1.0 } else { 1.0 }, 1.0, 1.0));
             let e = residual(0, p) + residual(levels - 1, p);
             if e < best.0 {
-                best = (e, p);
+                best = (e, p, turn, mirror);
             }
         }
     }
+    let (turn, mirrored) = (best.2, best.3);
     let p = best.1;
     let (match_l1, match_last) = (residual(0, p), residual(levels - 1, p));
     eprintln!("cmgen frame: ours·P with P = {p:?} (relative L1: level 0 {match_l1:.4}, last level {match_last:.4})");
@@ -205,7 +207,8 @@ fn main() {
          running); CPU is user + system of the process. Errors: each level against the same angular \
          integral of the input (`ibl::reference`) on {samples} texels at a fixed stride, relative \
          ‖a − r‖/‖r‖ over the texels above 1 % of the mean; cmgen's frame was matched to `ibl`'s \
-         by its level 0 over turns about +Y (0.25° steps) with and without a mirror: P = {p:?}; relative L1 after the match \
+         by its level 0 and last level over turns about +Y (0.25° steps) with and without a mirror: \
+         cmgen's direction = ours turned {turn}° about +Y{}; relative L1 after the match \
          {match_l1:.4} at level 0 (two resamplings of a detailed map differ at texel scale) and \
          {match_last:.4} at the last level.\n\n\
          | tool | wall s | CPU s |\n| --- | ---: | ---: |\n\
@@ -214,6 +217,7 @@ fn main() {
          | level | size | r | cmgen RMS | cmgen max | ibl RMS | ibl max |\n| ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
         cmgen,
         map.file_name().and_then(|s| s.to_str()).unwrap_or(""),
+        if mirrored { " after mirroring x" } else { "" },
         cm_wall / ibl_wall,
         cm_cpu / ibl_cpu.max(1e-9),
     );

@@ -191,7 +191,8 @@ impl CubeMap {
                     for i in 0..k {
                         let s = 2.0 * (c as f64 + (i as f64 + 0.5) / k as f64) / size as f64 - 1.0;
                         let t = 2.0 * (r as f64 + (j as f64 + 0.5) / k as f64) / size as f64 - 1.0;
-                        let w = (1.0 + s * s + t * t).powf(-1.5);
+                        let q = 1.0 + s * s + t * t;
+                        let w = 1.0 / (q * q.sqrt());
                         let v = env.lookup(env_from_cube * face_direction(face, s, t));
                         for ch in 0..3 {
                             sum[ch] += w * v[ch] as f64;
