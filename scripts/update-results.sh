@@ -16,6 +16,8 @@ if [ "${1:-}" != "--assemble" ]; then
   scripts/reproduce-fig6.sh
   scripts/reproduce-fig7.sh
   scripts/bench-render.sh
+  scripts/ibl-accuracy.sh
+  # scripts/bench-peers.sh (Filament's cmgen) is not run here: it installs a package.
 fi
 {
   echo "# Results"
@@ -25,7 +27,7 @@ fi
   echo "\`docs/results/*.md\`. Speeds are ratios measured in one run (the machine is shared and"
   echo "noisy); absolute times are for orientation only."
   echo
-  for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader render render-fig7 render-bench; do
+  for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader render render-fig7 render-bench ibl-accuracy peers; do
     f="docs/results/$section.md"
     if [ -f "$f" ]; then
       # Sections link their figures relative to docs/results/; this file lives in docs/.

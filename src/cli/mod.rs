@@ -8,6 +8,7 @@ pub mod convert;
 pub mod count_terms;
 pub mod encode_normals;
 pub mod factor_brdf;
+pub mod ibl;
 pub mod options;
 pub mod outputs;
 pub mod prefilter;

@@ -28,6 +28,8 @@ enum StageArgs {
     SampleShader(super::sample_shader::Args),
     /// Encode normal vectors at a bit budget and measure the exact angular error.
     EncodeNormals(super::encode_normals::Args),
+    /// Bake image-based lighting for glTF/PBR engines: GGX cube mips, irradiance, SH, DFG.
+    Ibl(super::ibl::Args),
     /// Render a sphere or mesh with a bake (SH, SHRM, factored) or the reference, and compare.
     Render(super::render::Args),
 }
@@ -42,6 +44,7 @@ pub fn main() -> ExitCode {
         StageArgs::CountTerms(args) => run(args),
         StageArgs::SampleShader(args) => run(args),
         StageArgs::EncodeNormals(args) => run(args),
+        StageArgs::Ibl(args) => run(args),
         StageArgs::Render(args) => run(args),
     }
 }

@@ -47,8 +47,10 @@ impl Face {
         ["px", "nx", "py", "ny", "pz", "nz"][self.index()]
     }
 
-    /// Cube-frame direction at face coordinates (s, t) ∈ [−1, 1]².
-    fn local_dir(self, s: f64, t: f64) -> DVec3 {
+    /// Cube-frame direction (not normalized) at face coordinates (s, t) ∈ [−1, 1]²: the one
+    /// face table of the crate (`ibl::cube` reads it too).
+    #[inline]
+    pub fn direction(self, s: f64, t: f64) -> DVec3 {
         match self {
             Face::PosX => DVec3::new(1.0, -t, -s),
             Face::NegX => DVec3::new(-1.0, -t, s),
@@ -64,7 +66,7 @@ impl Face {
 pub fn direction_at(face: Face, n: usize, px: f64, py: f64) -> DVec3 {
     let s = 2.0 * px / n as f64 - 1.0;
     let t = 2.0 * py / n as f64 - 1.0;
-    (WORLD_FROM_CUBE * face.local_dir(s, t)).normalize()
+    (WORLD_FROM_CUBE * face.direction(s, t)).normalize()
 }
 
 /// Solid angle subtended by the face rectangle from (0,0) to (a,b) on the plane at distance 1:
@@ -84,7 +86,13 @@ pub fn texel(face: Face, n: usize, x: usize, y: usize) -> (DVec3, f64) {
 
 /// The face a world direction hits and its face coordinates (s, t) ∈ [−1, 1]².
 pub fn face_coords(dir: DVec3) -> (Face, f64, f64) {
-    let d = WORLD_FROM_CUBE.transpose() * dir;
+    select_face(WORLD_FROM_CUBE.transpose() * dir)
+}
+
+/// The face a cube-frame direction selects and its face coordinates (s, t) ∈ [−1, 1]², by the
+/// major-axis rule of the Vulkan/GL cube samplers (ties go to X, then Y): the inverse of
+/// [`Face::direction`].
+pub fn select_face(d: DVec3) -> (Face, f64, f64) {
     let (ax, ay, az) = (d.x.abs(), d.y.abs(), d.z.abs());
     if ax >= ay && ax >= az {
         if d.x > 0.0 {

@@ -11,7 +11,7 @@ mod resample;
 pub mod stage;
 pub mod zonal;
 
-pub use cube::{Face, FACES};
+pub use cube::{select_face, Face, FACES};
 pub use layout::Layout;
 pub use load::{LoadError, LoadOptions, Loaded, NegativePolicy};
 pub use probe::WORLD_FROM_PROBE;

@@ -24,8 +24,12 @@
 //! per output row in the frequency domain: one inverse FFT per output row and channel. The cost is
 //! O(H_out·H_cone·(W log W + n²·W_cone)) instead of the direct O(H_out·W·N_cone·n²).
 //!
-//! **Determinism.** Every output row is computed by one thread, accumulating its source rows in
-//! ascending order: the result is bitwise the same for any number of threads.
+//! **Mirror symmetry.** Mirroring z maps output row y_o to H_out − 1 − y_o and source row y to
+//! H − 1 − y and keeps R·ω, so those two pairs share their kernel: output rows are computed in
+//! mirrored pairs, each kernel evaluated and transformed once for both (half the kernel work).
+//!
+//! **Determinism.** Every mirrored pair of output rows is computed by one thread, accumulating
+//! its source rows in a fixed order: the result is bitwise the same for any number of threads.
 //!
 //! [`zonal_filter_reference`] is the slow, obviously-correct form of the same sum (every texel,
 //! every sub-sample, directions from [`crate::sphere::direction`]); the tests hold the fast path
@@ -364,12 +368,29 @@ pub fn zonal_filter(
     let mut pixels = vec![[0.0; 3]; width * out_height];
     let mut row_weight = vec![0.0; out_height];
     progress.start("zonal filter", out_height as u64);
-    pixels.par_chunks_mut(width).zip(row_weight.par_iter_mut()).enumerate().for_each_init(
+    // North–south symmetry: mirroring z maps output row y_o to H_out − 1 − y_o and source row y
+    // to H − 1 − y and keeps R·ω, so the kernel of (y_o, y) is also that of the mirrored pair.
+    // Rows are taken in mirrored pairs; each kernel is evaluated and transformed once for both.
+    let half = out_height / 2;
+    let (top, bottom) = pixels.split_at_mut(half * width);
+    let (top_weight, bottom_weight) = row_weight.split_at_mut(half);
+    // Pairs (y_o, its mirror): bottom rows taken from the last; an odd middle row pairs with none.
+    type OutRow<'a> = (&'a mut [[f64; 3]], &'a mut f64);
+    let mut jobs: Vec<(usize, OutRow, Option<OutRow>)> = Vec::with_capacity(out_height - half);
+    let mut bottom_rows: Vec<OutRow> = bottom.chunks_mut(width).zip(bottom_weight.iter_mut()).collect();
+    for (y_out, (row, weight)) in top.chunks_mut(width).zip(top_weight.iter_mut()).enumerate() {
+        let mirror = bottom_rows.pop().expect("the bottom holds at least as many rows as the top");
+        jobs.push((y_out, (row, weight), Some(mirror)));
+    }
+    if let Some(middle) = bottom_rows.pop() {
+        jobs.push((half, middle, None));
+    }
+    jobs.into_par_iter().for_each_init(
         || RowScratch::new(&*forward, &*inverse, width),
-        |s, (y_out, (row, weight))| {
+        |s, (y_out, (row, weight), mirror)| {
             let theta_r = out_grid.row_theta(y_out);
             let (s_r, z_r) = theta_r.sin_cos();
-            s.acc.iter_mut().for_each(|a| a.fill(Complex::new(0.0, 0.0)));
+            s.acc.iter_mut().chain(s.acc_mirror.iter_mut()).for_each(|a| a.fill(Complex::new(0.0, 0.0)));
             let mut total = 0.0;
             for y in 0..height {
                 if !plan.pair_kernel((z_r, s_r), theta_r, y, &mut s.half) {
@@ -384,30 +405,42 @@ pub fn zonal_filter(
                     .process_with_scratch(&mut s.full, &mut s.kernel_spectrum, &mut s.forward_scratch)
                     .expect("sizes from the plan");
                 total += s.kernel_spectrum[0].re;
-                let source = &spectra[y * 3 * bins..(y + 1) * 3 * bins];
-                for c in 0..3 {
-                    let src = &source[c * bins..(c + 1) * bins];
-                    for ((a, l), k) in s.acc[c].iter_mut().zip(src).zip(&s.kernel_spectrum) {
-                        *a += l * k.re;
+                let sources = [(y, &mut s.acc), (height - 1 - y, &mut s.acc_mirror)];
+                for (source_row, acc) in sources.into_iter().take(if mirror.is_some() { 2 } else { 1 }) {
+                    let source = &spectra[source_row * 3 * bins..(source_row + 1) * 3 * bins];
+                    for c in 0..3 {
+                        let src = &source[c * bins..(c + 1) * bins];
+                        for ((a, l), k) in acc[c].iter_mut().zip(src).zip(&s.kernel_spectrum) {
+                            *a += l * k.re;
+                        }
                     }
                 }
             }
-            *weight = total;
             let scale = 1.0 / width as f64;
-            for c in 0..3 {
-                // The DC and Nyquist bins of a real signal's spectrum are real.
-                s.acc[c][0].im = 0.0;
-                if width % 2 == 0 {
-                    s.acc[c][bins - 1].im = 0.0;
-                }
-                inverse
-                    .process_with_scratch(&mut s.acc[c], &mut s.out, &mut s.inverse_scratch)
-                    .expect("sizes from the plan");
-                for (p, v) in row.iter_mut().zip(&s.out) {
-                    p[c] = v * scale;
+            let mut outputs = vec![(row, weight, &mut s.acc)];
+            let count = if let Some((mirror_row, mirror_weight)) = mirror {
+                outputs.push((mirror_row, mirror_weight, &mut s.acc_mirror));
+                2
+            } else {
+                1
+            };
+            for (row, weight, acc) in outputs {
+                *weight = total;
+                for c in 0..3 {
+                    // The DC and Nyquist bins of a real signal's spectrum are real.
+                    acc[c][0].im = 0.0;
+                    if width % 2 == 0 {
+                        acc[c][bins - 1].im = 0.0;
+                    }
+                    inverse
+                        .process_with_scratch(&mut acc[c], &mut s.out, &mut s.inverse_scratch)
+                        .expect("sizes from the plan");
+                    for (p, v) in row.iter_mut().zip(&s.out) {
+                        p[c] = v * scale;
+                    }
                 }
             }
-            progress.advance(1);
+            progress.advance(count);
         },
     );
     progress.finish();
@@ -420,6 +453,8 @@ struct RowScratch {
     full: Vec<f64>,
     kernel_spectrum: Vec<Complex<f64>>,
     acc: [Vec<Complex<f64>>; 3],
+    /// The accumulators of the mirrored output row.
+    acc_mirror: [Vec<Complex<f64>>; 3],
     out: Vec<f64>,
     forward_scratch: Vec<Complex<f64>>,
     inverse_scratch: Vec<Complex<f64>>,
@@ -432,6 +467,7 @@ impl RowScratch {
             full: forward.make_input_vec(),
             kernel_spectrum: forward.make_output_vec(),
             acc: [inverse.make_input_vec(), inverse.make_input_vec(), inverse.make_input_vec()],
+            acc_mirror: [inverse.make_input_vec(), inverse.make_input_vec(), inverse.make_input_vec()],
             out: inverse.make_output_vec(),
             forward_scratch: forward.make_scratch_vec(),
             inverse_scratch: inverse.make_scratch_vec(),

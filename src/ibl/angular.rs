@@ -135,6 +135,24 @@ pub struct LevelError {
     pub rms_rel_error: f64,
 }
 
+impl LevelError {
+    /// Pools (‖a − r‖, ‖r‖) pairs of sampled texels: relative errors over the texels whose
+    /// reference is above 1 % of the sampled mean (darker ones would make any error relative to
+    /// nearly nothing).
+    pub fn pool(pairs: &[(f64, f64)]) -> Self {
+        let floor = 0.01 * pairs.iter().map(|p| p.1).sum::<f64>() / pairs.len().max(1) as f64;
+        let rel: Vec<f64> = pairs.iter().filter(|p| p.1 > floor).map(|p| p.0 / p.1).collect();
+        let rms = (rel.iter().map(|e| e * e).sum::<f64>() / rel.len().max(1) as f64).sqrt();
+        LevelError {
+            samples: pairs.len(),
+            counted: rel.len(),
+            floor,
+            max_rel_error: rel.iter().cloned().fold(0.0, f64::max),
+            rms_rel_error: rms,
+        }
+    }
+}
+
 /// The angular prefilter over a mip pyramid of the input cube.
 pub struct AngularPrefilter {
     chain: CubeMipChain,
@@ -254,16 +272,7 @@ impl AngularPrefilter {
                 (diff, norm)
             })
             .collect();
-        let floor = 0.01 * pairs.iter().map(|p| p.1).sum::<f64>() / pairs.len().max(1) as f64;
-        let rel: Vec<f64> = pairs.iter().filter(|p| p.1 > floor).map(|p| p.0 / p.1).collect();
-        let rms = (rel.iter().map(|e| e * e).sum::<f64>() / rel.len().max(1) as f64).sqrt();
-        Ok(LevelError {
-            samples: pairs.len(),
-            counted: rel.len(),
-            floor,
-            max_rel_error: rel.iter().cloned().fold(0.0, f64::max),
-            rms_rel_error: rms,
-        })
+        Ok(LevelError::pool(&pairs))
     }
 }
 

@@ -74,17 +74,11 @@ pub enum CubeError {
     Empty,
 }
 
-/// The cube-frame direction (not normalized) at face coordinates (s, t) ∈ [−1, 1]².
+/// The cube-frame direction (not normalized) at face coordinates (s, t) ∈ [−1, 1]² (the
+/// crate's one face table, [`Face::direction`]).
 #[inline]
 pub fn face_direction(face: Face, s: f64, t: f64) -> DVec3 {
-    match face {
-        Face::PosX => DVec3::new(1.0, -t, -s),
-        Face::NegX => DVec3::new(-1.0, -t, s),
-        Face::PosY => DVec3::new(s, 1.0, t),
-        Face::NegY => DVec3::new(s, -1.0, -t),
-        Face::PosZ => DVec3::new(s, -t, 1.0),
-        Face::NegZ => DVec3::new(-s, -t, -1.0),
-    }
+    face.direction(s, t)
 }
 
 /// Face coordinate of texel `k` of an n-texel row or column: 2(k + ½)/n − 1.
@@ -99,26 +93,10 @@ pub fn texel_direction(face: Face, size: usize, row: usize, col: usize) -> DVec3
 }
 
 /// The face a cube-frame direction selects and its face coordinates (s, t) ∈ [−1, 1]², by the
-/// Vulkan major-axis rule (ties go to X, then Y).
+/// Vulkan major-axis rule (ties go to X, then Y): [`crate::envmap::select_face`].
+#[inline]
 pub fn face_coordinates(dir: DVec3) -> (Face, f64, f64) {
-    let (ax, ay, az) = (dir.x.abs(), dir.y.abs(), dir.z.abs());
-    if ax >= ay && ax >= az {
-        if dir.x > 0.0 {
-            (Face::PosX, -dir.z / ax, -dir.y / ax)
-        } else {
-            (Face::NegX, dir.z / ax, -dir.y / ax)
-        }
-    } else if ay >= az {
-        if dir.y > 0.0 {
-            (Face::PosY, dir.x / ay, dir.z / ay)
-        } else {
-            (Face::NegY, dir.x / ay, -dir.z / ay)
-        }
-    } else if dir.z > 0.0 {
-        (Face::PosZ, dir.x / az, -dir.y / az)
-    } else {
-        (Face::NegZ, -dir.x / az, -dir.y / az)
-    }
+    crate::envmap::select_face(dir)
 }
 
 /// The texel (face, row, column) of an n×n cube that contains a cube-frame direction.
@@ -191,7 +169,8 @@ impl CubeMap {
                     for i in 0..k {
                         let s = 2.0 * (c as f64 + (i as f64 + 0.5) / k as f64) / size as f64 - 1.0;
                         let t = 2.0 * (r as f64 + (j as f64 + 0.5) / k as f64) / size as f64 - 1.0;
-                        let w = (1.0 + s * s + t * t).powf(-1.5);
+                        let q = 1.0 + s * s + t * t;
+                        let w = 1.0 / (q * q.sqrt());
                         let v = env.lookup(env_from_cube * face_direction(face, s, t));
                         for ch in 0..3 {
                             sum[ch] += w * v[ch] as f64;

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Filament's cmgen (--ibl-ld) against `ibl` on the same map at the same sizes: times, ratio and
+# each one's error per level against the same angular reference, into docs/results/peers.md.
+# Not part of CI. Installs cmgen from the distribution (libfilament-tools) when it can; skips
+# with a message when it cannot. The work is done in Rust (examples/peers.rs).
+# Usage: scripts/bench-peers.sh [MAP, default ../shared/testdata/envmaps/grace_latlong.exr] [SAMPLES]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export CARGO_BUILD_JOBS="${CARGO_BUILD_JOBS:-1}"
+map="${1:-../shared/testdata/envmaps/grace_latlong.exr}"
+samples="${2:-256}"
+if ! command -v cmgen >/dev/null 2>&1; then
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -q libfilament-tools >/dev/null 2>&1 || true
+    fi
+fi
+if ! command -v cmgen >/dev/null 2>&1; then
+    echo "bench-peers: skipped: cmgen is not installed and libfilament-tools could not be had" >&2
+    exit 0
+fi
+if [ ! -f "$map" ]; then
+    echo "bench-peers: skipped: $map is absent" >&2
+    exit 0
+fi
+cargo build --release --quiet --bin ibl --example peers
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+target/release/examples/peers "$(command -v cmgen)" target/release/ibl "$map" "$work" docs/results/peers.md "$samples"
+echo "wrote docs/results/peers.md"

@@ -1,0 +1,90 @@
+//! `ibl`: clap arguments → [`ibl::stage::Config`] → one library call → the files of DIR, all or
+//! none.
+
+mod args;
+
+use super::common::{Context, Outcome, Stage};
+use super::options::Execution;
+use super::outputs::Outputs;
+use crate::ibl::stage::{self, Config};
+use crate::io::Output;
+use anyhow::{bail, Result};
+pub use args::*;
+
+impl From<&Args> for Config {
+    fn from(args: &Args) -> Config {
+        Config {
+            size: args.size,
+            min_size: args.min_size,
+            irradiance_size: args.irradiance_size,
+            roughness_map: args.roughness_map,
+            format: args.format.format(),
+            container: args.container,
+            up: args.up,
+            rotate_degrees: args.rotate,
+            mirror: args.mirror,
+            clamp: args.clamp,
+            dfg: args.dfg.variant(),
+            samples: args.samples,
+            source: args.input.name(),
+            args: std::env::args().collect(),
+            ..Config::default()
+        }
+    }
+}
+
+impl Stage for Args {
+    const NAME: &'static str = "ibl";
+    fn execution(&self) -> &Execution {
+        &self.run
+    }
+    fn run(self, ctx: &Context) -> Result<Outcome> {
+        let config = Config::from(&self);
+        config.check()?;
+        // DIR is created by the commit's output set (and removed if anything fails); an
+        // existing directory with files in it is refused so that no stale file is mixed in.
+        if self.output.exists() {
+            let empty = self.output.is_dir()
+                && std::fs::read_dir(&self.output).map(|mut d| d.next().is_none()).unwrap_or(false);
+            if !empty {
+                bail!("{}: exists and is not an empty directory", self.output.display());
+            }
+        }
+        // Before the long work: the nearest existing ancestor (or DIR itself) must take files.
+        let existing = self.output.ancestors().find(|p| p.as_os_str().is_empty() || p.exists());
+        let existing = existing.filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        Output::File(existing.join("ibl.json")).check_writable()?;
+        let map = self.input.load(ctx)?;
+        let out = stage::run(&config, &map, ctx.progress())?;
+
+        let body = &out.document.body;
+        for level in body.specular.levels.iter().chain(std::iter::once(&body.irradiance.level)) {
+            let errors = match (level.rms_rel_error, level.max_rel_error) {
+                (Some(rms), Some(max)) => format!(", error {:.3} % RMS, {:.3} % max", 100.0 * rms, 100.0 * max),
+                _ => String::new(),
+            };
+            ctx.note(format!(
+                "{} {}² r={:.3}: {} from {} in {:.3} s{errors}",
+                if level.level == 0 && level.roughness == 1.0 {
+                    "irradiance".to_string()
+                } else {
+                    format!("level {}", level.level)
+                },
+                level.size,
+                level.roughness,
+                level.method,
+                level.source,
+                level.seconds
+            ));
+        }
+        ctx.note(format!("baked in {:.3} s, measured in {:.3} s", body.timings.bake, body.timings.measure));
+
+        let mut outputs = Outputs::new();
+        outputs.create_dir(&self.output)?;
+        for (name, bytes) in out.files {
+            outputs.bytes(&Output::File(self.output.join(name)), bytes)?;
+        }
+        outputs.commit()?;
+        Ok(Outcome::Success)
+    }
+}

@@ -1,0 +1,701 @@
+//! The `ibl` stage as one library call: an environment map in, the files a glTF/PBR engine loads
+//! out — the GGX-prefiltered specular cube with its mip chain, the irradiance cube, order-2 SH
+//! irradiance with shader snippets, the split-sum DFG table and the `prtkit.ibl` manifest
+//! (`docs/ibl.md`).
+//!
+//! **Levels.** Level k of an L-level chain has face size `size >> k` and perceptual roughness
+//! r_k = k/(L − 1) (`linear`), or Filament's r_k = 1 − √(1 − k/(L − 1)), the inverse of its
+//! lod = r(2 − r) (`filament`). Level 0 (r = 0, a mirror) is the environment resampled; every
+//! other level is the split-sum GGX prefilter (Karis 2013, [`super::ggx::SplitSumLobe`]), by
+//! whichever exact method the cost model finds cheaper ([`choose_method`]): the zonal filter on a
+//! lat-long grid ([`super::frequency`]) or the angular cone sum over a cube pyramid
+//! ([`super::angular`]). Neither samples at random.
+//!
+//! **Frame.** Output directions d_out = M d_prtkit with M = U·R_z(θ)·S: S mirrors prtkit's y
+//! (`--mirror`), R_z turns by `--rotate` degrees about prtkit's up axis, U takes prtkit's +Z to
+//! glTF's +Y ([`super::cube::WORLD_FROM_PRTKIT`]; the identity with `--up z`). Everything is
+//! filtered by direction, so the frame change is exact: texel d_out of a level is B(Mᵀ d_out).
+//!
+//! **Measured, not assumed.** With `samples` > 0 every level with r > 0 and the irradiance cube
+//! are compared with the angular integral of the input ([`super::reference`]) on that many
+//! texels; the manifest records the errors.
+
+use super::angular::{AngularError, AngularOptions, AngularPrefilter};
+use super::cube::{CubeError, CubeMap, CubeMipChain, MAX_FACE_SIZE, WORLD_FROM_PRTKIT};
+use super::dfg::{DfgError, DfgTable, DfgVariant};
+use super::frequency::{self, FilteredSphere, LatLongSource};
+use super::ggx::{GgxError, SplitSumLobe};
+use super::manifest::{self, Costs, IblBody, Level, ShBody};
+use super::reference::Reference;
+use super::sh_irradiance::IrradianceSh;
+use crate::envmap::zonal::ZonalError;
+use crate::envmap::{self, EnvMap, EnvMapError, Layout};
+use crate::io::gpu_format::{TexelFormat, Texture, TextureError, TextureShape};
+use crate::io::{dds, ktx2, Document, Provenance};
+use crate::progress::Progress;
+use glam::{DMat3, DVec3};
+use std::time::Instant;
+
+/// How level index maps to roughness.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum RoughnessMap {
+    /// r_k = k/(L − 1).
+    Linear,
+    /// Filament's: r_k = 1 − √(1 − k/(L − 1)) (the inverse of lod = r(2 − r)).
+    Filament,
+}
+
+impl RoughnessMap {
+    /// Roughness of level k of `levels`.
+    pub fn roughness(self, k: usize, levels: usize) -> f64 {
+        if levels < 2 {
+            return 0.0;
+        }
+        let lod = k as f64 / (levels - 1) as f64;
+        match self {
+            RoughnessMap::Linear => lod,
+            RoughnessMap::Filament => 1.0 - (1.0 - lod).max(0.0).sqrt(),
+        }
+    }
+
+    /// Name.
+    pub fn name(self) -> &'static str {
+        match self {
+            RoughnessMap::Linear => "linear",
+            RoughnessMap::Filament => "filament",
+        }
+    }
+
+    fn formula(self) -> &'static str {
+        match self {
+            RoughnessMap::Linear => "r_k = k / (levels - 1)",
+            RoughnessMap::Filament => {
+                "r_k = 1 - sqrt(1 - k / (levels - 1)), the inverse of Filament's lod = r (2 - r) (lodToPerceptualRoughness)"
+            }
+        }
+    }
+}
+
+/// File container.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Container {
+    /// KTX 2.0.
+    Ktx2,
+    /// DDS with the DX10 header.
+    Dds,
+}
+
+impl Container {
+    /// File extension and name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Container::Ktx2 => "ktx2",
+            Container::Dds => "dds",
+        }
+    }
+
+    fn encode(self, texture: &Texture, format: TexelFormat) -> Result<Vec<u8>, TextureError> {
+        match self {
+            Container::Ktx2 => ktx2::encode(texture, format),
+            Container::Dds => dds::encode(texture, format),
+        }
+    }
+}
+
+/// The output frame's up axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Up {
+    /// glTF: prtkit's +Z becomes +Y.
+    Y,
+    /// prtkit's frame kept.
+    Z,
+}
+
+/// Per-level method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// The environment resampled (r = 0).
+    Resample,
+    /// Zonal filter on a lat-long grid.
+    Zonal,
+    /// Angular cone sums over a cube pyramid.
+    Angular,
+}
+
+impl Method {
+    /// Name in the manifest.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Resample => "resample",
+            Method::Zonal => "zonal",
+            Method::Angular => "angular",
+        }
+    }
+}
+
+/// Force a method instead of the cost model (tests, studies).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum MethodChoice {
+    /// The cheaper by [`choose_method`].
+    #[default]
+    Auto,
+    /// Always zonal.
+    Zonal,
+    /// Always angular.
+    Angular,
+}
+
+/// What `ibl` computes.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Face size of level 0 (power of two).
+    pub size: usize,
+    /// Face size of the last level (power of two, ≤ size).
+    pub min_size: usize,
+    /// Face size of the irradiance cube (power of two).
+    pub irradiance_size: usize,
+    /// Level → roughness.
+    pub roughness_map: RoughnessMap,
+    /// Texel format of the cubes (the DFG table is RG16F, or RG32F with RGBA32F).
+    pub format: TexelFormat,
+    /// Container.
+    pub container: Container,
+    /// Output up axis.
+    pub up: Up,
+    /// Rotation about the up axis in degrees.
+    pub rotate_degrees: f64,
+    /// Mirror the environment.
+    pub mirror: bool,
+    /// Clamp input radiance to at most this (before filtering).
+    pub clamp: Option<f64>,
+    /// DFG variant.
+    pub dfg: DfgVariant,
+    /// DFG side.
+    pub dfg_size: usize,
+    /// Texels per level measured against the angular reference (0: none).
+    pub samples: usize,
+    /// Method choice.
+    pub method: MethodChoice,
+    /// Input name, for the manifest.
+    pub source: String,
+    /// Command line, for provenance.
+    pub args: Vec<String>,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            size: 256,
+            min_size: 8,
+            irradiance_size: 32,
+            roughness_map: RoughnessMap::Linear,
+            format: TexelFormat::Rgba16Float,
+            container: Container::Ktx2,
+            up: Up::Y,
+            rotate_degrees: 0.0,
+            mirror: false,
+            clamp: None,
+            dfg: DfgVariant::ScaleBias,
+            dfg_size: 128,
+            samples: 64,
+            method: MethodChoice::Auto,
+            source: String::new(),
+            args: Vec::new(),
+        }
+    }
+}
+
+/// Largest face size `ibl` bakes (a 4096² RGBA16F chain is 512 MiB in memory as f32).
+pub const MAX_SIZE: usize = 4096;
+
+/// Gauss–Legendre nodes per θ_h piece of the DFG table. Measured against 48 nodes over the
+/// whole 128² table: 1.6e-4 with 5, 9.9e-5 with 6, 1.1e-5 with 8; 6 stays below the half-float
+/// rounding of the stored values (2.4e-4 in [0.5, 1)) at 60 % of the time of 8.
+pub const DFG_QUADRATURE_ORDER: usize = 6;
+
+/// Errors of the stage.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A face size that is not a power of two in range.
+    #[error("{what} {size}: a face size must be a power of two between 1 and {MAX_SIZE}")]
+    Size {
+        /// Which option.
+        what: &'static str,
+        /// The value.
+        size: usize,
+    },
+    /// --min-size above --size.
+    #[error("--min-size {min} is larger than --size {size}")]
+    MinSize {
+        /// Smallest.
+        min: usize,
+        /// Largest.
+        size: usize,
+    },
+    /// A bad number.
+    #[error("{0}")]
+    Option(String),
+    /// The cubes need an RGB format.
+    #[error("{0} is a two-channel format; the cubes need rgba16f, rgba32f, b10g11r11 or e5b9g9r9")]
+    Format(&'static str),
+    /// Environment geometry.
+    #[error(transparent)]
+    EnvMap(#[from] EnvMapError),
+    /// Zonal filter.
+    #[error(transparent)]
+    Zonal(#[from] ZonalError),
+    /// Cube geometry.
+    #[error(transparent)]
+    Cube(#[from] CubeError),
+    /// Angular prefilter.
+    #[error(transparent)]
+    Angular(#[from] AngularError),
+    /// The reference.
+    #[error("angular reference: {0}")]
+    Reference(#[from] crate::prefilter::angular::AngularError),
+    /// GGX.
+    #[error(transparent)]
+    Ggx(#[from] GgxError),
+    /// DFG.
+    #[error(transparent)]
+    Dfg(#[from] DfgError),
+    /// Encoding.
+    #[error(transparent)]
+    Texture(#[from] TextureError),
+}
+
+/// What `ibl` produces.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// The manifest.
+    pub document: Document<IblBody>,
+    /// The SH document.
+    pub sh_document: Document<ShBody>,
+    /// The SH.
+    pub sh: IrradianceSh,
+    /// The specular chain (f32, before packing).
+    pub specular: CubeMipChain,
+    /// The irradiance cube E/π (f32).
+    pub irradiance: CubeMap,
+    /// The DFG table.
+    pub dfg: DfgTable,
+    /// The files to write in DIR: (name, bytes), the manifest last.
+    pub files: Vec<(String, Vec<u8>)>,
+}
+
+fn check_size(what: &'static str, size: usize) -> Result<(), Error> {
+    if size == 0 || !size.is_power_of_two() || size > MAX_SIZE.min(MAX_FACE_SIZE) {
+        return Err(Error::Size { what, size });
+    }
+    Ok(())
+}
+
+impl Config {
+    /// Checks sizes and numbers.
+    pub fn check(&self) -> Result<(), Error> {
+        check_size("--size", self.size)?;
+        check_size("--min-size", self.min_size)?;
+        check_size("--irradiance-size", self.irradiance_size)?;
+        if self.min_size > self.size {
+            return Err(Error::MinSize { min: self.min_size, size: self.size });
+        }
+        if !self.rotate_degrees.is_finite() {
+            return Err(Error::Option(format!("--rotate {} must be a finite angle", self.rotate_degrees)));
+        }
+        if let Some(c) = self.clamp {
+            if c.is_nan() || c <= 0.0 {
+                return Err(Error::Option(format!("--clamp {c} must be positive")));
+            }
+        }
+        if matches!(self.format, TexelFormat::Rg16Float | TexelFormat::Rg32Float) {
+            return Err(Error::Format(self.format.name()));
+        }
+        if self.dfg_size == 0 || self.dfg_size > 1024 {
+            return Err(Error::Option(format!("DFG size {} must be in 1..=1024", self.dfg_size)));
+        }
+        Ok(())
+    }
+
+    /// Number of specular levels.
+    pub fn levels(&self) -> usize {
+        (self.size / self.min_size).trailing_zeros() as usize + 1
+    }
+
+    /// M: output frame from prtkit's frame (module docs).
+    pub fn world_from_prtkit(&self) -> DMat3 {
+        let up = match self.up {
+            Up::Y => WORLD_FROM_PRTKIT,
+            Up::Z => DMat3::IDENTITY,
+        };
+        let mirror = if self.mirror { DMat3::from_diagonal(DVec3::new(1.0, -1.0, 1.0)) } else { DMat3::IDENTITY };
+        up * DMat3::from_rotation_z(self.rotate_degrees.to_radians()) * mirror
+    }
+
+    fn frame(&self) -> manifest::Frame {
+        let m = self.world_from_prtkit();
+        manifest::Frame {
+            up: match self.up {
+                Up::Y => "y".into(),
+                Up::Z => "z".into(),
+            },
+            rotate_degrees: self.rotate_degrees,
+            mirror: self.mirror,
+            world_from_prtkit: [0, 1, 2].map(|r| [m.x_axis[r], m.y_axis[r], m.z_axis[r]]),
+            faces: manifest::FACE_ORDER.iter().map(|s| s.to_string()).collect(),
+            face_orientation: manifest::FACE_ORIENTATION.into(),
+        }
+    }
+
+    fn frame_words(&self) -> String {
+        let turned = match (self.rotate_degrees != 0.0, self.mirror) {
+            (false, false) => String::new(),
+            (r, m) => format!(
+                ", environment{}{}",
+                if m { " mirrored" } else { "" },
+                if r { format!(" rotated {} degrees about up", self.rotate_degrees) } else { String::new() }
+            ),
+        };
+        match self.up {
+            Up::Y => format!("glTF world, +Y up (prtkit +Z -> +Y, +X kept, prtkit +Y -> -Z){turned}"),
+            Up::Z => format!("prtkit, +Z up{turned}"),
+        }
+    }
+}
+
+/// Seconds per unit of [`frequency::zonal_cost`] and per angular kernel evaluation, measured
+/// on one core of the development machine (`grace_latlong.exr`: the zonal filter of a 256 × 128
+/// grid, 7.9e6 units, in 0.044 s; the angular 32² level at r = 0.6, 2.3e6 evaluations, in
+/// 0.098 s). Only their ratio matters to the choice.
+const ZONAL_SECONDS_PER_UNIT: f64 = 5.6e-9;
+const ANGULAR_SECONDS_PER_EVALUATION: f64 = 4.3e-8;
+
+/// The angular path's options: the lobe truncated at ε = 1e-4, source texels at most 1/256 of
+/// the lobe's equivalent solid angle (about 1/16 of its width): 0.07–0.19 % RMS on Grace in
+/// `docs/ibl-building-blocks.md`, the zonal path's accuracy, where the module's default (1/64)
+/// measured up to 0.9 % RMS at r = 1 on the shared probes.
+pub const ANGULAR_OPTIONS: AngularOptions = AngularOptions { epsilon: 1e-4, texel_ratio: 1.0 / 256.0 };
+
+/// Estimated seconds (one core) of the two exact methods for one level.
+pub fn estimate_costs(source: &LatLongSource, lobe: &SplitSumLobe, size: usize, base_size: usize) -> Costs {
+    let (w, h) = source.working_size(2.0 * lobe.ggx().alpha());
+    let zonal = ZONAL_SECONDS_PER_UNIT * frequency::zonal_cost(w, h);
+    // Angular ([`ANGULAR_OPTIONS`]): 6n² output texels, each summing the source texels in its cone.
+    let options = ANGULAR_OPTIONS;
+    let cone = lobe.cone_angle(options.epsilon);
+    let source = angular_source_size(lobe, base_size);
+    let source_texel = 4.0 * std::f64::consts::PI / (6.0 * (source * source) as f64);
+    let in_cone = 2.0 * std::f64::consts::PI * (1.0 - cone.cos()) / source_texel;
+    Costs { zonal, angular: ANGULAR_SECONDS_PER_EVALUATION * 6.0 * (size * size) as f64 * in_cone }
+}
+
+/// The cube pyramid level the angular prefilter reads for a lobe ([`ANGULAR_OPTIONS`]): the coarsest whose
+/// face-centre texel, (2/n)², is within the budget of `AngularPrefilter::source_level`.
+fn angular_source_size(lobe: &SplitSumLobe, base_size: usize) -> usize {
+    let budget = ANGULAR_OPTIONS.texel_ratio * lobe.equivalent_solid_angle();
+    let mut source = base_size;
+    while source > 1 && (4.0 / ((source / 2) * (source / 2)) as f64) <= budget {
+        source /= 2;
+    }
+    source
+}
+
+/// The cheaper exact method by [`estimate_costs`].
+pub fn choose_method(costs: &Costs) -> Method {
+    if costs.angular < costs.zonal {
+        Method::Angular
+    } else {
+        Method::Zonal
+    }
+}
+
+/// The working lat-long map: the input (a lat-long is used as it is; other layouts are
+/// resampled to 4n × 2n with 2 × 2 supersampling, n the output face size), clamped if asked.
+fn working_latlong(config: &Config, env: &EnvMap) -> Result<EnvMap, Error> {
+    let mut latlong = if env.layout() == Layout::LatLong {
+        env.clone()
+    } else {
+        envmap::resample(env, Layout::LatLong, 4 * config.size, 2 * config.size, 2)?
+    };
+    if let Some(max) = config.clamp {
+        for img in latlong.images_mut() {
+            for p in &mut img.pixels {
+                for v in p.iter_mut() {
+                    *v = v.min(max as f32);
+                }
+            }
+        }
+    }
+    Ok(latlong)
+}
+
+/// One prefiltered level and how it was made.
+struct Baked {
+    cube: CubeMap,
+    level: Level,
+}
+
+/// The split-sum level of roughness r > 0 and face size n.
+fn bake_level(
+    config: &Config,
+    latlong: &LatLongSource,
+    base: &CubeMap,
+    (k, size, r): (usize, usize, f64),
+    progress: &dyn Progress,
+) -> Result<Baked, Error> {
+    let start = Instant::now();
+    let env_from_cube = config.world_from_prtkit().transpose();
+    let lobe = SplitSumLobe::new(r)?;
+    let costs = estimate_costs(latlong, &lobe, size, base.size());
+    let method = match config.method {
+        MethodChoice::Auto => choose_method(&costs),
+        MethodChoice::Zonal => Method::Zonal,
+        MethodChoice::Angular => Method::Angular,
+    };
+    let (cube, source, rule) = match method {
+        Method::Angular => {
+            // The pyramid from the level it reads down: the finer levels would only cost setup.
+            let mut source = base.clone();
+            while source.size() > angular_source_size(&lobe, base.size()) {
+                source = source.downsample()?;
+            }
+            let pre = AngularPrefilter::new(CubeMipChain::pyramid(source, 1)?)?;
+            let (cube, src) = pre.prefilter(size, r, &ANGULAR_OPTIONS, progress)?;
+            (cube, format!("cube {0}x{0}", src.source_size), None)
+        }
+        _ => {
+            let grid = latlong.working_grid(2.0 * lobe.ggx().alpha());
+            let filtered: FilteredSphere = frequency::filter(&grid, &lobe, progress)?;
+            let cube = CubeMap::from_fn(size, |d| filtered.sample(env_from_cube * d))?;
+            (cube, format!("latlong {}x{}", grid.width, grid.height), Some(filtered.rule_subsamples))
+        }
+    };
+    let level = Level {
+        level: k,
+        size,
+        roughness: r,
+        method: method.name().into(),
+        order: None,
+        source,
+        rule_subsamples: rule,
+        estimated_cost: Some(costs),
+        max_rel_error: None,
+        rms_rel_error: None,
+        samples: 0,
+        min_value: 0.0,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok(Baked { cube, level })
+}
+
+/// Runs `ibl` on `env` (any layout, prtkit's frame).
+pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Output, Error> {
+    config.check()?;
+    let t0 = Instant::now();
+    let mut timings = manifest::Timings::default();
+    let latlong = working_latlong(config, env)?;
+    let source = LatLongSource::new(latlong.image().clone());
+    let env_from_cube = config.world_from_prtkit().transpose();
+    timings.prepare = t0.elapsed().as_secs_f64();
+
+    // The DFG table depends on nothing else: it runs beside the cubes.
+    let t_dfg = Instant::now();
+    let (dfg, cubes) = rayon::join(
+        || {
+            DfgTable::with_quadrature_order(config.dfg_size, config.dfg, DFG_QUADRATURE_ORDER)
+                .map(|t| (t, t_dfg.elapsed()))
+        },
+        || -> Result<_, Error> {
+            // Level 0: the environment resampled (2 × 2 lookups per texel, a box over its footprint).
+            let t_spec = Instant::now();
+            let base = CubeMap::resample(&latlong, config.size, 2, env_from_cube)?;
+            let levels = config.levels();
+            let mut baked = vec![Baked {
+                cube: base.clone(),
+                level: Level {
+                    level: 0,
+                    size: config.size,
+                    roughness: 0.0,
+                    method: Method::Resample.name().into(),
+                    order: None,
+                    source: format!("{} {}x{}", latlong.layout().name(), latlong.image().width, latlong.image().height),
+                    rule_subsamples: None,
+                    estimated_cost: None,
+                    max_rel_error: None,
+                    rms_rel_error: None,
+                    samples: 0,
+                    min_value: base.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64,
+                    seconds: t_spec.elapsed().as_secs_f64(),
+                },
+            }];
+            for k in 1..levels {
+                let r = config.roughness_map.roughness(k, levels);
+                let size = config.size >> k;
+                baked.push(bake_level(config, &source, &base, (k, size, r), progress)?);
+            }
+            let specular_seconds = t_spec.elapsed().as_secs_f64();
+            // Irradiance: the r = 1 lobe is the clamped cosine over π, so the level is E/π.
+            let t_irr = Instant::now();
+            let mut irradiance = bake_level(config, &source, &base, (0, config.irradiance_size, 1.0), progress)?;
+            irradiance.level.roughness = 1.0;
+            let sh = IrradianceSh::project(&latlong, config.world_from_prtkit());
+            Ok((baked, irradiance, sh, specular_seconds, t_irr.elapsed().as_secs_f64()))
+        },
+    );
+    let (dfg, dfg_time) = dfg?;
+    let (mut baked, mut irradiance, sh, specular_seconds, irradiance_seconds) = cubes?;
+    timings.dfg = dfg_time.as_secs_f64();
+    timings.specular = specular_seconds;
+    timings.irradiance = irradiance_seconds;
+
+    // Encode.
+    let t_enc = Instant::now();
+    let ext = config.container.name();
+    let chain = CubeMipChain::new(baked.iter().map(|b| b.cube.clone()).collect())?;
+    let specular_bytes = config.container.encode(&chain.as_texture(), config.format)?;
+    let irradiance_bytes = config.container.encode(
+        &Texture {
+            shape: TextureShape::Cube { size: config.irradiance_size },
+            channels: 3,
+            levels: vec![irradiance.cube.texels()],
+        },
+        config.format,
+    )?;
+    let dfg_format =
+        if config.format == TexelFormat::Rgba32Float { TexelFormat::Rg32Float } else { TexelFormat::Rg16Float };
+    let rg = dfg.interleaved();
+    let dfg_bytes = config.container.encode(
+        &Texture {
+            shape: TextureShape::Texture2d { width: dfg.size(), height: dfg.size() },
+            channels: 2,
+            levels: vec![&rg],
+        },
+        dfg_format,
+    )?;
+    let frame_words = config.frame_words();
+    timings.encode = t_enc.elapsed().as_secs_f64();
+    timings.bake = t0.elapsed().as_secs_f64();
+
+    // Measure.
+    let t_measure = Instant::now();
+    if config.samples > 0 {
+        let reference = Reference::new(&latlong)?;
+        for b in baked.iter_mut().chain(std::iter::once(&mut irradiance)) {
+            b.level.min_value = b.cube.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64;
+            if b.level.roughness <= 0.0 {
+                continue;
+            }
+            let lobe = SplitSumLobe::new(b.level.roughness)?;
+            let m = reference.measure(&b.cube, &lobe, env_from_cube, config.samples);
+            b.level.max_rel_error = Some(m.max_rel_error);
+            b.level.rms_rel_error = Some(m.rms_rel_error);
+            b.level.samples = m.samples;
+        }
+    }
+    timings.measure = t_measure.elapsed().as_secs_f64();
+
+    let provenance = Provenance::new("ibl", &config.args, vec![config.source.clone()]);
+    let scale = "E(n)/pi: the radiance a white Lambertian surface reflects (multiply by the albedo)".to_string();
+    let body = IblBody {
+        source: config.source.clone(),
+        frame: config.frame(),
+        specular: manifest::Specular {
+            file: format!("specular.{ext}"),
+            container: ext.into(),
+            format: config.format.name().into(),
+            roughness_map: config.roughness_map.name().into(),
+            roughness_formula: config.roughness_map.formula().into(),
+            lobe: "split-sum GGX (Karis 2013): N = V = R, weights D(h) max(N.L, 0), normalized; perceptual roughness r, alpha = r^2".into(),
+            levels: baked.iter().map(|b| b.level.clone()).collect(),
+        },
+        irradiance: manifest::Irradiance {
+            file: format!("irradiance.{ext}"),
+            size: config.irradiance_size,
+            format: config.format.name().into(),
+            scale: scale.clone(),
+            level: irradiance.level.clone(),
+        },
+        sh: manifest::ShFiles {
+            file: "sh.json".into(),
+            shaders: vec!["sh.glsl".into(), "sh.hlsl".into(), "sh.wgsl".into()],
+            scale: scale.clone(),
+        },
+        dfg: manifest::Dfg {
+            file: format!("dfg.{ext}"),
+            size: dfg.size(),
+            variant: match config.dfg {
+                DfgVariant::ScaleBias => "scale-bias".into(),
+                DfgVariant::MultiScatter => "multiscatter".into(),
+            },
+            format: dfg_format.name().into(),
+            layout: match config.dfg {
+                DfgVariant::ScaleBias => "texel (row j, column i) at n.v = (i+0.5)/N, r = (j+0.5)/N, row 0 smoothest; sample uv = (n.v, r), clamp, linear; (x, y) = (A, B): specular = prefiltered * (F0 * x + y)".into(),
+                DfgVariant::MultiScatter => "texel (row j, column i) at n.v = (i+0.5)/N, r = (j+0.5)/N, row 0 smoothest; sample uv = (n.v, r), clamp, linear; (x, y) = (B, A + B), Filament's DFV_Multiscatter: specular = prefiltered * mix(x, y, F0) * (1 + F0 (1/y - 1))".into(),
+            },
+        },
+        timings,
+    };
+    let document = Document::new(manifest::FORMAT, manifest::VERSION, provenance.clone(), body);
+    let sh_document = Document::new(
+        manifest::SH_FORMAT,
+        manifest::VERSION,
+        provenance,
+        ShBody {
+            frame: config.frame(),
+            basis: ["1", "y", "z", "x", "x*y", "y*z", "3*z*z - 1", "x*z", "x*x - y*y"]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            scale,
+            coefficients: sh.shader.to_vec(),
+            radiance: sh.radiance.rgb.clone(),
+        },
+    );
+    let files = vec![
+        (format!("specular.{ext}"), specular_bytes),
+        (format!("irradiance.{ext}"), irradiance_bytes),
+        (format!("dfg.{ext}"), dfg_bytes),
+        ("sh.json".to_string(), sh_document.to_json().into_bytes()),
+        ("sh.glsl".to_string(), sh.glsl(&frame_words).into_bytes()),
+        ("sh.hlsl".to_string(), sh.hlsl(&frame_words).into_bytes()),
+        ("sh.wgsl".to_string(), sh.wgsl(&frame_words).into_bytes()),
+        ("ibl.json".to_string(), document.to_json().into_bytes()),
+    ];
+    Ok(Output { document, sh_document, sh, specular: chain, irradiance: irradiance.cube, dfg, files })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn roughness_maps() {
+        assert_eq!(RoughnessMap::Linear.roughness(2, 6), 0.4);
+        // Filament: lod = r(2 − r) inverted.
+        for k in 0..6 {
+            let r = RoughnessMap::Filament.roughness(k, 6);
+            assert!((r * (2.0 - r) - k as f64 / 5.0).abs() < 1e-12);
+        }
+        assert_eq!(RoughnessMap::Filament.roughness(5, 6), 1.0);
+    }
+
+    #[test]
+    fn frame_matrix_is_the_gltf_rotation_then_the_turn() {
+        let c = Config::default();
+        assert_eq!(c.world_from_prtkit(), WORLD_FROM_PRTKIT);
+        let turned = Config { rotate_degrees: 90.0, up: Up::Z, ..Config::default() };
+        assert!((turned.world_from_prtkit() * DVec3::X - DVec3::Y).length() < 1e-12);
+        let mirrored = Config { mirror: true, up: Up::Z, ..Config::default() };
+        assert_eq!(mirrored.world_from_prtkit() * DVec3::Y, -DVec3::Y);
+    }
+
+    #[test]
+    fn bad_sizes_are_refused() {
+        assert!(matches!(Config { size: 100, ..Config::default() }.check(), Err(Error::Size { .. })));
+        assert!(matches!(Config { min_size: 512, ..Config::default() }.check(), Err(Error::MinSize { .. })));
+        assert!(matches!(
+            Config { format: TexelFormat::Rg16Float, ..Config::default() }.check(),
+            Err(Error::Format(_))
+        ));
+        assert_eq!(Config::default().levels(), 6);
+    }
+}
