@@ -393,7 +393,6 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
     })
 }
 
-
 /// A lat-long image in the output layout (a cross is resampled at 4n × 3n, n = H/2).
 fn to_output_layout(image: &RgbImage, layout: Layout) -> Result<RgbImage, EnvMapError> {
     if layout == Layout::LatLong {
