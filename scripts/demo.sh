@@ -5,7 +5,9 @@
 #   2. sh-project projects it onto spherical harmonics (order chosen for ε = 1 %) and writes the
 #      reconstruction and the irradiance map;
 #   3. prefilter makes a glossy Phong reflection map and a microfacet SHRM from it;
-#   4. count-terms says how many in-out BRDF terms those materials need.
+#   4. count-terms says how many in-out BRDF terms those materials need;
+#   5. render draws a sphere from the SHRM next to the reference;
+#   6. ibl bakes the sky for a glTF/PBR engine (KTX2 mip chain, SH snippets, DFG table).
 # Outputs go to out/demo/ (EXR for data, PNG previews for people). Usage: scripts/demo.sh [OUTDIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -51,6 +53,10 @@ say "5. render: a Phong s=32 sphere from the SHRM next to the reference (panel.p
 "$bin/render" "$out/sky.exr" --brdf phong:s=32 --res 128x128 --eye 0,-4,0.8 --fov 30 --shading shrm \
     --shrm "$out/phong32-render.shrm.json" -o "$out/shrm.exr" --compare "$out/ref.exr" --exposure -2 \
     --panel "$out/panel.png" --panel-item "reference=$out/ref.exr" -q
+
+say "6. ibl: GGX mip chain, irradiance cube, SH snippets and DFG table for glTF/PBR engines"
+# Prints each level's method and its error against the angular integral (also in ibl/ibl.json).
+"$bin/ibl" "$out/sky.exr" -o "$out/ibl"
 
 say "done: $(ls "$out" | wc -l) files in $out"
 ls "$out" >&2

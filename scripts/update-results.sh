@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates every measured number in docs/: runs each benchmark and reproduction script (each
 # writes its section into docs/results/), then assembles docs/results.md from the sections.
-#   scripts/update-results.sh            # run everything (about 20 minutes on 2 cores), assemble
+#   scripts/update-results.sh            # run everything (about an hour on 2 cores), assemble
 #   scripts/update-results.sh --assemble # only assemble docs/results.md from the sections
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,6 +17,8 @@ if [ "${1:-}" != "--assemble" ]; then
   scripts/reproduce-fig7.sh
   scripts/bench-render.sh
   scripts/ibl-accuracy.sh
+  scripts/ring-free-table.sh
+  scripts/fuzz.sh
   # scripts/bench-peers.sh (Filament's cmgen) is not run here: it installs a package.
 fi
 {
@@ -27,7 +29,7 @@ fi
   echo "\`docs/results/*.md\`. Speeds are ratios measured in one run (the machine is shared and"
   echo "noisy); absolute times are for orientation only."
   echo
-  for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader render render-fig7 render-bench ibl-accuracy peers; do
+  for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader render render-fig7 render-bench ibl-accuracy peers ring-free fuzz; do
     f="docs/results/$section.md"
     if [ -f "$f" ]; then
       # Sections link their figures relative to docs/results/; this file lives in docs/.

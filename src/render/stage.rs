@@ -326,6 +326,13 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                     if !(2..=256).contains(resolution) {
                         return Err(bad(format!("--factor-resolution {resolution} must be in 2..=256")));
                     }
+                    // An n² × n² matrix has at most n² terms: refuse before the factorization.
+                    if *terms > resolution * resolution {
+                        return Err(bad(format!(
+                            "--terms {terms} is more than the {} a factorization at --factor-resolution {resolution} has",
+                            resolution * resolution
+                        )));
+                    }
                     let sampling = Sampling {
                         resolution: *resolution,
                         domain: Domain::Hemisphere,
