@@ -26,6 +26,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
+/// The tight reference's ε: the issue's ε = 0.001 leaves 0.1 % of each lobe out, which under a
+/// sun 10⁴ times the ground is itself a visible error in the ground's texels.
+const TIGHT: f64 = 1e-5;
+
 /// The acceptance figures of the table.
 const MAX_P99: f64 = 0.05;
 const MAX_REL_RMS: f64 = 0.02;
@@ -49,6 +53,7 @@ fn main() -> anyhow::Result<()> {
     let grazing = DVec3::new(1.0, 0.0, 0.2).normalize();
     let mut table = String::new();
     let (mut worst_p99, mut worst_rms, mut negatives, mut worst_ratio) = (0.0f64, 0.0f64, 0usize, 0.0f64);
+    let mut worst_tight = 0.0f64;
     for probe in probes {
         let map = probe_map(Path::new(probe))?;
         let name = probe_name(probe);
@@ -60,17 +65,20 @@ fn main() -> anyhow::Result<()> {
                 &[("+Z", DVec3::Z), ("grazing", grazing)]
             };
             for &(view_name, view) in views {
-                let reference =
-                    reference(&map, &brdf, view, &Path::new(cache).join(format!("{name}-{spec}-{view_name}.exr")))?;
+                let file = |eps: &str| Path::new(cache).join(format!("{name}-{spec}-{view_name}{eps}.exr"));
+                let loose = reference(&map, &brdf, view, 0.001, &file(""))?;
+                let tight = reference(&map, &brdf, view, TIGHT, &file("-tight"))?;
                 let (default, default_s, f_b, p_b) = bake(&map, &brdf, view, defaults)?;
                 let (_, paper_s, ..) = bake(&map, &brdf, view, paper)?;
-                let (m, _) = compare(&default, &reference, &[])?;
+                let (m, _) = compare(&default, &loose, &[])?;
+                let (t, _) = compare(&default, &tight, &[])?;
                 let ratio = default_s / paper_s;
                 worst_p99 = worst_p99.max(m.p99_texel_error);
+                worst_tight = worst_tight.max(t.p99_texel_error);
                 worst_rms = worst_rms.max(m.rel_error);
                 negatives += usize::from(m.negative_fraction > 0.0);
                 worst_ratio = worst_ratio.max(ratio);
-                let row = row(&name, spec, view_name, f_b, p_b, &m, default_s, paper_s);
+                let row = row(&name, spec, view_name, f_b, p_b, &m, &t, default_s, paper_s);
                 eprintln!("{row}");
                 writeln!(table, "{row}")?;
             }
@@ -84,23 +92,27 @@ fn main() -> anyhow::Result<()> {
         "Written by `scripts/ring-free-table.sh` (`examples/ring_free.rs`). Each probe resampled to a \
          256×128 lat-long map; the default `prefilter` (texel order rule, bright sources apart, \
          `nonneg` window) against the angular reference (`--method angular --epsilon 0.001`) at the \
-         same size. Per-texel errors over texels ≥ 1 % of the mean (`src/metrics.rs`). Times are \
+         same size, and against a tight reference (ε = 10⁻⁵: the issue's ε = 0.001 leaves 0.1 % of each \
+         lobe out, which under a sun 10⁴ times the ground is itself an error of several per cent in \
+         dark texels). Per-texel errors over texels ≥ 1 % of the mean (`src/metrics.rs`). Times are \
          wall-clock seconds of the library call in one run, the paper-order bake (`--order-rule \
          energy --bright off --window none`) beside the default.\n"
     )?;
     writeln!(
         doc,
-        "| probe | BRDF | view | F_B | P_B | negative texels | p99 per-texel | max per-texel (texel) | rel. RMS | default (s) | paper order (s) | ratio |"
+        "| probe | BRDF | view | F_B | P_B | negative texels | p99 per-texel | max per-texel (texel) | rel. RMS | p99 vs ε = 1e-5 | max vs ε = 1e-5 | default (s) | paper order (s) | ratio |"
     )?;
-    writeln!(doc, "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")?;
+    writeln!(doc, "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")?;
     doc.push_str(&table);
     writeln!(
         doc,
-        "\nWorst p99 {:.2} % (target ≤ {:.0} %: {}), worst rel. RMS {:.2} % (≤ {:.0} %: {}), maps with a \
+        "\nWorst p99 {:.2} % (target ≤ {:.0} %: {}; against the tight reference {:.2} %: {}), worst rel. RMS {:.2} % (≤ {:.0} %: {}), maps with a \
          negative texel: {negatives} (none: {}), largest cost ratio {worst_ratio:.1}× (≤ 3×: {}).",
         100.0 * worst_p99,
         100.0 * MAX_P99,
         verdict(worst_p99 <= MAX_P99),
+        100.0 * worst_tight,
+        verdict(worst_tight <= MAX_P99),
         100.0 * worst_rms,
         100.0 * MAX_REL_RMS,
         verdict(worst_rms <= MAX_REL_RMS),
@@ -119,17 +131,20 @@ fn row(
     f_b: usize,
     p_b: usize,
     m: &Metrics,
+    t: &Metrics,
     default_s: f64,
     paper_s: f64,
 ) -> String {
     format!(
-        "| {probe} | `{spec}` | {view} | {f_b} | {p_b} | {:.2} % | {:.2} % | {:.2} % ({}, {}) | {:.2} % | {default_s:.3} | {paper_s:.3} | {:.1}× |",
+        "| {probe} | `{spec}` | {view} | {f_b} | {p_b} | {:.2} % | {:.2} % | {:.2} % ({}, {}) | {:.2} % | {:.2} % | {:.2} % | {default_s:.3} | {paper_s:.3} | {:.1}× |",
         100.0 * m.negative_fraction,
         100.0 * m.p99_texel_error,
         100.0 * m.max_texel_error,
         m.worst_texel[0],
         m.worst_texel[1],
         100.0 * m.rel_error,
+        100.0 * t.p99_texel_error,
+        100.0 * t.max_texel_error,
         default_s / paper_s
     )
 }
@@ -180,14 +195,14 @@ fn bake(
     Ok((out.maps.remove(0), seconds, out.summary.f_b, out.summary.p_b))
 }
 
-/// The angular reference at ε = 0.001, cached in `file`.
-fn reference(map: &EnvMap, brdf: &Brdf, view: DVec3, file: &Path) -> anyhow::Result<RgbImage> {
+/// The angular reference at `epsilon`, cached in `file`.
+fn reference(map: &EnvMap, brdf: &Brdf, view: DVec3, epsilon: f64, file: &Path) -> anyhow::Result<RgbImage> {
     if let Ok(image) = read_image(file) {
         return Ok(image);
     }
     let config = Config {
         method: Method::Angular,
-        epsilon: 0.001,
+        epsilon,
         size: Some((256, 128)),
         maps: vec![MapRequest { file: file.display().to_string(), view }],
         ..Config::new(brdf.clone())
