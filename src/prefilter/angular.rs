@@ -325,7 +325,7 @@ impl ConeIntegrator {
 /// its cone angle θ*. Midpoint sums of a smooth lobe over box-filtered texels err by
 /// O((Δ/θ*)²), so on a smooth map (the remainder once bright sources are apart) this costs a
 /// fraction of the full-resolution sum for wide lobes at no visible loss (measured in
-/// `docs/prefilter.md`, "Fallback texels").
+/// `docs/prefilter.md`, "Ring-free bakes").
 pub struct ConePyramid {
     levels: Vec<ConeIntegrator>,
 }
