@@ -13,8 +13,17 @@ use std::process::{Output, Stdio};
 use std::time::{Duration, Instant};
 
 /// Every stand-alone binary.
-const STAGES: [&str; 8] =
-    ["convert", "sh-project", "prefilter", "factor-brdf", "count-terms", "sample-shader", "render", "encode-normals"];
+const STAGES: [&str; 9] = [
+    "convert",
+    "sh-project",
+    "prefilter",
+    "factor-brdf",
+    "count-terms",
+    "sample-shader",
+    "render",
+    "encode-normals",
+    "ibl",
+];
 
 /// Inputs the runs share, in one directory.
 struct World {
@@ -518,6 +527,11 @@ fn threads_1_and_2_write_identical_bytes() {
         run("encode-normals", &[&w.normals, "--scheme", "onv-range", "--bits", "20", "--packed", "-o", "c.bin"])
             .with(&["--report", "r.json", "--decoded", "d.f32"]),
         run("encode-normals", &["--table", "--bits", "16", "--samples", "20000"]),
+        run("ibl", &[&w.sky, "--size", "16", "--min-size", "4", "--samples", "16", "-o", "ibl"]),
+        run(
+            "ibl",
+            &[&w.sky, "--size", "8", "--min-size", "8", "--container", "dds", "--format", "e5b9g9r9", "-o", "d"],
+        ),
     ];
     for (i, r) in runs.iter().enumerate() {
         let (a, b) = (w.run_dir(&format!("t1-{i}")), w.run_dir(&format!("t2-{i}")));

@@ -32,7 +32,9 @@ pub struct IblBody {
     pub sh: ShFiles,
     /// The split-sum DFG table.
     pub dfg: Dfg,
-    /// Wall-clock seconds of the bake's parts.
+    /// Wall-clock seconds of the bake's parts: said on stderr and in `--json`, never written, so
+    /// the manifest is the same bytes for any thread count and any machine.
+    #[serde(skip)]
     pub timings: Timings,
 }
 
@@ -85,7 +87,8 @@ pub struct Level {
     pub samples: usize,
     /// The most negative texel component before packing (0 when none).
     pub min_value: f64,
-    /// Seconds to compute the level (measurement excluded).
+    /// Seconds to compute the level (measurement excluded); not written (see `timings`).
+    #[serde(skip)]
     pub seconds: f64,
 }
 
