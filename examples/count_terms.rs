@@ -13,7 +13,7 @@
 
 use prtkit::brdf::Brdf;
 use prtkit::factor::count::{self, CountConfig, Material};
-use prtkit::factor::{Channel, Domain, Method, Sampling};
+use prtkit::factor::{Channel, Domain, Sampling};
 use prtkit::progress::NoProgress;
 use std::path::{Path, PathBuf};
 
@@ -24,15 +24,12 @@ fn main() -> anyhow::Result<()> {
 /// Prints the table; an error names every material that fails the check.
 pub fn run(_out: &Path) -> anyhow::Result<()> {
     // The command line's defaults: the paper's 40 × 40 hemisphere grid, 99 %, 25 % tolerance.
-    let config = CountConfig {
-        sampling: Sampling { resolution: 40, domain: Domain::Hemisphere, cosine: false, channel: Channel::Luminance },
-        per_channel: false,
-        max_memory: 4 << 30,
-        energy: 0.99,
-        predict_only: false,
-        method: Method::Auto,
-        tolerance: 0.25,
-    };
+    let config = CountConfig::new(Sampling {
+        resolution: 40,
+        domain: Domain::Hemisphere,
+        cosine: false,
+        channel: Channel::Luminance,
+    });
     let mut materials = Vec::new();
     for spec in ["phong:s=30", "torrance-sparrow:sigma=0.2"] {
         let brdf = Brdf::parse(spec)?;

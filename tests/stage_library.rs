@@ -204,22 +204,19 @@ fn factor_brdf_library_and_binary_write_the_same_bytes() {
 #[test]
 fn count_terms_library_and_binary_write_the_same_bytes() {
     use prtkit::factor::count::{markdown_table, run, CountConfig, Material};
-    use prtkit::factor::{plot, Channel, Domain, Method, Sampling};
+    use prtkit::factor::{plot, Channel, Domain, Sampling};
     let b = bench();
     let specs = ["phong:s=8", "torrance-sparrow:sigma=0.3"];
     let args = ["--brdf", specs[0], "--brdf", specs[1], "--resolution", "16", "--max-terms", "30", "--plot", "k.svg"];
     let (_, table) = b.binary("count-terms", &args);
     let (_, json) =
         b.binary("count-terms", &[&args[..4], &["--resolution", "16", "--max-terms", "30", "--json"]].concat());
-    let config = CountConfig {
-        sampling: Sampling { resolution: 16, domain: Domain::Hemisphere, cosine: false, channel: Channel::Luminance },
-        per_channel: false,
-        max_memory: 4 << 30,
-        energy: 0.99,
-        predict_only: false,
-        method: Method::Auto,
-        tolerance: 0.25,
-    };
+    let config = CountConfig::new(Sampling {
+        resolution: 16,
+        domain: Domain::Hemisphere,
+        cosine: false,
+        channel: Channel::Luminance,
+    });
     let materials = specs
         .iter()
         .map(|s| {

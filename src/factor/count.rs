@@ -51,6 +51,22 @@ pub struct CountConfig {
     pub tolerance: f64,
 }
 
+impl CountConfig {
+    /// `sampling` with the stage's defaults: 99 % of the energy, a 25 % tolerance, the SVD
+    /// method chosen by size, a 4 GiB budget per SVD, one row per material.
+    pub fn new(sampling: Sampling) -> Self {
+        CountConfig {
+            sampling,
+            per_channel: false,
+            max_memory: 4 << 30,
+            energy: 0.99,
+            predict_only: false,
+            method: Method::Auto,
+            tolerance: 0.25,
+        }
+    }
+}
+
 /// One row of the table / JSON array.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Row {
