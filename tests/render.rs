@@ -45,6 +45,13 @@ fn centre(img: &RgbImage, r: usize) -> [f64; 3] {
     s.map(|v| v / (r * r) as f64)
 }
 
+/// The ground truth (`render`'s default shading) of `env` at `res`, as `dir/ref.exr`.
+fn render_reference(dir: &Path, env: &Path, args: &[&str], res: &str) -> PathBuf {
+    let reference = dir.join("ref.exr");
+    bin("render").arg(env).args(args).args(["--res", res, "-q", "-o"]).arg(&reference).assert().success();
+    reference
+}
+
 /// The `render --json` summary.
 fn summary(out: &[u8]) -> Summary {
     common::parse(out)
@@ -90,13 +97,7 @@ fn render_white_furnace_gives_the_albedo_in_every_mode() {
 fn render_irradiance_matches_the_reference_for_lambert_within_one_percent() {
     let dir = tempfile::tempdir().unwrap();
     let env = write_env(dir.path(), "sky.exr", 128, 64, smooth);
-    let reference = dir.path().join("ref.exr");
-    bin("render")
-        .arg(&env)
-        .args(["--brdf", "lambert", "--res", "32x32", "-q", "-o"])
-        .arg(&reference)
-        .assert()
-        .success();
+    let reference = render_reference(dir.path(), &env, &["--brdf", "lambert"], "32x32");
     let out = bin("render")
         .arg(&env)
         .args(["--shading", "irradiance", "--brdf", "lambert", "--res", "32x32", "-q", "--json", "--compare"])
@@ -114,13 +115,7 @@ fn render_irradiance_matches_the_reference_for_lambert_within_one_percent() {
 fn render_shrm_matches_the_reference_within_the_prefilter_epsilon() {
     let dir = tempfile::tempdir().unwrap();
     let env = write_env(dir.path(), "sky.exr", 128, 64, smooth);
-    let reference = dir.path().join("ref.exr");
-    bin("render")
-        .arg(&env)
-        .args(["--brdf", "phong:s=16", "--integrand", "prefilter", "--res", "32x32", "-q", "-o"])
-        .arg(&reference)
-        .assert()
-        .success();
+    let reference = render_reference(dir.path(), &env, &["--brdf", "phong:s=16", "--integrand", "prefilter"], "32x32");
     let out = Chain::prefilter(dir.path(), &env, "phong:s=16", "p.shrm", &["-e", "0.01"])
         .render()
         .args(["--res", "32x32", "--json", "--compare"])
@@ -139,13 +134,7 @@ fn render_shrm_matches_the_reference_within_the_prefilter_epsilon() {
 fn render_factored_error_falls_monotonically_with_k() {
     let dir = tempfile::tempdir().unwrap();
     let env = write_env(dir.path(), "sky.exr", 128, 64, smooth);
-    let reference = dir.path().join("ref.exr");
-    bin("render")
-        .arg(&env)
-        .args(["--brdf", "phong:s=8", "--res", "24x24", "-q", "-o"])
-        .arg(&reference)
-        .assert()
-        .success();
+    let reference = render_reference(dir.path(), &env, &["--brdf", "phong:s=8"], "24x24");
     let mut errors = Vec::new();
     for k in [1, 3, 8, 20, 40] {
         let out = bin("render")
@@ -174,13 +163,7 @@ fn render_factored_shades_a_sun_exactly_and_the_rest_through_the_factors() {
     let dir = tempfile::tempdir().unwrap();
     let sun = DVec3::new(0.5, -0.6, 0.6).normalize();
     let env = write_env(dir.path(), "sun.exr", 128, 64, |d| smooth(d) + if d.dot(sun) > 0.9995 { 1e4 } else { 0.0 });
-    let reference = dir.path().join("ref.exr");
-    bin("render")
-        .arg(&env)
-        .args(["--brdf", "phong:s=30", "--res", "32x32", "-q", "-o"])
-        .arg(&reference)
-        .assert()
-        .success();
+    let reference = render_reference(dir.path(), &env, &["--brdf", "phong:s=30"], "32x32");
     let run = |bright: &str| {
         let out = bin("render")
             .arg(&env)
@@ -298,13 +281,7 @@ fn factor_file(dir: &Path, name: &str, brdf: &str, cosine: bool, terms: usize) -
 fn render_factored_reads_factor_brdf_files_with_or_without_the_cosine_folded_in() {
     let dir = tempfile::tempdir().unwrap();
     let env = write_env(dir.path(), "sky.exr", 128, 64, smooth);
-    let reference = dir.path().join("ref.exr");
-    bin("render")
-        .arg(&env)
-        .args(["--brdf", "phong:s=8", "--res", "24x24", "-q", "-o"])
-        .arg(&reference)
-        .assert()
-        .success();
+    let reference = render_reference(dir.path(), &env, &["--brdf", "phong:s=8"], "24x24");
     let factored = |extra: &[&str]| -> f64 {
         let out = bin("render")
             .arg(&env)
