@@ -14,6 +14,16 @@ pub trait Shade: Sync {
     fn shade(&self, hit: &Hit, wo: DVec3) -> [f64; 3];
 }
 
+/// Two shading modes' radiance added (e.g. a smooth part and the bright sources' exact part).
+pub struct Sum<'a>(pub &'a dyn Shade, pub &'a dyn Shade);
+
+impl Shade for Sum<'_> {
+    fn shade(&self, hit: &Hit, wo: DVec3) -> [f64; 3] {
+        let (a, b) = (self.0.shade(hit, wo), self.1.shade(hit, wo));
+        [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+    }
+}
+
 /// A rendered image and which pixels show the object.
 #[derive(Clone, Debug)]
 pub struct Frame {

@@ -23,7 +23,7 @@ pub mod scene;
 pub mod stage;
 
 pub use camera::Camera;
-pub use frame::{render, Frame, Shade};
+pub use frame::{render, Frame, Shade, Sum};
 pub use scene::{Hit, Scene};
 
 use glam::DVec3;

@@ -7,7 +7,7 @@ use super::irradiance::Irradiance;
 use super::panel::{layout, Cell};
 use super::reference::{Integrand, Reference};
 use super::reflection::ShrmShader;
-use super::{render, Camera, Frame, Scene, Shade};
+use super::{render, Camera, Frame, Scene, Shade, Sum};
 use crate::brdf::Brdf;
 use crate::envmap::bright::{split, BrightRule};
 use crate::envmap::EnvMap;
@@ -199,16 +199,6 @@ pub struct BrightShare {
     pub texels: usize,
     /// Their excess over the threshold, as a share of the map's radiant energy.
     pub energy_fraction: f64,
-}
-
-/// Two shaders' radiance added: the smooth part and the bright sources' exact part.
-struct Sum<'a>(&'a dyn Shade, &'a dyn Shade);
-
-impl Shade for Sum<'_> {
-    fn shade(&self, hit: &super::Hit, wo: glam::DVec3) -> [f64; 3] {
-        let (a, b) = (self.0.shade(hit, wo), self.1.shade(hit, wo));
-        [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-    }
 }
 
 /// Errors of the stage.
