@@ -16,6 +16,7 @@
 //! a white furnace) whole.
 
 use super::EnvMap;
+use crate::io::RgbImage;
 use glam::DVec3;
 
 /// The brightest share of the sphere that may be moved to the angular pass.
@@ -63,6 +64,22 @@ impl BrightSources {
     /// True when nothing was split.
     pub fn is_empty(&self) -> bool {
         self.texels.is_empty()
+    }
+
+    /// Puts the excess back into a lat-long image of any size: each texel into the texel its
+    /// direction falls in, scaled by the ratio of solid angles so the image keeps its energy.
+    pub fn add_to_latlong(&self, image: &mut RgbImage) {
+        let grid = crate::sphere::LatLong::new(image.width, image.height);
+        for t in &self.texels {
+            let (fx, fy) = grid.position(t.dir);
+            let x = (fx.floor().max(0.0) as usize).min(image.width - 1);
+            let y = (fy.floor().max(0.0) as usize).min(image.height - 1);
+            let scale = t.solid_angle / grid.row_solid_angle(y);
+            let px = &mut image.pixels[y * image.width + x];
+            for c in 0..3 {
+                px[c] += (t.excess[c] * scale) as f32;
+            }
+        }
     }
 }
 
@@ -131,7 +148,6 @@ pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::RgbImage;
 
     fn sky_with_sun() -> EnvMap {
         let grid = LatLong::new(64, 32);
@@ -142,6 +158,25 @@ mod tests {
             [v, 0.9 * v, 0.8 * v]
         }))
         .unwrap()
+    }
+
+    #[test]
+    fn the_excess_put_back_restores_the_map_and_keeps_the_energy_at_any_size() {
+        let map = sky_with_sun();
+        let (mut rest, bright) = split(&map, BrightRule::Auto);
+        assert!(!bright.is_empty());
+        // Same grid: remainder + excess is the map, texel for texel.
+        bright.add_to_latlong(&mut rest.images_mut()[0]);
+        for (a, b) in rest.image().pixels.iter().zip(&map.image().pixels) {
+            assert!((0..3).all(|c| (a[c] - b[c]).abs() <= 1e-6 * b[c]), "{a:?} vs {b:?}");
+        }
+        // A coarser grid: the excess's energy Σ e ΔΩ lands whole.
+        let mut coarse = RgbImage::new(16, 8);
+        bright.add_to_latlong(&mut coarse);
+        let grid = LatLong::new(16, 8);
+        let got: f64 = coarse.pixels.iter().enumerate().map(|(i, p)| grid.row_solid_angle(i / 16) * p[0] as f64).sum();
+        let want: f64 = bright.texels.iter().map(|t| t.excess[0] * t.solid_angle).sum();
+        assert!((got - want).abs() < 1e-5 * want, "{got} vs {want}");
     }
 
     use crate::sphere::LatLong;

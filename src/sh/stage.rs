@@ -157,7 +157,7 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
         if config.reconstruction {
             let smooth = crate::sh::project::project(&clipped, coeffs.order, progress).map_err(|e| select(e.into()))?;
             let (mut image, t) = windowed_synthesis(&smooth, &vec![1.0; coeffs.order + 1], config.window, w, h)?;
-            add_texels(&mut image, &bright);
+            bright.add_to_latlong(&mut image);
             reconstruction = Some((image, t));
         }
         if config.irradiance {
@@ -237,22 +237,6 @@ fn windowed_synthesis(
         min,
     );
     Ok((found.map, Some(found.t)))
-}
-
-/// Adds bright texels' excess to a lat-long image, each into the texel its direction falls in,
-/// scaled by the ratio of solid angles so the image keeps their energy.
-fn add_texels(image: &mut RgbImage, bright: &crate::envmap::bright::BrightSources) {
-    let grid = crate::sphere::LatLong::new(image.width, image.height);
-    for t in &bright.texels {
-        let (fx, fy) = grid.position(t.dir);
-        let x = (fx.floor().max(0.0) as usize).min(image.width - 1);
-        let y = (fy.floor().max(0.0) as usize).min(image.height - 1);
-        let scale = t.solid_angle / grid.row_solid_angle(y);
-        let px = &mut image.pixels[y * image.width + x];
-        for c in 0..3 {
-            px[c] += (t.excess[c] * scale) as f32;
-        }
-    }
 }
 
 /// The lat-long image size: as asked, else the input's for a lat-long input wide enough for the
