@@ -324,6 +324,8 @@ impl Prefiltered {
         };
         let (w, h) = (self.remainder_shrm.width(), self.remainder_shrm.height());
         let windowed = |factors: &[f64]| remainder_shrm(model, &self.brdf, &self.lighting, factors, w, h, progress);
+        // A synthesis that fails ends the search (taken as non-negative); the error is returned
+        // with the map the search settles on.
         let min_of = |maps: &Result<Vec<RgbImage>, PrefilterError>| match maps {
             Ok(maps) => maps.iter().flat_map(|m| m.pixels.iter().flatten()).fold(0.0f64, |a, &v| a.min(v as f64)),
             Err(_) => 0.0,
