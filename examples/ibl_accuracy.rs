@@ -3,25 +3,20 @@
 //!
 //! `cargo run --release --example ibl_accuracy -- OUT.md [SAMPLES]`
 
+mod common;
+
 use prtkit::envmap::LoadOptions;
 use prtkit::ibl::manifest::Level;
 use prtkit::ibl::stage::{self, Config, RoughnessMap};
 use prtkit::progress::NoProgress;
 use std::fmt::Write;
-use std::path::PathBuf;
 
 fn main() {
     let out = std::env::args().nth(1).unwrap_or_else(|| "docs/results/ibl-accuracy.md".into());
     let samples: usize = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(256);
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/testdata/envmaps");
-    if !dir.is_dir() {
-        eprintln!("skipping: {} is absent", dir.display());
+    let Some((dir, names)) = common::shared_probes() else {
         return;
-    }
-    let names = ["grace_latlong.exr", "grace128.hdr", "grace_probe_250.pfm", "uffizi_ict_latlong_256x128.hdr"]
-        .map(String::from)
-        .into_iter()
-        .chain(["grace", "rnl", "stpeters", "galileo"].map(|probe| format!("dxsdk_cubes/{probe}/")));
+    };
     let mut md = format!(
         "## `ibl`: accuracy of every level on the shared light probes\n\n\
          `scripts/ibl-accuracy.sh`: the default bake (`ibl ENVMAP -o DIR`: 256² down to 8², r_k = k/5, and \
@@ -37,7 +32,7 @@ fn main() {
          | --- | --- | ---: | ---: | ---: | --- | --- | ---: | ---: | ---: | ---: |\n"
     );
     let mut worst = (0.0f64, 0.0f64);
-    let mut runs: Vec<(String, RoughnessMap)> = names.map(|n| (n, RoughnessMap::Linear)).collect();
+    let mut runs: Vec<(String, RoughnessMap)> = names.into_iter().map(|n| (n, RoughnessMap::Linear)).collect();
     runs.insert(1, ("grace_latlong.exr".into(), RoughnessMap::Filament));
     for (name, map) in runs {
         let env = match LoadOptions::default().load(&dir.join(&name)) {

@@ -3,25 +3,20 @@
 //!
 //! `cargo run --release --example probe_coefficients -- OUT.md`
 
+mod common;
+
 use prtkit::envmap::{EnvMap, LoadOptions};
 use prtkit::progress::NoProgress;
 use prtkit::sh::project::project;
 use std::fmt::Write;
-use std::path::PathBuf;
 
 fn main() {
     let out = std::env::args().nth(1).unwrap_or_else(|| "docs/results/probes.md".into());
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/testdata/envmaps");
-    if !dir.is_dir() {
-        eprintln!("skipping: {} is absent", dir.display());
+    let Some((dir, names)) = common::shared_probes() else {
         return;
-    }
+    };
     // Read as every stage reads an environment map: the layout from the aspect ratio (a
     // directory is six faces), NaN, infinite and negative radiance refused.
-    let names = ["grace_latlong.exr", "grace128.hdr", "grace_probe_250.pfm", "uffizi_ict_latlong_256x128.hdr"]
-        .map(String::from)
-        .into_iter()
-        .chain(["grace", "rnl", "stpeters", "galileo"].map(|probe| format!("dxsdk_cubes/{probe}/")));
     let mut inputs: Vec<(String, EnvMap)> = Vec::new();
     for name in names {
         match LoadOptions::default().load(&dir.join(&name)) {
