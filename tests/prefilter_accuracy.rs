@@ -155,3 +155,43 @@ fn kajiya_kay_by_the_tangent_matches_the_angular_reference() {
     // bound (§5.1), and Kajiya–Kay's ridge along the reflection cone converges more slowly in p.
     assert!(err <= 0.02, "relative RMS {err} (ε achieved {achieved})");
 }
+
+/// The ring-free table (docs/results/ring-free.md) in small: a sky with a sun 10⁴ times the
+/// ground, the default bake against the angular reference at ε = 1e-5 (tight enough that its own
+/// truncation does not count), and the paper-order bake, which rings, beside it.
+#[test]
+fn default_bakes_of_a_sun_neither_ring_nor_go_negative() {
+    use prtkit::envmap::bright::BrightRule;
+    use prtkit::prefilter::orders::OrderRule;
+    use prtkit::prefilter::pipeline::Lighting;
+    use prtkit::prefilter::stage::{self, Config, MapRequest, Method};
+    use prtkit::sh::window::Window;
+    let sun = DVec3::new(0.4, -0.3, 0.7).normalize();
+    let map = EnvMap::latlong(common::latlong(128, 64, |d| {
+        let ground = if d.z > 0.0 { 1.0 } else { 0.2 };
+        let v = ground + if d.dot(sun) > 0.9985 { 1e4 } else { 0.0 };
+        [v as f32, (0.9 * v) as f32, (0.8 * v) as f32]
+    }))
+    .unwrap();
+    let bake = |spec: &str, view: DVec3, setup: &dyn Fn(Config) -> Config| -> RgbImage {
+        let config = setup(Config {
+            size: Some((64, 32)),
+            maps: vec![MapRequest { file: "m.exr".into(), view }],
+            ..Config::new(Brdf::parse(spec).unwrap())
+        });
+        stage::run(&config, Lighting::Map(&map), &NoProgress).unwrap().maps.remove(0)
+    };
+    let reference = |c: Config| Config { method: Method::Angular, epsilon: 1e-5, ..c };
+    let paper =
+        |c: Config| Config { order_rule: OrderRule::Energy, bright: BrightRule::Off, window: Window::None, ..c };
+    for (spec, view) in
+        [("phong:s=32", DVec3::Z), ("torrance-sparrow:sigma=0.2", DVec3::new(1.0, 0.0, 0.2).normalize())]
+    {
+        let truth = bake(spec, view, &reference);
+        let (m, _) = prtkit::metrics::compare(&bake(spec, view, &|c| c), &truth, &[]).unwrap();
+        assert_eq!(m.negative_fraction, 0.0, "{spec}: {m}");
+        assert!(m.p99_texel_error <= 0.05 && m.rel_error <= 0.02, "{spec}: {m}");
+        let (p, _) = prtkit::metrics::compare(&bake(spec, view, &paper), &truth, &[]).unwrap();
+        assert!(p.negative_fraction > 0.0 || p.p99_texel_error > 0.2, "{spec}: the paper's orders should ring: {p}");
+    }
+}
