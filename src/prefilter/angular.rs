@@ -340,6 +340,7 @@ impl ConePyramid {
         let mut image = env.image().clone();
         while image.height >= 16 && image.height % 2 == 0 && image.width % 2 == 0 {
             image = halved(&image);
+            // Halving keeps the 2:1 shape, so this cannot fail for a map that was lat-long.
             let level = EnvMap::latlong(image.clone()).map_err(|_| AngularError::NotLatLong(Layout::LatLong.name()))?;
             levels.push(ConeIntegrator::new(&level)?);
         }
