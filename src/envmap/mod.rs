@@ -7,7 +7,7 @@ mod cube;
 mod layout;
 mod load;
 mod probe;
-mod resample;
+pub mod resample;
 pub mod stage;
 pub mod zonal;
 

@@ -13,7 +13,7 @@
 //!
 //! and at least [`MIN_ROWS`] rows, so that wide lobes still see where small bright sources are.
 //! The grid is the input box-resampled to that many rows (rounded up to a multiple of
-//! [`GRID_STEP`]; [`box_resample`]: texels are exact means over their footprints, ∫ L dω is
+//! [`GRID_STEP`]; [`box_latlong`]: texels are exact means over their footprints, ∫ L dω is
 //! kept), or the input itself, or — when the read-back needs more rows than the input has — the
 //! input with every texel split f × f, which is the same piecewise-constant function (nothing is
 //! interpolated).
@@ -35,6 +35,7 @@
 //! the stage's cost model.
 
 use super::ggx::SplitSumLobe;
+use crate::envmap::resample::box_latlong;
 use crate::envmap::zonal::{rule_for_kernel, zonal_filter, ZonalError};
 use crate::io::RgbImage;
 use crate::progress::Progress;
@@ -112,62 +113,8 @@ impl LatLongSource {
             let f = h / base.height;
             return RgbImage::from_fn(w, h, |x, y| base.get(x / f, y / f));
         }
-        box_resample(base, w, h)
+        box_latlong(base, w, h)
     }
-}
-
-/// The overlaps of the cells of two partitions of one interval, given by their increasing
-/// boundaries `a` (source) and `b` (target): (target cell, source cell, overlap length).
-fn overlaps(a: &[f64], b: &[f64]) -> Vec<(usize, usize, f64)> {
-    let mut out = Vec::with_capacity(a.len() + b.len());
-    let (mut i, mut j) = (0, 0);
-    while i + 1 < a.len() && j + 1 < b.len() {
-        let lo = a[i].max(b[j]);
-        let hi = a[i + 1].min(b[j + 1]);
-        if hi > lo {
-            out.push((j, i, hi - lo));
-        }
-        if a[i + 1] < b[j + 1] {
-            i += 1;
-        } else {
-            j += 1;
-        }
-    }
-    out
-}
-
-/// Resamples a lat-long image to a coarser W' × H' so that each texel is the exact mean radiance
-/// over its footprint: a lat-long texel is a product of an interval in φ and one in z = cos θ,
-/// in which the solid angle is dz dφ, so two texels overlap in the product of their intervals'
-/// overlaps and the mean is separable (columns, then rows). ∫ L dω is kept.
-pub fn box_resample(img: &RgbImage, width: usize, height: usize) -> RgbImage {
-    let (w, h) = (img.width, img.height);
-    let phi = |n: usize| (0..=n).map(|k| k as f64 / n as f64).collect::<Vec<_>>();
-    // z boundaries in increasing order: row 0 is the top, so these run from the bottom row up;
-    // −cos(πk/n) increases with k, and row k spans [−cos(πk/n), −cos(π(k+1)/n)] of −z.
-    let z = |n: usize| (0..=n).map(|k| -(PI * k as f64 / n as f64).cos()).collect::<Vec<_>>();
-    let columns = overlaps(&phi(w), &phi(width));
-    let (z_in, z_out) = (z(h), z(height));
-    let rows = overlaps(&z_in, &z_out);
-    let mut wide = vec![[0.0f64; 3]; h * width];
-    for y in 0..h {
-        for &(x_out, x_in, len) in &columns {
-            let v = img.get(x_in, y);
-            for c in 0..3 {
-                wide[y * width + x_out][c] += v[c] as f64 * len * width as f64;
-            }
-        }
-    }
-    let mut out = vec![[0.0f64; 3]; height * width];
-    for &(y_out, y_in, len) in &rows {
-        let share = len / (z_out[y_out + 1] - z_out[y_out]);
-        for x in 0..width {
-            for c in 0..3 {
-                out[y_out * width + x][c] += wide[y_in * width + x][c] * share;
-            }
-        }
-    }
-    RgbImage { width, height, pixels: out.iter().map(|p| p.map(|v| v as f32)).collect() }
 }
 
 /// A filtered sphere on a lat-long grid, read by direction.
@@ -259,41 +206,6 @@ pub fn zonal_cost(width: usize, height: usize) -> f64 {
 mod tests {
     use super::*;
     use crate::progress::NoProgress;
-
-    #[test]
-    fn box_resampling_keeps_the_integral_at_any_ratio() {
-        let img = RgbImage::from_fn(64, 32, |x, y| [(x * y) as f32, 1.0, (x % 3) as f32]);
-        let integral = |i: &RgbImage| -> [f64; 3] {
-            let g = LatLong::new(i.width, i.height);
-            let mut s = [0.0; 3];
-            for y in 0..i.height {
-                for x in 0..i.width {
-                    for c in 0..3 {
-                        s[c] += g.row_solid_angle(y) * i.get(x, y)[c] as f64;
-                    }
-                }
-            }
-            s
-        };
-        let a = integral(&img);
-        for (w, h) in [(32, 16), (40, 20), (26, 13)] {
-            let r = box_resample(&img, w, h);
-            let b = integral(&r);
-            for c in 0..3 {
-                assert!((a[c] / b[c] - 1.0).abs() < 1e-6, "{w}x{h}: {a:?} {b:?}");
-            }
-            // A constant channel stays exactly constant.
-            assert!(r.pixels.iter().all(|p| (p[1] - 1.0).abs() < 1e-6));
-        }
-        // Halving is the 2 × 2 mean weighted by the rows' solid angles.
-        let half = box_resample(&img, 32, 16);
-        let g = LatLong::new(64, 32);
-        let (w0, w1) = (g.row_solid_angle(6), g.row_solid_angle(7));
-        let want = (w0 * (img.get(10, 6)[0] + img.get(11, 6)[0]) as f64
-            + w1 * (img.get(10, 7)[0] + img.get(11, 7)[0]) as f64)
-            / (2.0 * (w0 + w1));
-        assert!((half.get(5, 3)[0] as f64 - want).abs() < 1e-4 * want, "{} vs {want}", half.get(5, 3)[0]);
-    }
 
     #[test]
     fn working_grid_splits_texels_when_the_input_is_too_coarse() {

@@ -339,7 +339,7 @@ impl ConePyramid {
         let mut levels = vec![ConeIntegrator::new(env)?];
         let mut image = env.image().clone();
         while image.height >= 16 && image.height % 2 == 0 && image.width % 2 == 0 {
-            image = halved(&image);
+            image = crate::envmap::resample::box_latlong(&image, image.width / 2, image.height / 2);
             // Halving keeps the 2:1 shape, so this cannot fail for a map that was lat-long.
             let level = EnvMap::latlong(image.clone()).map_err(|_| AngularError::NotLatLong(Layout::LatLong.name()))?;
             levels.push(ConeIntegrator::new(&level)?);
@@ -354,25 +354,6 @@ impl ConePyramid {
         let level = self.levels.iter().rev().find(fits).unwrap_or(&self.levels[0]);
         level.integrate(axis, theta_star, weight)
     }
-}
-
-/// A lat-long image at half the resolution: each texel the solid-angle-weighted mean of the 2 × 2
-/// it covers.
-fn halved(image: &RgbImage) -> RgbImage {
-    let grid = LatLong::new(image.width, image.height);
-    RgbImage::from_fn(image.width / 2, image.height / 2, |x, y| {
-        let (w0, w1) = (grid.row_solid_angle(2 * y), grid.row_solid_angle(2 * y + 1));
-        let mut acc = [0.0f64; 3];
-        for (yy, w) in [(2 * y, w0), (2 * y + 1, w1)] {
-            for xx in [2 * x, 2 * x + 1] {
-                let p = image.get(xx, yy);
-                for c in 0..3 {
-                    acc[c] += w * p[c] as f64;
-                }
-            }
-        }
-        acc.map(|v| (v / (2.0 * (w0 + w1))) as f32)
-    })
 }
 
 /// A truncation of a lobe: the cone angle θ* and the share of the lobe's weight outside it.
