@@ -61,6 +61,8 @@ pub enum Brdf {
     KajiyaKay(models::KajiyaKay),
     /// GGX microfacet reflection (Walter et al. 2007; Heitz 2014), no Fresnel.
     Ggx(models::GgxMicrofacet),
+    /// The glTF 2.0 metallic-roughness material (GGX with Schlick Fresnel over Lambert).
+    Gltf(models::GltfMaterial),
     /// Measured MERL table.
     Merl(Arc<MerlBrdf>),
 }
@@ -89,6 +91,7 @@ impl Brdf {
             Brdf::Lafortune(m) => grey(m.eval(wi, wo)),
             Brdf::KajiyaKay(m) => grey(m.eval(wi, wo)),
             Brdf::Ggx(m) => grey(m.eval(wi, wo)),
+            Brdf::Gltf(m) => m.eval(wi, wo),
             Brdf::Merl(m) => m.eval(wi, wo),
         }
     }
@@ -133,9 +136,9 @@ impl Brdf {
         }
     }
 
-    /// True if the channels can differ (measured data).
+    /// True if the channels can differ (measured data, coloured materials).
     pub fn is_rgb(&self) -> bool {
-        matches!(self, Brdf::Merl(_))
+        matches!(self, Brdf::Merl(_) | Brdf::Gltf(_))
     }
 
     /// The model name, e.g. `phong`.
@@ -148,6 +151,7 @@ impl Brdf {
             Brdf::Lafortune(_) => "lafortune",
             Brdf::KajiyaKay(_) => "kajiya-kay",
             Brdf::Ggx(_) => "ggx",
+            Brdf::Gltf(_) => "gltf",
             Brdf::Merl(_) => "merl",
         }
     }

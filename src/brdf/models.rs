@@ -258,6 +258,55 @@ impl GgxMicrofacet {
     }
 }
 
+/// The glTF 2.0 metallic-roughness material (glTF 2.0 specification, Appendix B "BRDF
+/// Implementation"): a GGX specular layer over a Lambertian base for dielectrics (F0 = 0.04, IOR
+/// 1.5), the same layer tinted by the base colour for metals, mixed by the metalness:
+///
+///   f = f_spec · F(v·h) + (1 − m)(1 − F_d(v·h)) · c/π,
+///   F = F0 + (1 − F0)(1 − v·h)⁵ with F0 = mix(0.04, c, m),   F_d = 0.04 + 0.96 (1 − v·h)⁵,
+///
+/// f_spec the [`GgxMicrofacet`] D·V of roughness r (α = r²). Expanding the spec's
+/// mix(fresnel_mix(diffuse, specular), conductor_fresnel(specular), m) gives exactly this. It is
+/// what `ibl`'s split sum approximates, and `render --shading reference` integrates it as the
+/// ground truth of `render --shading ibl`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GltfMaterial {
+    /// Base colour c (linear RGB, each in [0, 1]).
+    pub base: [f64; 3],
+    /// Metalness m in [0, 1].
+    pub metalness: f64,
+    /// The specular layer.
+    pub specular: GgxMicrofacet,
+}
+
+impl GltfMaterial {
+    /// F0 of the dielectric (IOR 1.5): ((1 − 1.5)/(1 + 1.5))².
+    pub const DIELECTRIC_F0: f64 = 0.04;
+
+    /// F0 per channel: mix(0.04, c, m).
+    pub fn f0(&self) -> [f64; 3] {
+        self.base.map(|c| Self::DIELECTRIC_F0 + self.metalness * (c - Self::DIELECTRIC_F0))
+    }
+
+    /// The diffuse colour (1 − m) c.
+    pub fn diffuse_colour(&self) -> [f64; 3] {
+        self.base.map(|c| (1.0 - self.metalness) * c)
+    }
+
+    /// ρ(ω_i, ω_o) per channel; zero unless both directions are above the surface.
+    pub fn eval(&self, wi: DVec3, wo: DVec3) -> [f64; 3] {
+        if wi.z <= 0.0 || wo.z <= 0.0 {
+            return [0.0; 3];
+        }
+        let spec = self.specular.eval(wi, wo);
+        let v_dot_h = wo.dot((wi + wo).normalize()).clamp(0.0, 1.0);
+        let schlick = (1.0 - v_dot_h).powi(5);
+        let diffuse_weight = (1.0 - (Self::DIELECTRIC_F0 + (1.0 - Self::DIELECTRIC_F0) * schlick)) / PI;
+        let (f0, kd) = (self.f0(), self.diffuse_colour());
+        [0, 1, 2].map(|c| spec * (f0[c] + (1.0 - f0[c]) * schlick) + kd[c] * diffuse_weight)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

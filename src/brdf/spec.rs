@@ -8,7 +8,9 @@
 //!
 //! Names and numbers are checked before any file is touched; `merl:` then reads the table.
 
-use super::models::{BlinnPhong, GgxMicrofacet, KajiyaKay, Lafortune, LafortuneLobe, Lambert, Phong, TorranceSparrow};
+use super::models::{
+    BlinnPhong, GgxMicrofacet, GltfMaterial, KajiyaKay, Lafortune, LafortuneLobe, Lambert, Phong, TorranceSparrow,
+};
 use super::{Brdf, BrdfError, MerlBrdf};
 use crate::limits::{MAX_BRDF_PEAK, MAX_TORRANCE_SPARROW_SIGMA};
 use std::f64::consts::PI;
@@ -18,7 +20,8 @@ use std::sync::Arc;
 
 /// The models and their parameters, for error messages and `--help`.
 pub const ACCEPTED: &str = "lambert[:albedo=A], phong:s=S, blinn-phong:s=S, torrance-sparrow:sigma=SIGMA, \
-lafortune:[kd=KD,]lobe=CXY/CZ/N[,lobe=CX/CY/CZ/N...], kajiya-kay:s=S, ggx:roughness=R, merl:PATH";
+lafortune:[kd=KD,]lobe=CXY/CZ/N[,lobe=CX/CY/CZ/N...], kajiya-kay:s=S, ggx:roughness=R, \
+gltf[:base=R/G/B,metalness=M,roughness=R], merl:PATH";
 
 /// A spec that does not parse. The message says what is wrong and what is accepted.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -102,6 +105,29 @@ fn parse_analytic(spec: &str, model: String, rest: &str) -> Result<Brdf, SpecErr
             )?;
             Brdf::Ggx(GgxMicrofacet::new(r).map_err(|e| err(e.to_string()))?)
         }
+        "gltf" => {
+            // glTF's own defaults: baseColorFactor 1, metallicFactor 1, roughnessFactor 1.
+            let base = p.colour("base", [1.0; 3])?;
+            let metalness = p.optional("metalness", 1.0)?;
+            if !(0.0..=1.0).contains(&metalness) {
+                return Err(err(format!("gltf metalness must be in [0, 1], got {metalness}")));
+            }
+            let r = p.optional("roughness", 1.0)?;
+            if !(r > 0.0 && r <= 1.0) {
+                return Err(err(format!(
+                    "gltf roughness must be in (0, 1], got {r} (r = 0, the mirror, is a delta; see docs/brdf-specs.md)"
+                )));
+            }
+            let min_r = (4.0 * PI * MAX_BRDF_PEAK).powf(-0.25);
+            p.peak(
+                "the peak at normal incidence 1/(4πα²), α = r²",
+                GgxMicrofacet::normal_peak(r),
+                "roughness >=",
+                min_r,
+            )?;
+            let specular = GgxMicrofacet::new(r).map_err(|e| err(e.to_string()))?;
+            Brdf::Gltf(GltfMaterial { base, metalness, specular })
+        }
         "lafortune" => {
             let kd = p.optional("kd", 0.0)?;
             if kd < 0.0 {
@@ -152,6 +178,10 @@ impl fmt::Display for Brdf {
                 Ok(())
             }
             Brdf::Ggx(m) => write!(f, "ggx:roughness={}", m.roughness()),
+            Brdf::Gltf(m) => {
+                let [r, g, b] = m.base;
+                write!(f, "gltf:base={r}/{g}/{b},metalness={},roughness={}", m.metalness, m.specular.roughness())
+            }
             Brdf::Merl(m) => write!(f, "merl:{}", m.path().display()),
         }
     }
@@ -191,6 +221,7 @@ impl Params<'_> {
             "phong" | "blinn-phong" | "kajiya-kay" => "s (exponent > 0)",
             "torrance-sparrow" => "sigma (roughness > 0, radians)",
             "ggx" => "roughness (perceptual roughness in (0, 1], alpha = roughness^2)",
+            "gltf" => "base (R/G/B or one grey value, each in [0, 1], default 1), metalness (in [0, 1], default 1), roughness (in (0, 1], default 1)",
             "lafortune" => "kd (>= 0, default 0) and lobe=CXY/CZ/N or lobe=CX/CY/CZ/N (N > 0), repeatable",
             _ => "",
         }
@@ -203,6 +234,7 @@ impl Params<'_> {
             "phong" | "blinn-phong" | "kajiya-kay" => &["s"],
             "torrance-sparrow" => &["sigma"],
             "ggx" => &["roughness"],
+            "gltf" => &["base", "metalness", "roughness"],
             "lafortune" => &["kd", "lobe"],
             _ => return Ok(()),
         };
@@ -224,13 +256,18 @@ impl Params<'_> {
         Ok(x)
     }
 
-    fn single(&mut self, key: &str) -> Result<Option<f64>, SpecError> {
+    /// The text of parameter `key`, if given (at most once).
+    fn text(&mut self, key: &str) -> Result<Option<String>, SpecError> {
         let hits: Vec<String> = self.params.iter().filter(|(k, _)| k == key).map(|(_, v)| v.clone()).collect();
         if hits.len() > 1 {
             return Err(self.err(format!("parameter {key} is given {} times", hits.len())));
         }
         self.used.push(key.to_string());
-        hits.first().map(|v| self.number(key, v)).transpose()
+        Ok(hits.into_iter().next())
+    }
+
+    fn single(&mut self, key: &str) -> Result<Option<f64>, SpecError> {
+        self.text(key)?.map(|v| self.number(key, &v)).transpose()
     }
 
     fn optional(&mut self, key: &str, default: f64) -> Result<f64, SpecError> {
@@ -247,6 +284,21 @@ impl Params<'_> {
             )));
         }
         Ok(())
+    }
+
+    /// A colour `key=R/G/B` (or one grey value), each component in [0, 1].
+    fn colour(&mut self, key: &str, default: [f64; 3]) -> Result<[f64; 3], SpecError> {
+        let Some(v) = self.text(key)? else { return Ok(default) };
+        let nums = v.split('/').map(|x| self.number(key, x.trim())).collect::<Result<Vec<f64>, _>>()?;
+        let rgb = match nums.as_slice() {
+            [g] => [*g; 3],
+            [r, g, b] => [*r, *g, *b],
+            _ => return Err(self.err(format!("{key}={v:?} needs R/G/B or one grey value, got {} numbers", nums.len()))),
+        };
+        if rgb.iter().any(|c| !(0.0..=1.0).contains(c)) {
+            return Err(self.err(format!("{key}={v} must have every component in [0, 1]")));
+        }
+        Ok(rgb)
     }
 
     fn positive(&mut self, key: &str) -> Result<f64, SpecError> {
