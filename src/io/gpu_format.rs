@@ -131,6 +131,38 @@ impl TexelFormat {
         }
     }
 
+    /// The format of a `VkFormat` value, if prtkit writes it.
+    pub fn from_vk_format(vk_format: u32) -> Option<Self> {
+        Self::ALL.into_iter().find(|f| f.vk_format() == vk_format)
+    }
+
+    /// Channels a texel holds: 4 (RGBA), 3 (the packed RGB formats) or 2 (RG).
+    pub fn channels(self) -> usize {
+        match self {
+            TexelFormat::Rgba16Float | TexelFormat::Rgba32Float => 4,
+            TexelFormat::B10G11R11Ufloat | TexelFormat::E5B9G9R9Ufloat => 3,
+            TexelFormat::Rg16Float | TexelFormat::Rg32Float => 2,
+        }
+    }
+
+    /// Appends the [`TexelFormat::channels`] floats of each little-endian texel of `bytes` (whole
+    /// texels; a trailing partial texel is ignored): the inverse of [`TexelFormat::encode`] up to
+    /// its rounding.
+    pub fn decode(self, bytes: &[u8], out: &mut Vec<f32>) {
+        let half = |b: &[u8]| f16::from_bits(u16::from_le_bytes([b[0], b[1]])).to_f32();
+        let single = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        out.reserve(bytes.len() / self.texel_bytes() * self.channels());
+        for t in bytes.chunks_exact(self.texel_bytes()) {
+            match self {
+                TexelFormat::Rgba16Float | TexelFormat::Rg16Float => out.extend(t.chunks_exact(2).map(half)),
+                TexelFormat::Rgba32Float | TexelFormat::Rg32Float => out.extend(t.chunks_exact(4).map(single)),
+                TexelFormat::B10G11R11Ufloat => out.extend(unpack_b10g11r11(word(t))),
+                TexelFormat::E5B9G9R9Ufloat => out.extend(unpack_rgb9e5(word(t))),
+            }
+        }
+    }
+
     /// Whether `channels` interleaved input channels can be encoded.
     fn check_channels(self, channels: usize) -> Result<(), FormatError> {
         let (ok, expected) = match self {

@@ -1,5 +1,6 @@
 //! KTX 2.0 writer for uncompressed HDR textures: 2-D textures and cube maps with mip chains
-//! (Khronos, "KTX File Format Specification", version 2.0).
+//! (Khronos, "KTX File Format Specification", version 2.0), and the reader `render --shading ibl`
+//! loads them back with ([`decode`], on the independent `ktx2` crate's parser, as an engine would).
 //!
 //! Layout written (spec §2 "File Structure"): the 12-byte identifier, the header (§3.1–3.8:
 //! vkFormat, typeSize, pixelWidth/Height/Depth, layerCount 0, faceCount 1 or 6, levelCount,
@@ -22,7 +23,7 @@
 //! and a 5-bit exponent sample at bit 27 with the E qualifier (sampleLower 15 = the bias,
 //! sampleUpper 31) — which is also what the Khronos KTX tools generate.
 
-use super::gpu_format::{TexelFormat, Texture, TextureError};
+use super::gpu_format::{TexelFormat, Texture, TextureError, TextureShape};
 
 /// The KTX 2.0 file identifier «KTX 20»\r\n\x1A\n.
 pub const IDENTIFIER: [u8; 12] = [0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A];
@@ -192,6 +193,65 @@ pub fn encode(texture: &Texture, format: TexelFormat) -> Result<Vec<u8>, Texture
         out.extend_from_slice(&images[p]);
     }
     Ok(out)
+}
+
+/// A texture read back: level p holds its faces one after the other, rows top to bottom, each
+/// texel [`TexelFormat::channels`] floats.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DecodedTexture {
+    /// The texel format of the file.
+    pub format: TexelFormat,
+    /// Shape and level-0 size.
+    pub shape: TextureShape,
+    /// The levels, largest first.
+    pub levels: Vec<Vec<f32>>,
+}
+
+/// Reads a KTX 2.0 file in one of the formats prtkit writes: a 2-D texture or a cube map, not an
+/// array, not supercompressed. The header is parsed by the `ktx2` crate, every level's length is
+/// checked against its dimensions before it is decoded.
+pub fn decode(bytes: &[u8]) -> Result<DecodedTexture, TextureError> {
+    let bad = |why: String| TextureError::Invalid(why);
+    let reader = ::ktx2::Reader::new(bytes).map_err(|e| bad(format!("not a KTX 2.0 file: {e}")))?;
+    let header = reader.header();
+    let vk = header.format.map_or(0, |f| f.value());
+    let format = TexelFormat::from_vk_format(vk).ok_or_else(|| {
+        bad(format!("VkFormat {vk} is not one prtkit reads (rgba16f, rgba32f, b10g11r11, e5b9g9r9, rg16f, rg32f)"))
+    })?;
+    if header.supercompression_scheme.is_some() {
+        return Err(bad("supercompressed; prtkit reads uncompressed levels".into()));
+    }
+    if header.layer_count > 0 || header.pixel_depth > 0 {
+        return Err(bad("an array or 3-D texture; prtkit reads 2-D textures and cube maps".into()));
+    }
+    let (w, h) = (header.pixel_width as usize, header.pixel_height as usize);
+    let shape = match header.face_count {
+        1 => TextureShape::Texture2d { width: w, height: h },
+        6 if w == h => TextureShape::Cube { size: w },
+        n => return Err(bad(format!("{n} faces of {w}×{h}; expected 1, or 6 square faces"))),
+    };
+    let levels = reader
+        .levels()
+        .enumerate()
+        .map(|(p, level)| {
+            let (lw, lh, faces) = ((w >> p).max(1), (h >> p).max(1), shape.dimensions().2);
+            let want = faces * lw * lh * format.texel_bytes();
+            if level.data.len() != want {
+                return Err(bad(format!(
+                    "level {p} holds {} bytes; {faces} × {lw}×{lh} texels need {want}",
+                    level.data.len()
+                )));
+            }
+            let mut texels = Vec::new();
+            format.decode(level.data, &mut texels);
+            Ok(texels)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let decoded = DecodedTexture { format, shape, levels };
+    // The same consistency rules as a texture to write (sizes, level count).
+    let levels = decoded.levels.iter().map(Vec::as_slice).collect();
+    Texture { shape, channels: format.channels(), levels }.check()?;
+    Ok(decoded)
 }
 
 #[cfg(test)]
