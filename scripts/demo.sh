@@ -7,7 +7,8 @@
 #   3. prefilter makes a glossy Phong reflection map and a microfacet SHRM from it;
 #   4. count-terms says how many in-out BRDF terms those materials need;
 #   5. render draws a sphere from the SHRM next to the reference;
-#   6. ibl bakes the sky for a glTF/PBR engine (KTX2 mip chain, SH snippets, DFG table).
+#   6. ibl bakes the sky for a glTF/PBR engine (KTX2 mip chain, SH snippets, DFG table);
+#   7. render shades a grid of glTF materials from that bake, each next to the ground truth.
 # Outputs go to out/demo/ (EXR for data, PNG previews for people). Usage: scripts/demo.sh [OUTDIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -57,6 +58,12 @@ say "5. render: a Phong s=32 sphere from the SHRM next to the reference (panel.p
 say "6. ibl: GGX mip chain, irradiance cube, SH snippets and DFG table for glTF/PBR engines"
 # Prints each level's method and its error against the angular integral (also in ibl/ibl.json).
 "$bin/ibl" "$out/sky.exr" -o "$out/ibl"
+
+say "7. render --shading ibl: a roughness x metalness grid from the bake, each above its reference (ibl-grid.png)"
+# Each sphere reads ibl/'s KTX2 files as an engine does (split sum); its label says the bake's error
+# against the exact split-sum integrals and the error against the rendering equation (docs/ibl.md).
+"$bin/render" "$out/sky.exr" --shading ibl --ibl "$out/ibl/ibl.json" --grid --brdf gltf:base=1/0.78/0.34 \
+    --res 48x48 --eye 0,-4,0.8 --fov 30 --panel "$out/ibl-grid.png" --exposure -2 --json -q > "$out/ibl-grid.json"
 
 say "done: $(ls "$out" | wc -l) files in $out"
 ls "$out" >&2

@@ -7,6 +7,8 @@ use super::common::{Context, Outcome, Stage};
 use super::options::{read_sh_document, Execution};
 use super::outputs::{check_writable, Outputs};
 use crate::io::{self, Output};
+use crate::render::grid::MaterialGrid;
+use crate::render::ibl::IblBake;
 use crate::render::mesh::Mesh;
 use crate::render::stage::{self, Config, PanelItem, Shading, StoredFactors};
 use crate::render::{Camera, Scene};
@@ -47,6 +49,17 @@ impl Args {
                     bright: self.bright,
                 }
             }
+            ShadingArg::Ibl => {
+                let doc = self.ibl.as_ref().context("--shading ibl needs --ibl DIR/ibl.json (from ibl -o DIR)")?;
+                let grid = self.grid.then(|| MaterialGrid {
+                    roughness: self.grid_roughness.clone(),
+                    metalness: self.grid_metalness.clone(),
+                });
+                if let Some(g) = &grid {
+                    g.check().map_err(anyhow::Error::msg)?; // before reading the bake
+                }
+                Shading::Ibl { bake: Box::new(IblBake::load(doc)?), grid }
+            }
             ShadingArg::Reference => Shading::Reference { integrand: self.integrand },
         })
     }
@@ -82,6 +95,9 @@ impl Stage for Args {
         }
         if (self.error_image.is_some() || self.metrics.is_some()) && self.compare.is_none() {
             bail!("--error-image and --metrics need --compare REF.exr");
+        }
+        if self.grid && self.shading != ShadingArg::Ibl {
+            bail!("--grid is for --shading ibl");
         }
         let json_out = self.json.then_some(Output::Stdout);
         check_writable(self.outputs().chain(&json_out))?;

@@ -224,6 +224,24 @@ impl CubeMap {
         self.get(face, row, col)
     }
 
+    /// Bilinear lookup within the face a cube-frame direction selects, clamped at the face's
+    /// edges (a sampler without seamless cube filtering; the seam-free bake makes the texels on
+    /// either side of an edge agree, so the two differ little).
+    pub fn lookup_bilinear(&self, dir: DVec3) -> [f32; 3] {
+        let (face, s, t) = face_coordinates(dir);
+        let n = self.size;
+        let axis = |c: f64| {
+            let x = ((c + 1.0) * 0.5 * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
+            let i = (x.floor() as usize).min(n.saturating_sub(2));
+            (i, (i + 1).min(n - 1), (x - i as f64) as f32)
+        };
+        let ((c0, c1, fx), (r0, r1, fy)) = (axis(s), axis(t));
+        let mix = |a: [f32; 3], b: [f32; 3], f: f32| [0, 1, 2].map(|k| a[k] + f * (b[k] - a[k]));
+        let top = mix(self.get(face, r0, c0), self.get(face, r0, c1), fx);
+        let bottom = mix(self.get(face, r1, c0), self.get(face, r1, c1), fx);
+        mix(top, bottom, fy)
+    }
+
     /// The next mip level: each texel is the solid-angle-weighted mean of its 2×2 children, i.e.
     /// the exact mean radiance over its footprint, so ∫ L dω is preserved.
     pub fn downsample(&self) -> Result<CubeMap, CubeError> {

@@ -2,6 +2,7 @@
 //! document (`DIR/sh.json`): what each file of an `ibl` bake holds, in which frame, and how
 //! accurate every level measured.
 
+use crate::io::document::Validate;
 use serde::{Deserialize, Serialize};
 
 /// Format name of the manifest.
@@ -36,6 +37,22 @@ pub struct IblBody {
     /// the manifest is the same bytes for any thread count and any machine.
     #[serde(skip)]
     pub timings: Timings,
+}
+
+impl Validate for IblBody {
+    fn validate(&self) -> Result<(), (&'static str, String)> {
+        let m = glam::DMat3::from_cols_array_2d(&self.frame.world_from_prtkit);
+        let orthonormal = (m * m.transpose()).abs_diff_eq(glam::DMat3::IDENTITY, 1e-6);
+        if !orthonormal || m.to_cols_array().iter().any(|v| !v.is_finite()) {
+            return Err(("world_from_prtkit", "not a rotation (or a rotation with a mirror)".into()));
+        }
+        let roughness: Vec<f64> = self.specular.levels.iter().map(|l| l.roughness).collect();
+        let rising = roughness.windows(2).all(|w| w[0] < w[1]);
+        if roughness.is_empty() || !rising || roughness.iter().any(|r| !(0.0..=1.0).contains(r)) {
+            return Err(("levels", format!("the levels' roughness {roughness:?} must rise within [0, 1]")));
+        }
+        Ok(())
+    }
 }
 
 /// The frame every output is in.

@@ -51,19 +51,18 @@ impl Reference {
         Ok(Reference { integrator: ConeIntegrator::new(latlong)? })
     }
 
-    /// The integrator with a texel rule fit for `lobe` on this grid.
-    fn for_lobe(&self, lobe: &SplitSumLobe) -> (ConeIntegrator, f64) {
+    /// B(R) of `lobe` at any direction, with the texel rule fit for it on this grid chosen once.
+    pub fn lobe(&self, lobe: &SplitSumLobe) -> LobeIntegral {
         let grid = self.integrator.grid();
         let cone = (FRAC_PI_2 + 2.0 * PI / grid.height as f64).min(PI);
         let kernel = |c: f64| lobe.kernel(c);
         let choice = rule_for_kernel(grid.width, grid.height, &kernel, cone, grid.height, REFERENCE_RULE_TOLERANCE);
-        (self.integrator.with_rule(choice.rule), cone)
+        LobeIntegral { integrator: self.integrator.with_rule(choice.rule), cone, lobe: *lobe }
     }
 
     /// B(R) at one direction R of prtkit's frame.
     pub fn texel(&self, axis: DVec3, lobe: &SplitSumLobe) -> [f64; 3] {
-        let (integrator, cone) = self.for_lobe(lobe);
-        evaluate(&integrator, cone, axis, lobe)
+        self.lobe(lobe).at(axis)
     }
 
     /// Measures `level` (cube frame; `env_from_cube` takes its directions to prtkit's frame) on
@@ -74,13 +73,13 @@ impl Reference {
         let total = 6 * m * m;
         let stride = (total / samples.max(1)).max(1);
         let picks: Vec<usize> = (0..total).step_by(stride).map(|i| (i + stride / 2).min(total - 1)).collect();
-        let (integrator, cone) = self.for_lobe(lobe);
+        let integral = self.lobe(lobe);
         let pairs: Vec<(f64, f64)> = picks
             .par_iter()
             .map(|&i| {
                 let (face, row, col) = (FACES[i / (m * m)], (i / m) % m, i % m);
                 let axis = env_from_cube * texel_direction(face, m, row, col);
-                let reference = evaluate(&integrator, cone, axis, lobe);
+                let reference = integral.at(axis);
                 let got = level.get(face, row, col);
                 let diff = (0..3).map(|c| (got[c] as f64 - reference[c]).powi(2)).sum::<f64>().sqrt();
                 let norm = reference.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -97,12 +96,22 @@ impl Reference {
     }
 }
 
-fn evaluate(integrator: &ConeIntegrator, cone: f64, axis: DVec3, lobe: &SplitSumLobe) -> [f64; 3] {
-    let axis = axis.normalize();
-    // The texels kept cover the kernel's whole support and the kernel is normalized (∫ k dω = 1),
-    // so the sum needs no division: its weight is 1 up to the rule's tolerance.
-    integrator.integrate(axis, cone, |w| {
-        let k = lobe.kernel(axis.dot(w));
-        [k, k, k]
-    })
+/// One lobe's angular reference over one environment: B(R) = Σ_t L_t ∫_t k(R·ω) dω.
+pub struct LobeIntegral {
+    integrator: ConeIntegrator,
+    cone: f64,
+    lobe: SplitSumLobe,
+}
+
+impl LobeIntegral {
+    /// B(R) at the direction `axis` of prtkit's frame.
+    pub fn at(&self, axis: DVec3) -> [f64; 3] {
+        let axis = axis.normalize();
+        // The texels kept cover the kernel's whole support and the kernel is normalized (∫ k dω =
+        // 1), so the sum needs no division: its weight is 1 up to the rule's tolerance.
+        self.integrator.integrate(axis, self.cone, |w| {
+            let k = self.lobe.kernel(axis.dot(w));
+            [k, k, k]
+        })
+    }
 }

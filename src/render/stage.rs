@@ -3,8 +3,10 @@
 //! reference render, and laid out in a labelled panel.
 
 use super::factored::{Factored, Transport};
+use super::grid::{render_grid, GridCell, MaterialGrid};
+use super::ibl::{IblBake, SplitSum};
 use super::irradiance::Irradiance;
-use super::panel::{layout, Cell};
+use super::panel::{layout, layout_grid, Cell};
 use super::reference::{Integrand, Reference};
 use super::reflection::ShrmShader;
 use super::{render, Camera, Frame, Scene, Shade, Sum};
@@ -63,6 +65,14 @@ pub enum Shading {
         /// Bright sources apart: shaded exactly, the remainder through the factors.
         bright: BrightRule,
     },
+    /// From an `ibl` bake with the split sum, as a glTF/PBR engine shades (glTF materials).
+    Ibl {
+        /// The bake.
+        bake: Box<IblBake>,
+        /// A roughness × metalness grid of spheres, each with its reference, instead of one
+        /// render of `--brdf`'s material.
+        grid: Option<MaterialGrid>,
+    },
     /// Ground truth: a sum over every environment texel.
     Reference {
         /// The rendering equation, or the ρ̂ the prefilter represents.
@@ -77,6 +87,7 @@ impl Shading {
             Shading::Irradiance { .. } => "irradiance",
             Shading::Shrm { .. } => "shrm",
             Shading::Factored { .. } => "factored",
+            Shading::Ibl { .. } => "ibl",
             Shading::Reference { .. } => "reference",
         }
     }
@@ -190,6 +201,9 @@ pub struct Summary {
     /// Metrics against the reference, if compared.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub metrics: Option<Metrics>,
+    /// Every cell of an ibl grid, with its error against its reference (ibl --grid).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grid: Option<Vec<GridCell>>,
 }
 
 /// The bright texels a factored render shades exactly, and their share of the map's energy.
@@ -250,7 +264,9 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
         terms: None,
         bright: None,
         metrics: None,
+        grid: None,
     };
+    let mut grid_panel = None;
     let (frame, label) = match &config.shading {
         Shading::Irradiance { order, coefficients } => {
             let Brdf::Lambert(m) = brdf else {
@@ -349,6 +365,32 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 .then_some(BrightShare { texels: sources.texels.len(), energy_fraction: sources.energy_fraction });
             (render(scene, &config.camera, env, &Sum(&shader, &exact), progress), label)
         }
+        Shading::Ibl { bake, grid } => {
+            let Brdf::Gltf(material) = brdf else {
+                return Err(bad(format!(
+                    "--shading ibl shades glTF metallic-roughness materials; --brdf {} is not gltf:base=R/G/B,metalness=M,roughness=R",
+                    brdf.spec()
+                )));
+            };
+            match grid {
+                None => {
+                    let frame = render(scene, &config.camera, env, &SplitSum::new(bake.as_ref(), *material), progress);
+                    let r = material.specular.roughness();
+                    (frame, format!("ibl r={r} m={}", material.metalness))
+                }
+                Some(grid) => {
+                    if config.compare.is_some() || config.panel.as_ref().is_some_and(|p| !p.is_empty()) {
+                        return Err(bad("--grid renders its own references: no --compare or --panel-item".into()));
+                    }
+                    // The base colour is --brdf's; roughness and metalness are the grid's.
+                    let g =
+                        render_grid(grid, material.base, bake, env, scene, &config.camera, progress).map_err(bad)?;
+                    summary.grid = Some(g.cells);
+                    grid_panel = Some(layout_grid(&g.rows, config.exposure));
+                    (g.mosaic, "ibl grid".to_string())
+                }
+            }
+        }
         Shading::Reference { integrand } => {
             let shader = Reference::new(env, brdf.clone(), *integrand, scene).map_err(bad)?;
             (render(scene, &config.camera, env, &shader as &dyn Shade, progress), "reference".to_string())
@@ -376,7 +418,10 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
         }
         None => None,
     };
-    let panel = config.panel.as_ref().map(|items| panel(items, &frame, &label, config, summary.metrics));
+    let panel = match grid_panel {
+        Some(grid) => config.panel.is_some().then_some(grid),
+        None => config.panel.as_ref().map(|items| panel(items, &frame, &label, config, summary.metrics)),
+    };
     Ok(Output { frame, comparison, panel, summary })
 }
 

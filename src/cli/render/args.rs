@@ -17,6 +17,8 @@ pub enum ShadingArg {
     Shrm,
     /// K-term in-out factorization, lighting projected onto the factors (Mahajan eq. 4).
     Factored,
+    /// From an `ibl` bake (--ibl), with the split sum a glTF/PBR engine uses; --brdf gltf:….
+    Ibl,
     /// Ground truth: sum over every environment texel of L ρ cos (× visibility on meshes).
     Reference,
 }
@@ -97,6 +99,25 @@ pub struct Args {
     /// method), or a luminance threshold.
     #[arg(long, value_name = "auto|off|Y", default_value = "auto", value_parser = crate::cli::options::parse_bright)]
     pub bright: crate::envmap::bright::BrightRule,
+
+    /// ibl: the manifest `DIR/ibl.json` written by `ibl` (names the KTX2 files it reads).
+    #[arg(long, value_name = "IBL.json")]
+    pub ibl: Option<PathBuf>,
+
+    /// ibl: render a roughness × metalness grid of spheres (--res each), every one above its
+    /// reference (the same material integrated over every environment texel: the cost of
+    /// --shading reference per cell), labelled with its error; the base colour is --brdf's.
+    /// --panel writes the labelled grid, -o/--png the split-sum spheres alone.
+    #[arg(long)]
+    pub grid: bool,
+
+    /// ibl --grid: the roughness of each column.
+    #[arg(long, value_delimiter = ',', value_name = "R,R,…", default_values_t = crate::render::grid::DEFAULT_ROUGHNESS)]
+    pub grid_roughness: Vec<f64>,
+
+    /// ibl --grid: the metalness of each row.
+    #[arg(long, value_delimiter = ',', value_name = "M,M,…", default_values_t = crate::render::grid::DEFAULT_METALNESS)]
+    pub grid_metalness: Vec<f64>,
 
     /// reference: `brdf-cosine` (the rendering equation, ρ max(n·ω,0) V) or `prefilter` (the
     /// ρ̂ the prefilter represents: Phong's lobe about R on the whole sphere, §6.3).
