@@ -247,6 +247,11 @@ impl<'m> AngularIntegral<'m> {
         }
     }
 
+    /// Sub-samples per texel axis of the texel rule.
+    pub fn subsamples(&self) -> usize {
+        self.choice.rule.subsamples()
+    }
+
     /// Truncation and texel rule, for a document.
     pub fn report(&self, path: AngularPath) -> AngularReport {
         AngularReport {
@@ -256,7 +261,7 @@ impl<'m> AngularIntegral<'m> {
                 Cone::View(cutoff) => cutoff.left_out(),
             },
             cone_angle: self.cone_angle(),
-            subsamples: self.choice.rule.subsamples(),
+            subsamples: self.subsamples(),
             quadrature_error: self.choice.estimated_error,
             path,
         }

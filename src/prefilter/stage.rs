@@ -244,9 +244,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
         return Err(Error::IrradianceNeedsLambert);
     }
     if let Some(n) = config.verify {
-        if n == 0 || n > super::verify::MAX_TEXELS {
-            return Err(VerifyError::Texels(n).into());
-        }
+        super::verify::check_texels(n)?;
         if matches!(lighting, Lighting::Coefficients(_)) {
             return Err(Error::VerifyNeedsMap);
         }

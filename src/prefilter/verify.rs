@@ -147,9 +147,7 @@ impl<'m> Verifier<'m> {
     /// Checks `texels` texels per map of `height` rows (the texel rule is the one `--method
     /// angular` chooses for that height) of `model` under the lat-long `env`.
     pub fn new(model: &'m Model, env: &EnvMap, height: usize, texels: usize) -> Result<Self, VerifyError> {
-        if texels == 0 || texels > MAX_TEXELS {
-            return Err(VerifyError::Texels(texels));
-        }
+        check_texels(texels)?;
         let integral = AngularIntegral::new(model, env, EPSILON, height)?;
         let sources = brightest_sources(env, integral.cone_angle());
         Ok(Verifier { integral, radial: model.centre().is_some(), sources, texels })
@@ -251,12 +249,15 @@ impl<'m> Verifier<'m> {
             progress.advance(1);
         }
         progress.finish();
-        Ok(Verification {
-            epsilon: EPSILON,
-            subsamples: self.integral.report(super::pipeline::AngularPath::ConeSum).subsamples,
-            requested: self.texels,
-            maps: out,
-        })
+        Ok(Verification { epsilon: EPSILON, subsamples: self.integral.subsamples(), requested: self.texels, maps: out })
+    }
+}
+
+/// Refuses N outside 1..=[`MAX_TEXELS`] (before any work).
+pub fn check_texels(n: usize) -> Result<(), VerifyError> {
+    match n {
+        1..=MAX_TEXELS => Ok(()),
+        _ => Err(VerifyError::Texels(n)),
     }
 }
 
