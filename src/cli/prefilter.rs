@@ -9,6 +9,7 @@ use super::outputs::{check_writable, Outputs};
 use crate::io::Output;
 use crate::prefilter::pipeline::Lighting;
 use crate::prefilter::stage::{self, Config, MapRequest};
+use crate::prefilter::verify::Verification;
 use anyhow::{bail, Result};
 pub use args::*;
 
@@ -37,6 +38,7 @@ impl TryFrom<&Args> for Config {
                 .collect(),
             kautz_mccool_slices: if args.kautz_mccool.is_some() { args.slices as usize } else { 0 },
             irradiance: args.irradiance.is_some(),
+            verify: args.verify.map(|n| n as usize),
             source: match (&args.env, &args.sh) {
                 (Some(p), _) | (None, Some(p)) if p.as_os_str() == "-" => "<stdin>".into(),
                 (Some(p), _) | (None, Some(p)) => p.display().to_string(),
@@ -82,6 +84,9 @@ impl Stage for Args {
             (None, None) => bail!("give an environment map or --sh FILE"),
         };
         let out = stage::run(&config, lighting, ctx.progress())?;
+        if let Some(v) = &out.summary.verification {
+            ctx.note(verification_note(v));
+        }
 
         let mut outputs = Outputs::new();
         for dir in self.icosahedral.iter().chain(&self.views_dir) {
@@ -110,4 +115,26 @@ impl Stage for Args {
         outputs.commit()?;
         Ok(Outcome::Success)
     }
+}
+
+/// One line on `--verify`: the map with the largest per-texel error, in the figures a person sees.
+fn verification_note(v: &Verification) -> String {
+    let worst = v.maps.iter().max_by(|a, b| a.max_texel_error.total_cmp(&b.max_texel_error));
+    let Some(m) = worst else { return "verify: no map to check".into() };
+    let of = if v.maps.len() > 1 { format!(" (the worst of {} maps)", v.maps.len()) } else { String::new() };
+    format!(
+        "verify: {}{of}: {} texels against the angular integral (ε = {:e}): {} negative, per texel max {:.3} % \
+         (at ({}, {}): mean RGB {:.4e}, exact {:.4e}) and p99 {:.3} %, rel RMS {:.3} %",
+        m.map,
+        m.texels,
+        v.epsilon,
+        m.negative,
+        100.0 * m.max_texel_error,
+        m.worst.x,
+        m.worst.y,
+        m.worst.value.iter().sum::<f64>() / 3.0,
+        m.worst.exact.iter().sum::<f64>() / 3.0,
+        100.0 * m.p99_texel_error,
+        100.0 * m.rel_error
+    )
 }

@@ -59,6 +59,9 @@ pub struct ShrmBody {
     /// filtered in angle, the window (frequency method).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bake: Option<super::hybrid::Report>,
+    /// `--verify`: texels of every map checked against the angular integral, and the figures.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verification: Option<super::verify::Verification>,
 }
 
 /// The lighting an SHRM was computed from.

@@ -10,3 +10,4 @@ pub mod orders;
 pub mod pipeline;
 pub mod shrm;
 pub mod stage;
+pub mod verify;

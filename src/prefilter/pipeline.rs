@@ -4,6 +4,7 @@ use super::angular::{self, ConeIntegrator, CutoffTable};
 use super::brdf_sh::BrdfSh;
 use super::model::{Model, ModelError};
 use super::shrm::{self, Shrm, ShrmError};
+use crate::envmap::zonal::RuleChoice;
 use crate::envmap::EnvMap;
 use crate::io::RgbImage;
 use crate::progress::Progress;
@@ -200,6 +201,91 @@ pub struct AngularMaps {
     pub report: AngularReport,
 }
 
+/// The lobe's truncation cone: one angle for radially symmetric lobes, θ*(θ_o) otherwise.
+enum Cone {
+    Radial(angular::Truncation),
+    View(CutoffTable),
+}
+
+/// The angular reference's integral for one model and environment, set up as `--method angular`
+/// sets it up for an output of a given height: the lobe truncated at ε (App. D) and the texel
+/// rule that misplaces at most ε/10 of its weight ([`angular`]). [`angular_reference`] computes
+/// whole maps with it, [`AngularIntegral::texel`] single texels (`prefilter --verify`).
+pub struct AngularIntegral<'m> {
+    model: &'m Model,
+    env: ConeIntegrator,
+    cone: Cone,
+    choice: RuleChoice,
+    epsilon: f64,
+}
+
+impl<'m> AngularIntegral<'m> {
+    /// The integral of `model` over the lat-long `env`, truncated at `epsilon`, with the texel
+    /// rule chosen for an output of `height` rows.
+    pub fn new(model: &'m Model, env: &EnvMap, epsilon: f64, height: usize) -> Result<Self, PrefilterError> {
+        let env = ConeIntegrator::new(env)?;
+        let (cone, choice) = if model.centre().is_some() {
+            let u = |x: f64| model.lobe(x)[0];
+            let truncation = angular::radial_truncation(u, epsilon);
+            let choice = angular::reference_rule(env.grid(), &u, truncation.theta_star, height, epsilon);
+            (Cone::Radial(truncation), choice)
+        } else {
+            let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), epsilon, 65);
+            let choice = env.rule_for_view(model, &cutoff, epsilon / 10.0);
+            (Cone::View(cutoff), choice)
+        };
+        let env = env.with_rule(choice.rule.clone());
+        Ok(AngularIntegral { model, env, cone, choice, epsilon })
+    }
+
+    /// The widest cone half-angle θ*, in radians: no reflection vector farther than this from a
+    /// texel of the environment sees it.
+    pub fn cone_angle(&self) -> f64 {
+        match &self.cone {
+            Cone::Radial(t) => t.theta_star,
+            Cone::View(cutoff) => cutoff.max(),
+        }
+    }
+
+    /// Sub-samples per texel axis of the texel rule.
+    pub fn subsamples(&self) -> usize {
+        self.choice.rule.subsamples()
+    }
+
+    /// Truncation and texel rule, for a document.
+    pub fn report(&self, path: AngularPath) -> AngularReport {
+        AngularReport {
+            epsilon: self.epsilon,
+            epsilon_achieved: match &self.cone {
+                Cone::Radial(t) => t.left_out,
+                Cone::View(cutoff) => cutoff.left_out(),
+            },
+            cone_angle: self.cone_angle(),
+            subsamples: self.subsamples(),
+            quadrature_error: self.choice.estimated_error,
+            path,
+        }
+    }
+
+    /// B(R) for one reflection vector `r` (unit) and `view` (ignored by radially symmetric
+    /// lobes): the sum [`angular::radial_map`] and [`angular::view_map`] compute per texel.
+    pub fn texel(&self, r: DVec3, view: DVec3) -> [f64; 3] {
+        let model = self.model;
+        match &self.cone {
+            Cone::Radial(t) => {
+                self.env.integrate(r, t.theta_star.clamp(1e-9, std::f64::consts::PI), |l| [model.lobe(r.dot(l))[0]; 3])
+            }
+            Cone::View(cutoff) => match model.prepare_view(r, view) {
+                Some(p) => {
+                    let theta_star = cutoff.at(r.dot(view).clamp(-1.0, 1.0).acos());
+                    self.env.integrate(r, theta_star, |l| model.rho_hat_prepared(&p, l))
+                }
+                None => [0.0; 3],
+            },
+        }
+    }
+}
+
 /// The angular reference (App. D): for radially symmetric BRDFs one map (views ignored),
 /// otherwise one reflection map per view, on a `width`×`height` lat-long grid. The lobe is
 /// truncated at ε, and its texel integrals use the smallest Gauss–Legendre rule that misplaces
@@ -213,39 +299,23 @@ pub fn angular_reference(
     height: usize,
     progress: &dyn Progress,
 ) -> Result<AngularMaps, PrefilterError> {
-    let cone = ConeIntegrator::new(env)?;
-    if model.centre().is_some() {
-        let u = |x: f64| model.lobe(x)[0];
-        let truncation = angular::radial_truncation(u, epsilon);
-        let choice = angular::reference_rule(cone.grid(), &u, truncation.theta_star, height, epsilon);
-        let cone = cone.with_rule(choice.rule.clone());
-        let map = angular::radial_map(&cone, u, truncation.theta_star, width, height, progress)?;
-        let path = if width == cone.grid().width { AngularPath::Zonal } else { AngularPath::ConeSum };
-        let report = AngularReport {
-            epsilon,
-            epsilon_achieved: truncation.left_out,
-            cone_angle: truncation.theta_star,
-            subsamples: choice.rule.subsamples(),
-            quadrature_error: choice.estimated_error,
-            path,
-        };
-        return Ok(AngularMaps { maps: vec![map], report });
+    let integral = AngularIntegral::new(model, env, epsilon, height)?;
+    let cone = &integral.env;
+    match &integral.cone {
+        Cone::Radial(t) => {
+            let u = |x: f64| model.lobe(x)[0];
+            let map = angular::radial_map(cone, u, t.theta_star, width, height, progress)?;
+            let path = if width == cone.grid().width { AngularPath::Zonal } else { AngularPath::ConeSum };
+            Ok(AngularMaps { maps: vec![map], report: integral.report(path) })
+        }
+        Cone::View(cutoff) => {
+            progress.start("angular", (views.len() * height) as u64);
+            let maps =
+                views.iter().map(|&v| angular::view_map(cone, model, cutoff, v, width, height, progress)).collect();
+            progress.finish();
+            Ok(AngularMaps { maps, report: integral.report(AngularPath::ConeSum) })
+        }
     }
-    let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), epsilon, 65);
-    let choice = cone.rule_for_view(model, &cutoff, epsilon / 10.0);
-    let cone = cone.with_rule(choice.rule.clone());
-    progress.start("angular", (views.len() * height) as u64);
-    let maps = views.iter().map(|&v| angular::view_map(&cone, model, &cutoff, v, width, height, progress)).collect();
-    progress.finish();
-    let report = AngularReport {
-        epsilon,
-        epsilon_achieved: cutoff.left_out(),
-        cone_angle: cutoff.max(),
-        subsamples: choice.rule.subsamples(),
-        quadrature_error: choice.estimated_error,
-        path: AngularPath::ConeSum,
-    };
-    Ok(AngularMaps { maps, report })
 }
 
 /// The maps of [`angular_reference`].

@@ -9,6 +9,7 @@ use super::model::{residual_bound, Centre, Model, ModelError};
 use super::orders::OrderRule;
 use super::pipeline::{self, Lighting, PrefilterError};
 use super::shrm;
+use super::verify::{MapCheck, Verification, Verifier, VerifyError};
 use crate::brdf::Brdf;
 use crate::envmap::bright::{BrightRule, BrightSources};
 use crate::envmap::{self, EnvMap, EnvMapError, Layout};
@@ -88,6 +89,8 @@ pub struct Config {
     pub kautz_mccool_slices: usize,
     /// Produce the irradiance map (Lambert only).
     pub irradiance: bool,
+    /// Check this many texels of every map against the angular integral (`--verify`).
+    pub verify: Option<usize>,
     /// The lighting's name, for the document.
     pub source: String,
     /// The command line, for the document's provenance.
@@ -115,6 +118,7 @@ impl Config {
             maps: Vec::new(),
             kautz_mccool_slices: 0,
             irradiance: false,
+            verify: None,
             source: String::new(),
             args: Vec::new(),
         }
@@ -157,6 +161,9 @@ pub struct Summary {
     pub width: usize,
     /// Grid height.
     pub height: usize,
+    /// The `--verify` figures.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verification: Option<Verification>,
     /// Seconds per step.
     pub timings: Timings,
 }
@@ -174,6 +181,9 @@ pub struct Timings {
     pub maps_seconds: f64,
     /// The angular reference.
     pub angular_seconds: f64,
+    /// `--verify`.
+    #[serde(default)]
+    pub verify_seconds: f64,
     /// Everything.
     pub total_seconds: f64,
 }
@@ -207,6 +217,12 @@ pub enum Error {
     /// Resampling to the output layout failed.
     #[error(transparent)]
     Resample(#[from] EnvMapError),
+    /// The verification needs the environment map.
+    #[error("--verify needs the environment map, not SH coefficients (the exact values integrate the map)")]
+    VerifyNeedsMap,
+    /// The verification failed.
+    #[error(transparent)]
+    Verify(#[from] VerifyError),
 }
 
 /// The grid size for F_B: 2S × S with S = clamp(10·F_B, 32, 512) (§5.2: S ≈ 10F).
@@ -226,6 +242,12 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
     let model = Model::new(config.brdf.clone(), config.cosine)?;
     if config.irradiance && model.centre() != Some(Centre::Normal) {
         return Err(Error::IrradianceNeedsLambert);
+    }
+    if let Some(n) = config.verify {
+        super::verify::check_texels(n)?;
+        if matches!(lighting, Lighting::Coefficients(_)) {
+            return Err(Error::VerifyNeedsMap);
+        }
     }
     let fail = |error: PrefilterError| Error::Prefilter { source_name: config.source.clone(), error };
     let views: Vec<DVec3> = config.maps.iter().map(|m| m.view).collect();
@@ -290,21 +312,40 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
         }
     };
 
-    let irradiance = if config.irradiance {
-        // Lambert's map is radiance (albedo/π)·E(N); the irradiance is that × π/albedo. Any map
-        // will do (the model is view-independent), else the SHRM's.
+    // Lambert's map is radiance (albedo/π)·E(N); the irradiance is that × π/albedo. Any map
+    // will do (the model is view-independent), else the SHRM's.
+    let albedo = model.brdf().reflection_lobe(1.0).unwrap_or(1.0 / PI) * PI;
+    let irradiance_scale = (PI / albedo.max(1e-12)) as f32;
+    let irradiance = config.irradiance.then(|| {
         let mut e = match (maps.first(), &shrm_out) {
             (Some(map), _) => map.clone(),
             (None, Some(s)) => shrm::reflection_map(s, DVec3::Z),
             (None, None) => unreachable!("the angular method computed a map for the irradiance"),
         };
-        let albedo = model.brdf().reflection_lobe(1.0).unwrap_or(1.0 / PI) * PI;
-        let scale = (PI / albedo.max(1e-12)) as f32;
-        e.pixels.iter_mut().flatten().for_each(|c| *c *= scale);
-        Some(to_output_layout(&e, config.output_layout)?)
-    } else {
-        None
+        e.pixels.iter_mut().flatten().for_each(|c| *c *= irradiance_scale);
+        e
+    });
+    let verification = match (config.verify, lighting) {
+        (Some(n), Lighting::Map(env)) => {
+            let t = Instant::now();
+            let mut checks: Vec<MapCheck> = config
+                .maps
+                .iter()
+                .zip(&maps)
+                .map(|(m, image)| MapCheck { name: m.file.clone(), image, view: m.view, scale: 1.0 })
+                .collect();
+            if let Some(image) = &irradiance {
+                let scale = irradiance_scale as f64;
+                checks.push(MapCheck { name: "irradiance".into(), image, view: DVec3::Z, scale });
+            }
+            let verifier = Verifier::new(&model, &hybrid::as_latlong(env)?, height, n)?;
+            let verification = verifier.verify(&checks, progress)?;
+            timings.verify_seconds = t.elapsed().as_secs_f64();
+            Some(verification)
+        }
+        _ => None,
     };
+    let irradiance = irradiance.map(|e| to_output_layout(&e, config.output_layout)).transpose()?;
     let maps: Vec<RgbImage> = maps
         .iter()
         .take(config.maps.len())
@@ -370,6 +411,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
             .collect(),
         timings: None,
         bake,
+        verification: verification.clone(),
     };
     let provenance = Provenance::new("prefilter", &config.args, vec![config.source.clone()]);
     let summary = Summary {
@@ -381,6 +423,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
         epsilon_bound: bound,
         width,
         height,
+        verification,
         timings,
     };
     Ok(Output {

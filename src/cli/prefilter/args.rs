@@ -158,6 +158,14 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub irradiance: Option<PathBuf>,
 
+    /// Check N texels (1 … 100000) of every map written against the angular integral of --method angular
+    /// (ε = 1e-5) and write the figures (negative texels, p99 and largest per-texel relative
+    /// error, relative RMS, the worst texel) into the document and --json: texels beside the
+    /// brightest sources, the darkest, the poles, and the rest spread evenly (docs/prefilter.md,
+    /// "Verifying a bake"). Costs one cone sum per texel: for 3-D BRDFs N/(W·H) of an angular run.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=crate::prefilter::verify::MAX_TEXELS as u64))]
+    pub verify: Option<u64>,
+
     /// frequency (default) or angular (the reference; reflection maps only).
     #[arg(long, value_enum, default_value_t = Method::Frequency)]
     pub method: Method,
