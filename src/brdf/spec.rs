@@ -93,17 +93,7 @@ fn parse_analytic(spec: &str, model: String, rest: &str) -> Result<Brdf, SpecErr
         }
         "ggx" => {
             let r = p.positive("roughness")?;
-            if r > 1.0 {
-                return Err(err(format!("ggx roughness must be in (0, 1], got {r}")));
-            }
-            let min_r = (4.0 * PI * MAX_BRDF_PEAK).powf(-0.25);
-            p.peak(
-                "the peak at normal incidence 1/(4πα²), α = r²",
-                GgxMicrofacet::normal_peak(r),
-                "roughness >=",
-                min_r,
-            )?;
-            Brdf::Ggx(GgxMicrofacet::new(r).map_err(|e| err(e.to_string()))?)
+            Brdf::Ggx(p.ggx_layer(r)?)
         }
         "gltf" => {
             // glTF's own defaults: baseColorFactor 1, metallicFactor 1, roughnessFactor 1.
@@ -112,20 +102,8 @@ fn parse_analytic(spec: &str, model: String, rest: &str) -> Result<Brdf, SpecErr
             if !(0.0..=1.0).contains(&metalness) {
                 return Err(err(format!("gltf metalness must be in [0, 1], got {metalness}")));
             }
-            let r = p.optional("roughness", 1.0)?;
-            if !(r > 0.0 && r <= 1.0) {
-                return Err(err(format!(
-                    "gltf roughness must be in (0, 1], got {r} (r = 0, the mirror, is a delta; see docs/brdf-specs.md)"
-                )));
-            }
-            let min_r = (4.0 * PI * MAX_BRDF_PEAK).powf(-0.25);
-            p.peak(
-                "the peak at normal incidence 1/(4πα²), α = r²",
-                GgxMicrofacet::normal_peak(r),
-                "roughness >=",
-                min_r,
-            )?;
-            let specular = GgxMicrofacet::new(r).map_err(|e| err(e.to_string()))?;
+            let roughness = p.optional("roughness", 1.0)?;
+            let specular = p.ggx_layer(roughness)?;
             Brdf::Gltf(GltfMaterial { base, metalness, specular })
         }
         "lafortune" => {
@@ -284,6 +262,18 @@ impl Params<'_> {
             )));
         }
         Ok(())
+    }
+
+    /// The GGX layer of perceptual roughness `r` (`ggx`, and `gltf`'s specular): r in (0, 1], its
+    /// normal-incidence peak 1/(4πα²) within [`MAX_BRDF_PEAK`] (r = 0, the mirror, is a delta).
+    fn ggx_layer(&self, r: f64) -> Result<GgxMicrofacet, SpecError> {
+        if !(r > 0.0 && r <= 1.0) {
+            return Err(self.err(format!("{} roughness must be in (0, 1], got {r}", self.model)));
+        }
+        let min_r = (4.0 * PI * MAX_BRDF_PEAK).powf(-0.25);
+        let peak = GgxMicrofacet::normal_peak(r);
+        self.peak("the peak at normal incidence 1/(4πα²), α = r²", peak, "roughness >=", min_r)?;
+        GgxMicrofacet::new(r).map_err(|e| self.err(e.to_string()))
     }
 
     /// A colour `key=R/G/B` (or one grey value), each component in [0, 1].

@@ -33,6 +33,7 @@
 use crate::envmap::{EnvMap, Face, FACES};
 use crate::io::gpu_format::{Texture, TextureShape};
 use crate::io::RgbImage;
+use crate::sphere::latlong::bilinear_taps;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
@@ -229,17 +230,17 @@ impl CubeMap {
     /// either side of an edge agree, so the two differ little).
     pub fn lookup_bilinear(&self, dir: DVec3) -> [f32; 3] {
         let (face, s, t) = face_coordinates(dir);
-        let n = self.size;
-        let axis = |c: f64| {
-            let x = ((c + 1.0) * 0.5 * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
-            let i = (x.floor() as usize).min(n.saturating_sub(2));
-            (i, (i + 1).min(n - 1), (x - i as f64) as f32)
-        };
-        let ((c0, c1, fx), (r0, r1, fy)) = (axis(s), axis(t));
-        let mix = |a: [f32; 3], b: [f32; 3], f: f32| [0, 1, 2].map(|k| a[k] + f * (b[k] - a[k]));
-        let top = mix(self.get(face, r0, c0), self.get(face, r0, c1), fx);
-        let bottom = mix(self.get(face, r1, c0), self.get(face, r1, c1), fx);
-        mix(top, bottom, fy)
+        let n = self.size as f64;
+        // Texel-centre coordinates within the face, as `EnvMap::lookup` takes them on faces.
+        let (fx, fy) = ((s + 1.0) * 0.5 * n - 0.5, (t + 1.0) * 0.5 * n - 0.5);
+        let mut out = [0.0f32; 3];
+        for (i, w) in bilinear_taps(self.size, self.size, fx, fy, false) {
+            let v = self.get(face, i / self.size, i % self.size);
+            for k in 0..3 {
+                out[k] += w as f32 * v[k];
+            }
+        }
+        out
     }
 
     /// The next mip level: each texel is the solid-angle-weighted mean of its 2×2 children, i.e.

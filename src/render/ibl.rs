@@ -28,6 +28,7 @@ use crate::ibl::reference::{LobeIntegral, Reference};
 use crate::io::document::{named_file, read_document, BundleError};
 use crate::io::gpu_format::TextureShape;
 use crate::io::ktx2::{decode, DecodedTexture};
+use crate::sphere::latlong::bilinear_taps;
 use glam::{DMat3, DVec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -46,16 +47,13 @@ struct ScaleBias {
 impl ScaleBias {
     /// (A, B) at (n·v, r), bilinear between texel centres, clamped at the edges.
     fn lookup(&self, n_dot_v: f64, roughness: f64) -> [f64; 2] {
-        let n = self.size;
-        let axis = |u: f64| {
-            let x = (u * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
-            let i = (x.floor() as usize).min(n.saturating_sub(2));
-            (i, (i + 1).min(n - 1), x - i as f64)
-        };
-        let ((c0, c1, fx), (r0, r1, fy)) = (axis(n_dot_v), axis(roughness));
-        let at = |r: usize, c: usize| self.values[r * n + c];
-        let mix = |a: [f64; 2], b: [f64; 2], f: f64| [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])];
-        mix(mix(at(r0, c0), at(r0, c1), fx), mix(at(r1, c0), at(r1, c1), fx), fy)
+        let n = self.size as f64;
+        let mut out = [0.0; 2];
+        for (i, w) in bilinear_taps(self.size, self.size, n_dot_v * n - 0.5, roughness * n - 0.5, false) {
+            out[0] += w * self.values[i][0];
+            out[1] += w * self.values[i][1];
+        }
+        out
     }
 }
 
