@@ -259,7 +259,8 @@ struct Plan<'a, K> {
     centres: Vec<(f64, f64)>,
     /// Weights in φ of the n sub-columns.
     phi_weights: Vec<f64>,
-    /// cos((d + offset_j)·2π/W) for d = 0..=W/2, j = 0..n.
+    /// cos((d + offset_j)·2π/W), sub-column j's run at j·(W/2 + 1) + d, d = 0..=W/2: contiguous
+    /// in d, so the kernel loop over a row's offsets vectorizes.
     cos_nodes: Vec<f64>,
     /// cos(d·2π/W) for d = 0..=W/2.
     cos_centres: Vec<f64>,
@@ -271,10 +272,8 @@ impl<'a, K: Fn(f64) -> f64 + Sync> Plan<'a, K> {
         let h = TAU / width as f64;
         let columns = rule.sub_columns(grid);
         let half = width / 2;
-        let mut cos_nodes = Vec::with_capacity((half + 1) * columns.len());
-        for d in 0..=half {
-            cos_nodes.extend(columns.iter().map(|&(offset, _)| ((d as f64 + offset) * h).cos()));
-        }
+        let cos_nodes =
+            columns.iter().flat_map(|&(offset, _)| (0..=half).map(move |d| ((d as f64 + offset) * h).cos())).collect();
         Plan {
             grid,
             kernel,
@@ -299,29 +298,21 @@ impl<'a, K: Fn(f64) -> f64 + Sync> Plan<'a, K> {
         let half = self.grid.width / 2;
         let (ct, st) = self.centres[y];
         // Centres pass when ct·z_R + st·s_R·cos(d h) ≥ cos θ_c, and cos(d h) falls with d on
-        // [0, W/2]: scan d up from 0 and stop at the first failure.
-        let n = self.phi_weights.len();
-        let rows = &self.sub_rows[y * n..(y + 1) * n];
+        // [0, W/2]: the offsets in the cone are 0..end.
+        let end = self.cos_centres.iter().take_while(|&&c| ct * z_r + st * s_r * c >= self.cos_cone).count();
         k.fill(0.0);
-        let mut any = false;
-        for d in 0..=half {
-            if ct * z_r + st * s_r * self.cos_centres[d] < self.cos_cone {
-                break;
-            }
-            any = true;
-            let cos_dphi = &self.cos_nodes[d * n..(d + 1) * n];
-            let mut sum = 0.0;
-            for row in rows {
-                let (a, b) = (row.z * z_r, row.sin_theta * s_r);
-                let mut inner = 0.0;
-                for (c, w) in cos_dphi.iter().zip(&self.phi_weights) {
-                    inner += w * (self.kernel)(a + b * c);
+        let n = self.phi_weights.len();
+        for row in &self.sub_rows[y * n..(y + 1) * n] {
+            let (a, b) = (row.z * z_r, row.sin_theta * s_r);
+            for (j, w) in self.phi_weights.iter().enumerate() {
+                let weight = row.weight * w;
+                let cos_dphi = &self.cos_nodes[j * (half + 1)..][..end];
+                for (kd, c) in k[..end].iter_mut().zip(cos_dphi) {
+                    *kd += weight * (self.kernel)(a + b * c);
                 }
-                sum += row.weight * inner;
             }
-            k[d] = sum;
         }
-        any
+        end > 0
     }
 }
 
