@@ -77,7 +77,11 @@ impl Stage for Args {
                 level.seconds
             ));
         }
-        ctx.note(format!("baked in {:.3} s, measured in {:.3} s", body.timings.bake, body.timings.measure));
+        let t = &body.timings;
+        ctx.note(format!(
+            "baked in {:.3} s (prepare {:.3}, specular {:.3}, irradiance and SH {:.3}, DFG {:.3} beside them, encode {:.3}), measured in {:.3} s",
+            t.bake, t.prepare, t.specular, t.irradiance, t.dfg, t.encode, t.measure
+        ));
 
         let mut outputs = Outputs::new();
         outputs.create_dir(&self.output)?;

@@ -160,6 +160,20 @@ impl EnvMap {
 
     /// Calls `f` for every mapped texel, image by image, row by row.
     pub fn for_each_texel(&self, mut f: impl FnMut(Texel)) {
+        if self.layout == Layout::LatLong {
+            // The same directions as `texel_geometry`, from sin/cos tabulated per row and column.
+            let img = &self.images[0];
+            let grid = LatLong::new(img.width, img.height);
+            let columns: Vec<(f64, f64)> = (0..img.width).map(|x| grid.column_phi(x).sin_cos()).collect();
+            for y in 0..img.height {
+                let (st, ct) = grid.row_theta(y).sin_cos();
+                let solid_angle = grid.row_solid_angle(y);
+                for (x, &(sp, cp)) in columns.iter().enumerate() {
+                    f(Texel { dir: DVec3::new(st * cp, st * sp, ct), solid_angle, rgb: img.get(x, y) });
+                }
+            }
+            return;
+        }
         for (face, img) in self.images.iter().enumerate() {
             for y in 0..img.height {
                 for x in 0..img.width {
@@ -178,20 +192,20 @@ impl EnvMap {
 
     /// Bilinearly filtered radiance in direction `dir` (need not be normalized).
     pub fn lookup(&self, dir: DVec3) -> [f32; 3] {
-        let d = dir.normalize();
         match self.layout {
             Layout::LatLong => {
+                // `position` normalizes.
                 let img = &self.images[0];
-                let (px, py) = LatLong::new(img.width, img.height).position(d);
+                let (px, py) = LatLong::new(img.width, img.height).position(dir);
                 bilinear(img, px - 0.5, py - 0.5, true)
             }
             Layout::Angular => {
                 let img = &self.images[0];
-                let (fx, fy) = probe::pixel_of(img.width, d);
+                let (fx, fy) = probe::pixel_of(img.width, dir.normalize());
                 bilinear(img, fx, fy, false)
             }
             Layout::Faces | Layout::CrossHorizontal | Layout::CrossVertical => {
-                let (face, s, t) = cube::face_coords(d);
+                let (face, s, t) = cube::face_coords(dir.normalize());
                 let n = match self.layout {
                     Layout::Faces => self.images[0].width,
                     _ => self.layout.face_size(self.images[0].width, self.images[0].height),

@@ -15,8 +15,7 @@
 //! output frame's matrix from prtkit's (rotation, `--rotate`, `--mirror` included).
 
 use crate::envmap::EnvMap;
-use crate::sh::legendre::LegendreTable;
-use crate::sh::{convolve::clamped_cosine, eval_basis_dir, lm, ShCoeffs};
+use crate::sh::{convolve::clamped_cosine, lm, ShCoeffs};
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 
@@ -62,18 +61,19 @@ impl IrradianceSh {
     /// Projects `latlong` (any layout works; prtkit's frame) with its directions taken to the
     /// output frame by `world_from_env`.
     pub fn project(env: &EnvMap, world_from_env: DMat3) -> Self {
-        let table = LegendreTable::new(2);
-        let mut y = vec![0.0; 9];
+        // Y_i = K_i b_i: the closed-form order-2 basis (the same functions as `sh::eval_basis_dir`
+        // without the general recurrence; `polynomial_form_is_prtkits_basis` holds them equal).
+        let k = basis_constants();
         let mut radiance = ShCoeffs::zeros(2);
         env.for_each_texel(|t| {
-            eval_basis_dir(&table, world_from_env * t.dir, &mut y);
-            for (c, yi) in radiance.rgb.iter_mut().zip(&y) {
+            let b = basis_polynomials(world_from_env * t.dir);
+            for ((c, bi), ki) in radiance.rgb.iter_mut().zip(&b).zip(&k) {
+                let w = t.solid_angle * ki * bi;
                 for ch in 0..3 {
-                    c[ch] += t.rgb[ch] as f64 * t.solid_angle * yi;
+                    c[ch] += t.rgb[ch] as f64 * w;
                 }
             }
         });
-        let k = basis_constants();
         let mut shader = [[0.0; 3]; 9];
         for i in 0..9 {
             let (l, _) = lm(i);
@@ -154,6 +154,8 @@ impl IrradianceSh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sh::eval_basis_dir;
+    use crate::sh::legendre::LegendreTable;
 
     #[test]
     fn polynomial_form_is_prtkits_basis() {

@@ -23,7 +23,7 @@
 use super::angular::{AngularError, AngularOptions, AngularPrefilter};
 use super::cube::{CubeError, CubeMap, CubeMipChain, MAX_FACE_SIZE, WORLD_FROM_PRTKIT};
 use super::dfg::{DfgError, DfgTable, DfgVariant};
-use super::frequency::{self, FilteredSphere, LatLongSource};
+use super::frequency::{FilteredSphere, LatLongSource};
 use super::ggx::{GgxError, SplitSumLobe};
 use super::manifest::{self, Costs, IblBody, Level, ShBody};
 use super::reference::Reference;
@@ -208,9 +208,9 @@ impl Default for Config {
 /// Largest face size `ibl` bakes (a 4096² RGBA16F chain is 512 MiB in memory as f32).
 pub const MAX_SIZE: usize = 4096;
 
-/// Gauss–Legendre nodes per θ_h piece of the DFG table. Measured against 48 nodes over the
-/// whole 128² table: 1.6e-4 with 5, 9.9e-5 with 6, 1.1e-5 with 8; 6 stays below the half-float
-/// rounding of the stored values (2.4e-4 in [0.5, 1)) at 60 % of the time of 8.
+/// Gauss–Legendre nodes per θ_h piece of the DFG table (order + 2 in φ). Measured against 48
+/// nodes over the whole 128² table: 1.6e-4 with 5, 9.9e-5 with 6, 1.3e-5 with 8; 6 stays below
+/// the half-float rounding of the stored values (2.4e-4 in [0.5, 1)) at 75 % of the time of 8.
 pub const DFG_QUADRATURE_ORDER: usize = 6;
 
 /// Errors of the stage.
@@ -362,7 +362,7 @@ impl Config {
     }
 }
 
-/// Seconds per unit of [`frequency::zonal_cost`] and per angular kernel evaluation, measured
+/// Seconds per unit of [`super::frequency::zonal_cost`] and per angular kernel evaluation, measured
 /// on one core of the development machine (`grace_latlong.exr`: the zonal filter of a 256 × 128
 /// grid, 7.9e6 units, in 0.044 s; the angular 32² level at r = 0.6, 2.3e6 evaluations, in
 /// 0.098 s). Only their ratio matters to the choice.
@@ -377,8 +377,7 @@ pub const ANGULAR_OPTIONS: AngularOptions = AngularOptions { epsilon: 1e-4, texe
 
 /// Estimated seconds (one core) of the two exact methods for one level.
 pub fn estimate_costs(source: &LatLongSource, lobe: &SplitSumLobe, size: usize, base_size: usize) -> Costs {
-    let (w, h) = source.working_size(2.0 * lobe.ggx().alpha());
-    let zonal = ZONAL_SECONDS_PER_UNIT * frequency::zonal_cost(w, h);
+    let zonal = ZONAL_SECONDS_PER_UNIT * source.passes(lobe).iter().map(|p| p.cost()).sum::<f64>();
     // Angular ([`ANGULAR_OPTIONS`]): 6n² output texels, each summing the source texels in its cone.
     let options = ANGULAR_OPTIONS;
     let cone = lobe.cone_angle(options.epsilon);
@@ -463,10 +462,9 @@ fn bake_level(
             (cube, format!("cube {0}x{0}", src.source_size), None)
         }
         _ => {
-            let grid = latlong.working_grid(2.0 * lobe.ggx().alpha());
-            let filtered: FilteredSphere = frequency::filter(&grid, &lobe, progress)?;
+            let filtered: FilteredSphere = latlong.filter(&lobe, progress)?;
             let cube = CubeMap::from_fn(size, |d| filtered.sample(env_from_cube * d))?;
-            (cube, format!("latlong {}x{}", grid.width, grid.height), Some(filtered.rule_subsamples))
+            (cube, filtered.source, Some(filtered.rule_subsamples))
         }
     };
     let level = Level {
@@ -497,12 +495,20 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     let env_from_cube = config.world_from_prtkit().transpose();
     timings.prepare = t0.elapsed().as_secs_f64();
 
-    // The DFG table depends on nothing else: it runs beside the cubes.
+    // The DFG table depends on nothing else, the SH only on the input: they run beside the cubes.
     let t_dfg = Instant::now();
-    let (dfg, cubes) = rayon::join(
+    let ((dfg, (sh, sh_time)), cubes) = rayon::join(
         || {
-            DfgTable::with_quadrature_order(config.dfg_size, config.dfg, DFG_QUADRATURE_ORDER)
-                .map(|t| (t, t_dfg.elapsed()))
+            rayon::join(
+                || {
+                    DfgTable::with_quadrature_order(config.dfg_size, config.dfg, DFG_QUADRATURE_ORDER)
+                        .map(|t| (t, t_dfg.elapsed()))
+                },
+                || {
+                    let t_sh = Instant::now();
+                    (IrradianceSh::project(&latlong, config.world_from_prtkit()), t_sh.elapsed())
+                },
+            )
         },
         || -> Result<_, Error> {
             // Level 0: the environment resampled (2 × 2 lookups per texel, a box over its footprint).
@@ -537,15 +543,14 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
             let t_irr = Instant::now();
             let mut irradiance = bake_level(config, &source, &base, (0, config.irradiance_size, 1.0), progress)?;
             irradiance.level.roughness = 1.0;
-            let sh = IrradianceSh::project(&latlong, config.world_from_prtkit());
-            Ok((baked, irradiance, sh, specular_seconds, t_irr.elapsed().as_secs_f64()))
+            Ok((baked, irradiance, specular_seconds, t_irr.elapsed().as_secs_f64()))
         },
     );
     let (dfg, dfg_time) = dfg?;
-    let (mut baked, mut irradiance, sh, specular_seconds, irradiance_seconds) = cubes?;
+    let (mut baked, mut irradiance, specular_seconds, irradiance_seconds) = cubes?;
     timings.dfg = dfg_time.as_secs_f64();
     timings.specular = specular_seconds;
-    timings.irradiance = irradiance_seconds;
+    timings.irradiance = irradiance_seconds + sh_time.as_secs_f64();
 
     // Encode.
     let t_enc = Instant::now();
