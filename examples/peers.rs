@@ -197,14 +197,15 @@ fn main() {
 
     let env = LoadOptions::default().load(&map).unwrap_or_else(|e| fail(&e.to_string())).map;
     let reference = Reference::new(&env).unwrap_or_else(|e| fail(&e.to_string()));
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut md = format!(
         "## `ibl` and Filament's `cmgen` on the same map\n\n\
          `scripts/bench-peers.sh`: `{}` (`cmgen --no-mirror --format=exr --size={size} --ibl-ld=DIR`, its \
          default 1024 samples) and `ibl --size {size} --min-size {min_size} --samples 0 --format rgba32f --roughness-map filament` \
          (the same levels and roughnesses: cmgen's lod_k = k/(levels − 1) through Filament's \
          lodToPerceptualRoughness, checked equal level by level) on \
-         `{}`. Times are the best of three runs of each, on the shared 2-core machine (other work was \
-         running); CPU is user + system of the process. Errors: each level against the same angular \
+         `{}`. Times are the best of three runs of each, side by side in one run of the script, on a \
+         {cores}-core machine; CPU is user + system of the process. Errors: each level against the same angular \
          integral of the input (`ibl::reference`) on {samples} texels at a fixed stride, relative \
          ‖a − r‖/‖r‖ over the texels above 1 % of the mean; cmgen's frame was matched to `ibl`'s \
          by its level 0 and last level over turns about +Y (0.25° steps) with and without a mirror: \
