@@ -442,3 +442,53 @@ fn shipped_meshes_load_and_only_the_concave_ones_shadow_themselves() {
     assert_eq!(fractions[0], 1.0, "{fractions:?}");
     assert!(fractions[1] < 0.9 && fractions[2] < 0.95, "{fractions:?}");
 }
+
+#[test]
+fn render_irradiance_window_nonneg_removes_the_negative_lobes_of_a_point_light() {
+    // One bright texel on black: its order-4 irradiance rings negative over the dark half
+    // (the clamped cosine truncated at l = 4). The default `nonneg` window finds the gentlest
+    // heat window that leaves no object pixel negative, and says so; `none` keeps the rings.
+    let dir = tempfile::tempdir().unwrap();
+    let spot = DVec3::new(0.4, -0.5, 0.3).normalize();
+    let env = write_env(dir.path(), "spot.exr", 128, 64, |d| if d.dot(spot) > 0.998 { 5000.0 } else { 0.0 });
+    let object_negatives = |path: &Path| {
+        let img = read_image(path).unwrap();
+        img.pixels.iter().filter(|p| p.iter().any(|&v| v < 0.0)).count()
+    };
+    let mut negatives = Vec::new();
+    for window in ["none", "nonneg", "hann"] {
+        let out = dir.path().join(format!("{window}.exr"));
+        let base = ["--shading", "irradiance", "--brdf", "lambert", "-F", "4", "--res", "48x48", "--json", "-q"];
+        let stdout = bin("render").arg(&env).args(base).args(["--window", window, "-o"]).arg(&out).output().unwrap();
+        assert!(stdout.status.success());
+        let report = summary(&stdout.stdout).window.expect("irradiance reports its window");
+        assert_eq!(report.kind.name(), window);
+        if window == "nonneg" {
+            let t = report.t.unwrap();
+            assert!(t > 0.0 && t < 1.0, "t = {t}");
+        }
+        negatives.push(object_negatives(&out));
+    }
+    assert!(negatives[0] > 20, "the raw order-4 irradiance is negative over the dark half: {negatives:?}");
+    assert_eq!(negatives[1], 0, "nonneg leaves no negative pixel: {negatives:?}");
+    // A smooth sky needs no window: nonneg keeps the raw render (t = 0), bit for bit.
+    let sky = write_env(dir.path(), "sky.exr", 64, 32, smooth);
+    let run = |window: &str, name: &str| {
+        let out = dir.path().join(name);
+        let args = ["--shading", "irradiance", "--brdf", "lambert", "--res", "32x32", "--json", "-q", "--window"];
+        let stdout = bin("render").arg(&sky).args(args).arg(window).arg("-o").arg(&out).output().unwrap();
+        (summary(&stdout.stdout).window.unwrap(), read_image(&out).unwrap())
+    };
+    let ((raw_report, raw), (kept_report, kept)) = (run("none", "a.exr"), run("nonneg", "b.exr"));
+    assert_eq!((raw_report.t, kept_report.t), (None, Some(0.0)));
+    assert_eq!(raw.pixels, kept.pixels);
+    // Only the SH modes window.
+    bin("render")
+        .arg(&sky)
+        .args(["--shading", "reference", "--window", "hann", "--res", "8x8", "-o"])
+        .arg(dir.path().join("no.exr"))
+        .assert()
+        .code(2)
+        .stderr(contains("--window is for --shading irradiance and shrm"));
+    assert!(!dir.path().join("no.exr").exists());
+}

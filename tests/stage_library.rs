@@ -316,7 +316,7 @@ fn render_library_and_binary_write_the_same_bytes() {
     let (shrm, body) = prtkit::render::reflection::load(&chain.document).unwrap();
     let config = Config {
         brdf: Brdf::parse("phong:s=8").unwrap(),
-        shading: Shading::Shrm { shrm, body: Box::new(body) },
+        shading: Shading::Shrm { shrm, body: Box::new(body), window: prtkit::sh::window::Window::Nonneg },
         camera: camera(),
         compare: Some(("ref.exr".into(), reference.clone())),
         panel: Some(vec![PanelItem { label: "reference".into(), image: Some(reference) }]),

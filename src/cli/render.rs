@@ -24,12 +24,13 @@ impl Args {
             ShadingArg::Irradiance => Shading::Irradiance {
                 order: self.order,
                 coefficients: self.sh.as_deref().map(read_sh_document).transpose()?,
+                window: self.window.unwrap_or_default(),
             },
             ShadingArg::Shrm => {
                 let doc =
                     self.shrm.as_ref().context("--shading shrm needs --shrm SHRM.json (from prefilter --shrm)")?;
                 let (shrm, body) = crate::render::reflection::load(doc)?;
-                Shading::Shrm { shrm, body: Box::new(body) }
+                Shading::Shrm { shrm, body: Box::new(body), window: self.window.unwrap_or_default() }
             }
             ShadingArg::Factored => {
                 let factors = match &self.factors {
@@ -95,6 +96,9 @@ impl Stage for Args {
         }
         if (self.error_image.is_some() || self.metrics.is_some()) && self.compare.is_none() {
             bail!("--error-image and --metrics need --compare REF.exr");
+        }
+        if self.window.is_some() && !matches!(self.shading, ShadingArg::Irradiance | ShadingArg::Shrm) {
+            bail!("--window is for --shading irradiance and shrm (the SH modes)");
         }
         if self.grid && self.shading != ShadingArg::Ibl {
             bail!("--grid is for --shading ibl");

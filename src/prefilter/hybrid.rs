@@ -28,7 +28,7 @@ use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::Progress;
 use crate::sh::project::project;
-use crate::sh::window::{self, Window};
+use crate::sh::window::{self, Window, WindowReport};
 use crate::sh::{lm, ShCoeffs};
 use crate::sphere::LatLong;
 use glam::DVec3;
@@ -88,16 +88,6 @@ pub struct BrightReport {
     pub energy_fraction: f64,
     /// Share of ∫ Y² dω (the ringing energy) filtered in angle.
     pub squared_fraction: f64,
-}
-
-/// The window, in figures.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct WindowReport {
-    /// `none`, `hann`, `lanczos`, `sigma` or `nonneg`.
-    pub kind: Window,
-    /// For `nonneg`: the heat parameter t of exp(−t·l(l+1)) it needed (0: none).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub t: Option<f64>,
 }
 
 /// A ring-free prefiltered lighting: everything reflection maps and the SHRM file are made of.

@@ -76,6 +76,21 @@ impl Shrm {
     pub fn layer(&self, p: usize, q: isize) -> &RgbImage {
         &self.layers[index(p, q)]
     }
+
+    /// The SHRM with its view bands p multiplied by `factors[p]` (bands beyond are dropped): a
+    /// window on the view truncation P_B, applied at synthesis (`render --window`).
+    pub fn with_view_window(&self, factors: &[f64]) -> Shrm {
+        let mut out = self.clone();
+        for p in 0..=self.p_b {
+            let w = factors.get(p).copied().unwrap_or(0.0) as f32;
+            for q in -(p as isize)..=(p as isize) {
+                for px in &mut out.layers[index(p, q)].pixels {
+                    px.iter_mut().for_each(|v| *v *= w);
+                }
+            }
+        }
+        out
+    }
 }
 
 /// The local frame of lat-long texel (x, y): R_{α,β} = R_z(β)·R_y(α) with (α, β) the spherical
@@ -352,4 +367,23 @@ pub fn kautz_mccool(shrm: &Shrm, slices: usize) -> Vec<RgbImage> {
             img
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_view_window_scales_each_view_band_by_its_factor() {
+        let layer = |v: f32| RgbImage::from_fn(4, 2, |_, _| [v, 2.0 * v, 3.0 * v]);
+        let shrm = Shrm { f_b: 2, p_b: 1, global: false, layers: (0..4).map(|i| layer(1.0 + i as f32)).collect() };
+        let windowed = shrm.with_view_window(&[1.0, 0.25]);
+        assert_eq!(windowed.layer(0, 0).pixels, layer(1.0).pixels);
+        for q in -1..=1 {
+            let i = index(1, q);
+            assert_eq!(windowed.layers[i].pixels, layer(0.25 * (1.0 + i as f32)).pixels);
+        }
+        // Missing factors drop their bands.
+        assert!(shrm.with_view_window(&[1.0]).layer(1, 0).pixels.iter().flatten().all(|&v| v == 0.0));
+    }
 }

@@ -18,7 +18,10 @@ use crate::io::{Document, Provenance, RgbImage};
 use crate::metrics::{compare, Metrics};
 use crate::prefilter::document::ShrmBody;
 use crate::prefilter::shrm::Shrm;
+use crate::progress::NoProgress;
 use crate::progress::Progress;
+use crate::sh::convolve::clamped_cosine;
+use crate::sh::window::{self, Window, WindowReport};
 use crate::sh::ShCoeffs;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -41,6 +44,8 @@ pub enum Shading {
         order: usize,
         /// Given coefficients (a `prtkit.sh` document's).
         coefficients: Option<ShCoeffs>,
+        /// The window on the lighting's bands at synthesis.
+        window: Window,
     },
     /// From an SHRM and its document.
     Shrm {
@@ -48,6 +53,9 @@ pub enum Shading {
         shrm: Shrm,
         /// Its document.
         body: Box<ShrmBody>,
+        /// The window on the SHRM's view bands p at synthesis (its lighting bands carry the
+        /// prefilter's window).
+        window: Window,
     },
     /// K-term in-out factorization (Mahajan et al. 2008, eq. 3–4).
     Factored {
@@ -198,6 +206,9 @@ pub struct Summary {
     /// The bright sources shaded exactly (factored).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bright: Option<BrightShare>,
+    /// The window at synthesis (irradiance, shrm).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window: Option<WindowReport>,
     /// Metrics against the reference, if compared.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub metrics: Option<Metrics>,
@@ -263,12 +274,13 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
         epsilon_achieved: None,
         terms: None,
         bright: None,
+        window: None,
         metrics: None,
         grid: None,
     };
     let mut grid_panel = None;
     let (frame, label) = match &config.shading {
-        Shading::Irradiance { order, coefficients } => {
+        Shading::Irradiance { order, coefficients, window } => {
             let Brdf::Lambert(m) = brdf else {
                 return Err(bad(format!(
                     "--shading irradiance shades Lambertian surfaces; --brdf {} is not lambert",
@@ -283,18 +295,28 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 None => crate::sh::project::project(env, *order, progress)?,
             };
             summary.order = Some(*order);
-            let frame = render(scene, &config.camera, env, &Irradiance::new(&light, m.albedo), progress);
+            // The window multiplies the lighting's bands; the bands it shapes are Â_l L_lm.
+            let kernel: Vec<f64> = (0..=*order).map(clamped_cosine).collect();
+            let (frame, report) = windowed(*window, &kernel, progress, |factors, progress| {
+                let shader = Irradiance::new(&window::apply(&light, factors), m.albedo);
+                render(scene, &config.camera, env, &shader, progress)
+            });
+            summary.window = Some(report);
             (frame, format!("irradiance F={order}"))
         }
-        Shading::Shrm { shrm, body } => {
+        Shading::Shrm { shrm, body, window } => {
             if body.brdf != brdf.spec() {
                 return Err(bad(format!("the SHRM was computed for {}, --brdf says {}", body.brdf, brdf.spec())));
             }
             summary.orders = Some((body.f_b, body.p_b));
             summary.epsilon_achieved = Some(body.epsilon_achieved);
-            let shader =
-                ShrmShader::new(shrm.clone(), body.parameterization == "normal", config.camera.view_direction());
-            (render(scene, &config.camera, env, &shader, progress), format!("SHRM F={} P={}", body.f_b, body.p_b))
+            let by_normal = body.parameterization == "normal";
+            let (frame, report) = windowed(*window, &vec![1.0; body.p_b + 1], progress, |factors, progress| {
+                let shader = ShrmShader::new(shrm.with_view_window(factors), by_normal, config.camera.view_direction());
+                render(scene, &config.camera, env, &shader, progress)
+            });
+            summary.window = Some(report);
+            (frame, format!("SHRM F={} P={}", body.f_b, body.p_b))
         }
         Shading::Factored { terms, factors, resolution, cell_samples, normal_table, bright } => {
             if *terms == 0 {
@@ -427,6 +449,35 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
 
 /// Lays out the panel: the items in order (each labelled with its error against the reference
 /// when comparing), this render in the item marked `None`, or last.
+/// Renders with `window`'s band factors for bands 0..=F (F + 1 = `kernel.len()`): a fixed window
+/// once; `nonneg` by [`window::nonneg`] on the object's pixels (the raw render when none is
+/// negative, so the common case costs one render; the search renders without progress).
+/// `kernel` is the zonal factors the window multiplies, which bracket the search.
+fn windowed(
+    kind: Window,
+    kernel: &[f64],
+    progress: &dyn Progress,
+    draw: impl Fn(&[f64], &dyn Progress) -> Frame,
+) -> (Frame, WindowReport) {
+    let order = kernel.len().saturating_sub(1);
+    if kind != Window::Nonneg || order == 0 {
+        let t = (kind == Window::Nonneg).then_some(0.0);
+        return (draw(&kind.factors(order), progress), WindowReport { kind, t });
+    }
+    let object_min = |frame: &Frame| {
+        frame
+            .image
+            .pixels
+            .iter()
+            .zip(&frame.mask)
+            .filter(|(_, &m)| m)
+            .flat_map(|(p, _)| p)
+            .fold(0.0f64, |a, &v| a.min(v as f64))
+    };
+    let found = window::nonneg(kernel, |factors| draw(factors, &NoProgress), object_min);
+    (found.map, WindowReport { kind, t: Some(found.t) })
+}
+
 fn panel(items: &[PanelItem], frame: &Frame, label: &str, config: &Config, metrics: Option<Metrics>) -> RgbImage {
     let with_error = |mut lines: Vec<String>, m: Option<Metrics>| {
         if let Some(m) = m.filter(|m| m.rel_error > 0.0) {

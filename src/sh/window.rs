@@ -79,6 +79,16 @@ impl Window {
     }
 }
 
+/// The window a synthesis used, in figures (documents and `--json`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct WindowReport {
+    /// `none`, `hann`, `lanczos`, `sigma` or `nonneg`.
+    pub kind: Window,
+    /// For `nonneg`: the heat parameter t of exp(−t·l(l+1)) it needed (0: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t: Option<f64>,
+}
+
 /// Heat-kernel window factors exp(−t·l(l+1)), l = 0..=F.
 pub fn heat_factors(order: usize, t: f64) -> Vec<f64> {
     (0..=order).map(|l| (-t * (l * (l + 1)) as f64).exp()).collect()

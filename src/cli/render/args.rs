@@ -71,6 +71,14 @@ pub struct Args {
     #[arg(long, value_name = "SHRM.json")]
     pub shrm: Option<PathBuf>,
 
+    /// irradiance and shrm: window at synthesis, on the lighting's bands l (irradiance) or the
+    /// SHRM's view bands p (shrm; its lighting bands carry prefilter's window already): none,
+    /// hann, lanczos, sigma, or nonneg (no window unless a pixel of the object would be
+    /// negative; then the gentlest heat window that makes every one non-negative).
+    /// [default: nonneg]
+    #[arg(long, value_enum)]
+    pub window: Option<crate::sh::window::Window>,
+
     /// factored: number of terms K.
     #[arg(short = 'K', long, default_value_t = 12)]
     pub terms: usize,
