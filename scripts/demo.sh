@@ -57,6 +57,8 @@ say "5. render: a Phong s=32 sphere from the SHRM next to the reference (panel.p
 
 say "6. ibl: GGX mip chain, irradiance cube, SH snippets and DFG table for glTF/PBR engines"
 # Prints each level's method and its error against the angular integral (also in ibl/ibl.json).
+# ibl writes into a new or empty directory (never over another bake): a rerun replaces the demo's own.
+rm -rf "$out/ibl"
 "$bin/ibl" "$out/sky.exr" -o "$out/ibl"
 
 say "7. render --shading ibl: a roughness x metalness grid from the bake, each above its reference (ibl-grid.png)"
