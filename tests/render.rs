@@ -492,3 +492,45 @@ fn render_irradiance_window_nonneg_removes_the_negative_lobes_of_a_point_light()
         .stderr(contains("--window is for --shading irradiance and shrm"));
     assert!(!dir.path().join("no.exr").exists());
 }
+
+#[test]
+fn render_shrm_window_nonneg_removes_negative_pixels_of_a_view_dependent_shrm() {
+    // A Torrance-Sparrow σ = 0.3 SHRM of Grace (P_B = 6): its raw view bands make some pixels
+    // of the sphere negative (measured 1.8 %); the default window on the view bands leaves none.
+    let probe = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/testdata/envmaps/grace_probe_250.pfm");
+    if !probe.exists() {
+        eprintln!("skipping: {} is absent", probe.display());
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let doc = dir.path().join("ts.json");
+    let brdf = ["--brdf", "torrance-sparrow:sigma=0.3"];
+    bin("prefilter")
+        .arg(&probe)
+        .args(brdf)
+        .args(["--size", "128x64", "-q", "--shrm"])
+        .arg(dir.path().join("ts.exr"))
+        .arg("-o")
+        .arg(&doc)
+        .assert()
+        .success();
+    let mut found = Vec::new();
+    for window in ["none", "nonneg"] {
+        let out = dir.path().join(format!("{window}.exr"));
+        let stdout = bin("render")
+            .arg(&probe)
+            .args(brdf)
+            .args(["--shading", "shrm", "--res", "64x64", "--json", "-q", "--window", window, "--shrm"])
+            .arg(&doc)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(stdout.status.success());
+        let t = summary(&stdout.stdout).window.unwrap().t;
+        let negatives = read_image(&out).unwrap().pixels.iter().filter(|p| p.iter().any(|&v| v < 0.0)).count();
+        found.push((t, negatives));
+    }
+    assert!(found[0].0.is_none() && found[0].1 > 0, "raw view bands: {found:?}");
+    assert!(found[1].0.unwrap() > 0.0 && found[1].1 == 0, "nonneg: {found:?}");
+}

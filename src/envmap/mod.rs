@@ -256,6 +256,21 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
+    #[test]
+    fn latlong_texels_come_in_order_with_the_geometry_of_texel_geometry() {
+        // for_each_texel's lat-long path tabulates sin/cos per row and column; the directions,
+        // solid angles and values must be texel_geometry's, bit for bit, in row-major order.
+        let map = EnvMap::latlong(RgbImage::from_fn(12, 6, |x, y| [x as f32, y as f32, 1.0])).unwrap();
+        let mut k = 0;
+        map.for_each_texel(|t| {
+            let (x, y) = (k % 12, k / 12);
+            assert_eq!(Some((t.dir, t.solid_angle)), map.texel_geometry(0, x, y), "texel ({x}, {y})");
+            assert_eq!(t.rgb, [x as f32, y as f32, 1.0]);
+            k += 1;
+        });
+        assert_eq!(k, 72);
+    }
+
     fn total_solid_angle(map: &EnvMap) -> f64 {
         let mut s = 0.0;
         map.for_each_texel(|t| s += t.solid_angle);

@@ -95,12 +95,13 @@ impl IrradianceSh {
         out
     }
 
-    fn header(&self, comment: &str, frame: &str) -> String {
+    /// The comment block the three languages share (all take `//`).
+    fn header(&self, frame: &str) -> String {
         format!(
-            "{comment} prtkit ibl: order-2 SH irradiance, pre-convolved (Ramamoorthi & Hanrahan 2001).\n\
-             {comment} Frame: {frame}; n must be a unit normal in that frame.\n\
-             {comment} Scale: returns E(n)/pi, the radiance a white Lambertian surface reflects;\n\
-             {comment} multiply by the albedo (by pi for the irradiance E itself).\n"
+            "// prtkit ibl: order-2 SH irradiance, pre-convolved (Ramamoorthi & Hanrahan 2001).\n\
+             // Frame: {frame}; n must be a unit normal in that frame.\n\
+             // Scale: returns E(n)/pi, the radiance a white Lambertian surface reflects;\n\
+             // multiply by the albedo (by pi for the irradiance E itself).\n"
         )
     }
 
@@ -124,7 +125,7 @@ impl IrradianceSh {
     pub fn glsl(&self, frame: &str) -> String {
         format!(
             "{}const vec3 PRTKIT_SH[9] = vec3[9](\n    {}\n);\n\nvec3 prtkitIrradiance(vec3 n) {{\n    return {};\n}}\n",
-            self.header("//", frame),
+            self.header(frame),
             self.vectors("vec3").join(",\n    "),
             self.sum_expression("PRTKIT_SH")
         )
@@ -134,7 +135,7 @@ impl IrradianceSh {
     pub fn hlsl(&self, frame: &str) -> String {
         format!(
             "{}static const float3 PRTKIT_SH[9] = {{\n    {}\n}};\n\nfloat3 prtkitIrradiance(float3 n) {{\n    return {};\n}}\n",
-            self.header("//", frame),
+            self.header(frame),
             self.vectors("float3").join(",\n    "),
             self.sum_expression("PRTKIT_SH")
         )
@@ -144,7 +145,7 @@ impl IrradianceSh {
     pub fn wgsl(&self, frame: &str) -> String {
         format!(
             "{}const PRTKIT_SH = array<vec3<f32>, 9>(\n    {}\n);\n\nfn prtkit_irradiance(n: vec3<f32>) -> vec3<f32> {{\n    return {};\n}}\n",
-            self.header("//", frame),
+            self.header(frame),
             self.vectors("vec3<f32>").join(",\n    "),
             self.sum_expression("PRTKIT_SH")
         )
