@@ -14,7 +14,7 @@ use prtkit::io::image::read_image;
 use prtkit::io::RgbImage;
 use prtkit::prefilter::angular::{self, ConeIntegrator};
 use prtkit::prefilter::model::Model;
-use prtkit::prefilter::pipeline::{self, Lighting, Orders};
+use prtkit::prefilter::pipeline::{self, AngularSettings, Lighting, Orders};
 use prtkit::prefilter::shrm;
 use prtkit::progress::NoProgress;
 use std::fmt::Write;
@@ -67,7 +67,8 @@ fn table4(env: &EnvMap, md: &mut String) {
             shrm::reflection_map(&r.shrm, DVec3::Z)
         });
         let (ang_s, ang) = best_of(10, || {
-            pipeline::angular_reference(&model, env, &[DVec3::Z], 0.05, S, S, &NoProgress).expect("angular")
+            pipeline::angular_reference(&model, env, &[DVec3::Z], AngularSettings::paper(0.05), S, S, &NoProgress)
+                .expect("angular")
         });
         let n = ang.report.subsamples;
         // The same sum, texel by texel over the cone: the paper's angular method (App. D).
@@ -108,7 +109,8 @@ fn table5(env: &EnvMap, angular_views: usize, md: &mut String) {
             (shrm_s, r.brdf.f, r.brdf.p, r.epsilon_achieved, maps)
         });
         let t = Instant::now();
-        let ang = pipeline::angular_reference(&model, env, &timed, 0.05, S, S, &NoProgress).expect("angular");
+        let ang = pipeline::angular_reference(&model, env, &timed, AngularSettings::paper(0.05), S, S, &NoProgress)
+            .expect("angular");
         let ang_s = t.elapsed().as_secs_f64() * views.len() as f64 / timed.len() as f64;
         let n = ang.report.subsamples;
         let mut err = 0.0;
@@ -136,7 +138,8 @@ fn reference(md: &mut String) {
         let env = resample(&source, Layout::LatLong, w, h, 4).expect("resample");
         let model = Model::new(Brdf::parse(spec).expect("spec"), cosine).expect("model");
         let (secs, r) = best_of(runs, || {
-            pipeline::angular_reference(&model, &env, &[DVec3::Z], 0.001, w, h, &NoProgress).expect("angular")
+            pipeline::angular_reference(&model, &env, &[DVec3::Z], AngularSettings::paper(0.001), w, h, &NoProgress)
+                .expect("angular")
         });
         let us = 1e6 * secs / (w * h) as f64;
         let (n, cone, path) = (r.report.subsamples, r.report.cone_angle.to_degrees(), r.report.path);

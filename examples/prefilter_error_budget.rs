@@ -9,7 +9,7 @@ use prtkit::envmap::{resample, EnvMap, Layout};
 use prtkit::io::image::read_image;
 use prtkit::io::RgbImage;
 use prtkit::prefilter::model::Model;
-use prtkit::prefilter::pipeline::{self, Lighting, Orders};
+use prtkit::prefilter::pipeline::{self, AngularSettings, Lighting, Orders};
 use prtkit::prefilter::shrm;
 use prtkit::progress::NoProgress;
 fn rel(a: &RgbImage, b: &RgbImage) -> f64 {
@@ -27,8 +27,10 @@ fn main() {
     let env = resample(&EnvMap::new(Layout::Angular, img).unwrap(), Layout::LatLong, 128, 128, 4).unwrap();
     let model = Model::new(Brdf::parse("torrance-sparrow:sigma=0.1").unwrap(), false).unwrap();
     let views = [DVec3::Z, DVec3::new(1.0, 0.0, 0.3).normalize(), DVec3::new(0.2, 0.3, -0.9).normalize()];
-    let a05 = pipeline::angular_maps(&model, &env, &views, 0.05, 128, 128, &NoProgress).unwrap();
-    let a001 = pipeline::angular_maps(&model, &env, &views, 0.001, 128, 128, &NoProgress).unwrap();
+    let a05 =
+        pipeline::angular_maps(&model, &env, &views, AngularSettings::paper(0.05), 128, 128, &NoProgress).unwrap();
+    let a001 =
+        pipeline::angular_maps(&model, &env, &views, AngularSettings::paper(0.001), 128, 128, &NoProgress).unwrap();
     for (f, p) in [(23, 2), (23, 3), (40, 3), (40, 6)] {
         let r =
             pipeline::frequency(&model, Lighting::Map(&env), Orders::Fixed { f, p }, 128, 128, &NoProgress).unwrap();

@@ -18,6 +18,7 @@
 use super::EnvMap;
 use crate::io::RgbImage;
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 /// The brightest share of the sphere that may be moved to the angular pass.
 pub const AREA_FRACTION: f64 = 0.01;
@@ -60,10 +61,34 @@ pub struct BrightSources {
     pub squared_fraction: f64,
 }
 
+/// The bright part, in figures (for documents).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BrightReport {
+    /// The luminance threshold (absent when nothing was split).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub threshold: Option<f64>,
+    /// Texels filtered in angle.
+    pub texels: usize,
+    /// Share of the map's radiant energy filtered in angle.
+    pub energy_fraction: f64,
+    /// Share of ∫ Y² dω (the ringing energy) filtered in angle.
+    pub squared_fraction: f64,
+}
+
 impl BrightSources {
     /// True when nothing was split.
     pub fn is_empty(&self) -> bool {
         self.texels.is_empty()
+    }
+
+    /// The figures of this split.
+    pub fn report(&self) -> BrightReport {
+        BrightReport {
+            threshold: (!self.is_empty()).then_some(self.threshold),
+            texels: self.texels.len(),
+            energy_fraction: self.energy_fraction,
+            squared_fraction: self.squared_fraction,
+        }
     }
 
     /// Puts the excess back into a lat-long image of any size: each texel into the texel its
@@ -87,12 +112,14 @@ fn luminance(rgb: [f32; 3]) -> f64 {
     (rgb[0] as f64 + rgb[1] as f64 + rgb[2] as f64) / 3.0
 }
 
-/// The threshold of [`BrightRule::Auto`]: max(Q, MEAN_MULTIPLE × mean).
+/// The threshold of [`BrightRule::Auto`]: max(Q, MEAN_MULTIPLE × the mean of min(Y, Q)). The
+/// mean is the map's without its brightest share, clipped at Q: a sun 10⁴ × the sky would
+/// otherwise raise the mean, and with it the threshold, to well above the sky, leaving a clipped
+/// sun of hundreds of times the sky in the remainder.
 pub fn auto_threshold(map: &EnvMap) -> f64 {
     let mut texels: Vec<(f64, f64)> = Vec::with_capacity(map.texel_count());
     map.for_each_texel(|t| texels.push((luminance(t.rgb), t.solid_angle)));
     let total_area: f64 = texels.iter().map(|t| t.1).sum();
-    let mean = texels.iter().map(|t| t.0 * t.1).sum::<f64>() / total_area;
     texels.sort_by(|a, b| b.0.total_cmp(&a.0));
     let mut area = 0.0;
     let mut q = 0.0;
@@ -103,7 +130,8 @@ pub fn auto_threshold(map: &EnvMap) -> f64 {
             break;
         }
     }
-    q.max(MEAN_MULTIPLE * mean)
+    let clipped_mean = texels.iter().map(|t| t.0.min(q) * t.1).sum::<f64>() / total_area;
+    q.max(MEAN_MULTIPLE * clipped_mean)
 }
 
 /// Splits a map into the remainder (clipped at the threshold) and the bright texels, in any

@@ -59,6 +59,10 @@ pub struct ShrmBody {
     /// filtered in angle, the window (frequency method).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bake: Option<super::hybrid::Report>,
+    /// How the angular reference truncated its lobes: ε, the texel rule, the bright sources
+    /// summed apart (angular method).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<super::pipeline::AngularReport>,
     /// `--verify`: texels of every map checked against the angular integral, and the figures.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub verification: Option<super::verify::Verification>,

@@ -23,7 +23,7 @@ use super::model::Model;
 use super::orders::{texel_orders, OrderRule, TexelOrders};
 use super::pipeline::{brdf_coefficients, Lighting, Orders, PrefilterError};
 use super::shrm::{self, texel_frame, Shrm, ShrmError};
-use crate::envmap::bright::{split, BrightRule, BrightSources};
+use crate::envmap::bright::{split, BrightReport, BrightRule, BrightSources};
 use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::Progress;
@@ -74,20 +74,6 @@ pub struct Report {
     pub bright: BrightReport,
     /// The window applied at synthesis.
     pub window: WindowReport,
-}
-
-/// The bright part, in figures.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct BrightReport {
-    /// The luminance threshold (absent when nothing was split).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub threshold: Option<f64>,
-    /// Texels filtered in angle.
-    pub texels: usize,
-    /// Share of the map's radiant energy filtered in angle.
-    pub energy_fraction: f64,
-    /// Share of ∫ Y² dω (the ringing energy) filtered in angle.
-    pub squared_fraction: f64,
 }
 
 /// A ring-free prefiltered lighting: everything reflection maps and the SHRM file are made of.
@@ -204,12 +190,7 @@ pub fn prefilter(
             (None, OrderRule::Energy) => "energy".into(),
         },
         texel,
-        bright: BrightReport {
-            threshold: (!bright.is_empty()).then_some(bright.threshold),
-            texels: bright.texels.len(),
-            energy_fraction: bright.energy_fraction,
-            squared_fraction: bright.squared_fraction,
-        },
+        bright: bright.report(),
         window: WindowReport { kind: settings.window, t: (settings.window == Window::Nonneg).then_some(0.0) },
     };
     Ok(Prefiltered { brdf, lighting: light, factors, remainder_shrm, bright, remainder_map: remainder, report })

@@ -7,7 +7,7 @@ use super::document::{layer_name, Lighting as DocLighting, MapEntry, ShrmBody, F
 use super::hybrid::{self, Settings};
 use super::model::{residual_bound, Centre, Model, ModelError};
 use super::orders::OrderRule;
-use super::pipeline::{self, Lighting, PrefilterError};
+use super::pipeline::{self, AngularSettings, Lighting, PrefilterError};
 use super::shrm;
 use super::verify::{MapCheck, Verification, Verifier, VerifyError};
 use crate::brdf::Brdf;
@@ -29,7 +29,8 @@ use std::time::Instant;
 pub enum Method {
     /// Spherical-harmonic prefiltering (R&H 2002 App. C).
     Frequency,
-    /// Direct integration over the environment per output texel, BRDF truncated at ε (App. D).
+    /// Direct integration over the environment per output texel, BRDF truncated at ε (App. D),
+    /// bright sources apart with a wider cone (--bright).
     Angular,
 }
 
@@ -254,6 +255,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
     let start = Instant::now();
     let mut timings = Timings::default();
     let mut bake = None;
+    let mut angular = None;
     let (maps, shrm_out, f_b, p_b, epsilon_achieved, light_order, bound, (width, height)) = match config.method {
         Method::Frequency => {
             let settings = Settings {
@@ -300,9 +302,10 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
             let size = config.size.unwrap_or((latlong.image().width, latlong.image().height));
             let t = Instant::now();
             let wanted = if config.irradiance && views.is_empty() { vec![DVec3::Z] } else { views.clone() };
-            let reference =
-                pipeline::angular_reference(&model, &latlong, &wanted, config.epsilon, size.0, size.1, progress)
-                    .map_err(fail)?;
+            let settings = AngularSettings { epsilon: config.epsilon, bright: config.bright };
+            let reference = pipeline::angular_reference(&model, &latlong, &wanted, settings, size.0, size.1, progress)
+                .map_err(fail)?;
+            angular = Some(reference.report);
             timings.angular_seconds = t.elapsed().as_secs_f64();
             // Radially symmetric BRDFs give one map whatever the view.
             let images = reference.maps;
@@ -411,6 +414,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
             .collect(),
         timings: None,
         bake,
+        reference: angular,
         verification: verification.clone(),
     };
     let provenance = Provenance::new("prefilter", &config.args, vec![config.source.clone()]);

@@ -66,7 +66,7 @@ pub struct Args {
 
     /// Tolerance ε. With --order-rule texel: the worst-case error of any texel, as a fraction of
     /// the darkest texels counted (1 % of the mean); with energy: the BRDF energy F_B, P_B may
-    /// miss (§5.1). Also the angular method's truncation.
+    /// miss (§5.1). With --method angular: the share of each lobe its cone leaves out (App. D).
     #[arg(short = 'e', long, default_value_t = 0.01)]
     pub epsilon: f64,
 
@@ -78,7 +78,8 @@ pub struct Args {
 
     /// Bright sources filtered in angle with the exact lobe, the rest through SH: auto (a
     /// threshold from the map's histogram, docs/prefilter.md), off (the paper's method), or a
-    /// luminance threshold.
+    /// luminance threshold. With --method angular: the bright texels are summed with a wider
+    /// cone, so that under a sun no texel misses more than 2ε × the rest's brightest texel.
     #[arg(long, value_name = "auto|off|Y", default_value = "auto", value_parser = parse_bright)]
     pub bright: BrightRule,
 
