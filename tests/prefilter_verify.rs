@@ -49,10 +49,8 @@ fn paper(c: Config) -> Config {
     Config { order_rule: OrderRule::Energy, bright: BrightRule::Off, window: Window::None, ..c }
 }
 
-/// Equal up to f32 rounding: the reference map rounds its remainder and its bright sources to
-/// f32 apart, `--verify` their f64 sum once.
 fn close(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-4 * b.abs().max(1e-300)
+    (a - b).abs() <= 1e-9 * b.abs().max(1e-300)
 }
 
 #[test]

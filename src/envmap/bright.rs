@@ -108,7 +108,8 @@ impl BrightSources {
     }
 }
 
-fn luminance(rgb: [f32; 3]) -> f64 {
+/// The luminance Y the split thresholds: the mean of RGB.
+pub fn luminance(rgb: [f32; 3]) -> f64 {
     (rgb[0] as f64 + rgb[1] as f64 + rgb[2] as f64) / 3.0
 }
 

@@ -4,7 +4,7 @@ use super::angular::{self, ConeIntegrator, CutoffTable};
 use super::brdf_sh::BrdfSh;
 use super::model::{Model, ModelError};
 use super::shrm::{self, Shrm, ShrmError};
-use crate::envmap::bright::{split, BrightReport, BrightRule, BrightSources};
+use crate::envmap::bright::{luminance, split, BrightReport, BrightRule, BrightSources};
 use crate::envmap::zonal::RuleChoice;
 use crate::envmap::EnvMap;
 use crate::io::RgbImage;
@@ -355,11 +355,17 @@ impl<'m> AngularIntegral<'m> {
 
     /// B(R) for one reflection vector `r` (unit) and `view` (ignored by radially symmetric
     /// lobes): the sum [`angular::radial_map`] and [`angular::view_map`] compute per texel, plus
-    /// the bright sources.
+    /// the bright sources. With bright sources the remainder's sum is rounded to f32 first, as a
+    /// map holds it before they are added, so that a map and its texels agree to the bit.
     pub fn texel(&self, r: DVec3, view: DVec3) -> [f64; 3] {
         let rest = cone_sum(self.model, &self.cone, r, view, |theta_star, f| self.env.integrate(r, theta_star, f));
-        let bright = self.bright.as_ref().map_or([0.0; 3], |b| b.texel(self.model, r, view));
-        [0, 1, 2].map(|c| rest[c] + bright[c])
+        match &self.bright {
+            None => rest,
+            Some(b) => {
+                let bright = b.texel(self.model, r, view);
+                [0, 1, 2].map(|c| rest[c] as f32 as f64 + bright[c])
+            }
+        }
     }
 
     /// Adds the bright sources to a `width`×`height` lat-long map for `view`.
@@ -370,7 +376,7 @@ impl<'m> AngularIntegral<'m> {
             for (x, px) in row.iter_mut().enumerate() {
                 let v = bright.texel(self.model, grid.texel_direction(x, y), view);
                 for c in 0..3 {
-                    px[c] += v[c] as f32;
+                    px[c] = (px[c] as f64 + v[c]) as f32;
                 }
             }
         });
@@ -421,10 +427,10 @@ impl BrightPass {
             }
         }
         let excess = EnvMap::latlong(excess).map_err(|e| PrefilterError::Resample(e.to_string()))?;
-        let luminance = |rgb: &[f32; 3]| rgb.iter().map(|&c| c as f64).sum::<f64>() / 3.0;
-        let m_rest = rest.pixels.iter().map(luminance).fold(0.0, f64::max);
+        let m_rest = rest.pixels.iter().map(|&p| luminance(p)).fold(0.0, f64::max);
         let e_max = sources.texels.iter().map(|t| t.excess.iter().sum::<f64>() / 3.0).fold(0.0, f64::max);
-        let epsilon_b = (epsilon * m_rest / e_max.max(1e-300)).clamp(1e-12, epsilon);
+        // Never looser than ε, and no tighter than 10⁻¹² unless ε itself is.
+        let epsilon_b = (epsilon * m_rest / e_max.max(1e-300)).max(1e-12).min(epsilon);
         let (env, cone, _) = Cone::prepared(model, &excess, epsilon_b, height)?;
         Ok(BrightPass { env, texels, cone, report: sources.report() })
     }
@@ -531,5 +537,17 @@ mod tests {
             // Within the texel rules' tolerance (ε/10 of the lobe, times a sun of 2 · 10⁴).
             assert!(same.max_texel_error < 1e-3, "{spec}: {same:?}");
         }
+    }
+
+    #[test]
+    fn an_epsilon_below_the_bright_floor_is_taken_as_it_is() {
+        // The bright sources' cone is at most ε and at least 10⁻¹² unless ε is smaller: with
+        // ε = 10⁻¹³ both parts use ε itself (it used to panic in `clamp`), and the split map
+        // is the whole map's sum within the texel rules' tolerance.
+        let env = sun_sky();
+        let model = Model::new(Brdf::parse("phong:s=32").unwrap(), true).unwrap();
+        let map = |settings| angular_maps(&model, &env, &[DVec3::Z], settings, 64, 32, &NoProgress).unwrap().remove(0);
+        let (m, _) = compare(&map(AngularSettings::new(1e-13)), &map(AngularSettings::paper(1e-13)), &[]).unwrap();
+        assert!(m.max_texel_error < 1e-3, "{m:?}");
     }
 }

@@ -29,7 +29,7 @@
 
 use super::model::Model;
 use super::pipeline::{AngularIntegral, AngularSettings, PrefilterError};
-use crate::envmap::bright::MEAN_MULTIPLE;
+use crate::envmap::bright::{luminance, MEAN_MULTIPLE};
 use crate::envmap::EnvMap;
 use crate::io::RgbImage;
 use crate::metrics::{self, TEXEL_FLOOR};
@@ -314,18 +314,17 @@ impl Picker {
 
 /// Up to [`MAX_SOURCES`] directions of the brightest texels of the lat-long `env` (luminance:
 /// the mean of RGB), each more than `reach` from the others; after the brightest, only texels
-/// at least [`MEAN_MULTIPLE`] × the mean luminance (the bright split's floor) count as sources.
+/// at least [`MEAN_MULTIPLE`] × the mean luminance count as sources.
 fn brightest_sources(env: &EnvMap, reach: f64) -> Vec<DVec3> {
     let image = env.image();
     let grid = LatLong::new(image.width, image.height);
-    let luminance = |p: &[f32; 3]| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0;
     let mut total = (0.0, 0.0);
     for (i, p) in image.pixels.iter().enumerate() {
         let omega = grid.row_solid_angle(i / image.width);
-        total = (total.0 + luminance(p) * omega, total.1 + omega);
+        total = (total.0 + luminance(*p) * omega, total.1 + omega);
     }
     let bright = MEAN_MULTIPLE * total.0 / total.1;
-    let mut order: Vec<(f64, usize)> = image.pixels.iter().map(luminance).zip(0..).collect();
+    let mut order: Vec<(f64, usize)> = image.pixels.iter().map(|&p| luminance(p)).zip(0..).collect();
     order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     let mut sources: Vec<DVec3> = Vec::new();
     for (y, i) in order {
@@ -410,11 +409,10 @@ mod tests {
             let verifier = Verifier::new(&model, &env, 16, 60).unwrap();
             let (texels, _) = verifier.choose(&reference);
             let exact = verifier.exact(&texels, 32, 16, view);
-            // The same sums; the map rounds the remainder and the bright part to f32 apart.
             for (&i, e) in texels.iter().zip(&exact) {
                 let r = reference.pixels[i];
                 for c in 0..3 {
-                    assert!((e[c] as f32 - r[c]).abs() <= 1e-6 * r[c].abs(), "{spec} texel {i}: {e:?} vs {r:?}");
+                    assert_eq!(e[c] as f32, r[c], "{spec} texel {i}");
                 }
             }
         }
