@@ -178,10 +178,7 @@ pub fn prefilter(
     if width < 2 * f_b + 2 {
         return Err(ShrmError::TooSmall { width, f_b, need: 2 * f_b + 2 }.into());
     }
-    let factors = match settings.window {
-        Window::Nonneg => window::heat_factors(f_b, 0.0),
-        w => w.factors(f_b),
-    };
+    let factors = settings.window.factors(f_b);
     let remainder_shrm = remainder_shrm(model, &brdf, &light, &factors, width, height, progress)?;
     let report = Report {
         rule: match (settings.orders, settings.rule) {
@@ -191,7 +188,7 @@ pub fn prefilter(
         },
         texel,
         bright: bright.report(),
-        window: WindowReport { kind: settings.window, t: (settings.window == Window::Nonneg).then_some(0.0) },
+        window: WindowReport { kind: settings.window, t: settings.window.guarded().then_some(0.0) },
     };
     Ok(Prefiltered { brdf, lighting: light, factors, remainder_shrm, bright, remainder_map: remainder, report })
 }
@@ -282,12 +279,14 @@ impl Prefiltered {
             maps
         };
         let maps = synthesize(&self.remainder_shrm);
-        if self.report.window.kind != Window::Nonneg || !maps.iter().any(has_negative) {
+        let kind = self.report.window.kind;
+        if !kind.guarded() || !maps.iter().any(has_negative) {
             return Ok(maps);
         }
-        // The `nonneg` window: the smallest heat parameter t for which every map is ≥ 0,
-        // bracketed by the kernel-positivity bound (for radially symmetric BRDFs exact; for
-        // others the bound of the l-dimension's worst kernel, which the bisection then relaxes).
+        // The non-negativity guard: the smallest heat parameter t on top of the window for which
+        // every map is ≥ 0, bracketed by the kernel-positivity bound (for radially symmetric
+        // BRDFs exact; for others the bound of the l-dimension's worst kernel, which the
+        // bisection then relaxes).
         let f_b = self.brdf.f;
         let kernel: Vec<f64> = match model.centre() {
             Some(_) => (0..=f_b).map(|l| self.brdf.radial_kernel(l)[1].abs().max(1e-300)).collect(),
@@ -301,7 +300,8 @@ impl Prefiltered {
             Ok(maps) => maps.iter().flat_map(|m| m.pixels.iter().flatten()).fold(0.0f64, |a, &v| a.min(v as f64)),
             Err(_) => 0.0,
         };
-        let found = window::nonneg(&kernel, |factors| windowed(factors).map(|s| synthesize(&s)), min_of);
+        let found =
+            window::nonneg(&kind.factors(f_b), &kernel, |factors| windowed(factors).map(|s| synthesize(&s)), min_of);
         self.remainder_shrm = windowed(&found.factors)?;
         self.factors = found.factors;
         self.report.window.t = Some(found.t);

@@ -447,12 +447,10 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
     Ok(Output { frame, comparison, panel, summary })
 }
 
-/// Lays out the panel: the items in order (each labelled with its error against the reference
-/// when comparing), this render in the item marked `None`, or last.
-/// Renders with `window`'s band factors for bands 0..=F (F + 1 = `kernel.len()`): a fixed window
-/// once; `nonneg` by [`window::nonneg`] on the object's pixels (the raw render when none is
-/// negative, so the common case costs one render; the search renders without progress).
-/// `kernel` is the zonal factors the window multiplies, which bracket the search.
+/// Renders with `window`'s band factors for bands 0..=F (F + 1 = `kernel.len()`), then, unless
+/// the window is `none`, the non-negativity guard [`window::nonneg`] on the object's pixels (one
+/// render when none is negative; the search renders without progress). `kernel` is the zonal
+/// factors the window multiplies, which bracket the search.
 fn windowed(
     kind: Window,
     kernel: &[f64],
@@ -460,9 +458,10 @@ fn windowed(
     draw: impl Fn(&[f64], &dyn Progress) -> Frame,
 ) -> (Frame, WindowReport) {
     let order = kernel.len().saturating_sub(1);
-    if kind != Window::Nonneg || order == 0 {
-        let t = (kind == Window::Nonneg).then_some(0.0);
-        return (draw(&kind.factors(order), progress), WindowReport { kind, t });
+    let base = kind.factors(order);
+    if !kind.guarded() || order == 0 {
+        let t = kind.guarded().then_some(0.0);
+        return (draw(&base, progress), WindowReport { kind, t });
     }
     let object_min = |frame: &Frame| {
         frame
@@ -474,10 +473,12 @@ fn windowed(
             .flat_map(|(p, _)| p)
             .fold(0.0f64, |a, &v| a.min(v as f64))
     };
-    let found = window::nonneg(kernel, |factors| draw(factors, &NoProgress), object_min);
+    let found = window::nonneg(&base, kernel, |factors| draw(factors, &NoProgress), object_min);
     (found.map, WindowReport { kind, t: Some(found.t) })
 }
 
+/// Lays out the panel: the items in order (each labelled with its error against the reference
+/// when comparing), this render in the item marked `None`, or last.
 fn panel(items: &[PanelItem], frame: &Frame, label: &str, config: &Config, metrics: Option<Metrics>) -> RgbImage {
     let with_error = |mut lines: Vec<String>, m: Option<Metrics>| {
         if let Some(m) = m.filter(|m| m.rel_error > 0.0) {

@@ -52,10 +52,11 @@ pub struct Synthesis {
     pub window: crate::sh::window::Window,
     /// Lat-long size [W, H].
     pub size: [usize; 2],
-    /// For `nonneg`: the heat parameter t of exp(−t·l(l+1)) the reconstruction needed.
+    /// The heat parameter t of exp(−t·l(l+1)) the non-negativity guard multiplied the window by
+    /// for the reconstruction (0: the window alone was non-negative; absent for `none`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reconstruction_t: Option<f64>,
-    /// For `nonneg`: the t the irradiance map needed.
+    /// The same for the irradiance map.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub irradiance_t: Option<f64>,
 }

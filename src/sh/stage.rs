@@ -11,8 +11,13 @@
 //! written are those of the whole map; the document records the clipping level and both ε.
 //!
 //! **Synthesis.** Reconstructions and irradiance maps are synthesized with a window
-//! ([`super::window`]); the default `nonneg` leaves a non-negative map alone and otherwise
-//! applies the gentlest heat window that makes it non-negative. The coefficients stay raw.
+//! ([`super::window`]) and its non-negativity guard; the coefficients stay raw. The default is
+//! `lanczos`, not the `nonneg` of the bakes: a reconstruction has no BRDF kernel to damp its top
+//! bands, and a step such as the horizon rings through the whole ground. On the demo sky at
+//! order 27, a 10:1 horizon leaves row means of the ground 0.78–1.18 × the map's under `nonneg`
+//! (non-negative, still banded) and 0.97–1.02 × under Lanczos's σ-factors, whose horizon is the
+//! sharpest of the three fixed windows (docs/sh-project.md). On an irradiance map (Â_l falls as
+//! l^-5/2) the σ-factors of bands 1–2 are 1 − O((l/F)²): 0.99 at F = 27.
 //!
 //! **Reconstruction, bright sources apart.** At any finite order a sun rings (Gibbs), and no
 //! window removes rings 10⁴ times the ground's radiance without blurring the sky away. So the
@@ -65,7 +70,7 @@ impl Default for Config {
             reconstruction: false,
             irradiance: false,
             size: None,
-            window: Window::Nonneg,
+            window: Window::Lanczos,
             source: String::new(),
             args: Vec::new(),
         }
@@ -212,7 +217,8 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
 }
 
 /// Synthesizes `coeffs` convolved with the zonal `kernel` (Â_l for irradiance, 1 for a
-/// reconstruction) under `window`; for `nonneg`, also the heat parameter t it needed.
+/// reconstruction) under `window`, with the non-negativity guard unless `none`; also the guard's
+/// heat parameter t.
 fn windowed_synthesis(
     coeffs: &ShCoeffs,
     kernel: &[f64],
@@ -221,17 +227,19 @@ fn windowed_synthesis(
     h: usize,
 ) -> Result<(RgbImage, Option<f64>), SynthError> {
     let convolved = convolve::convolve_zonal(coeffs, |l| kernel[l]);
-    if kind != Window::Nonneg {
-        return Ok((synthesize_latlong(&window::apply(&convolved, &kind.factors(coeffs.order)), w, h)?, None));
-    }
-    // Synthesis cannot fail past the first call (same size and order), so the search may unwrap
-    // into an empty image on an impossible error without hiding one.
-    let first = synthesize_latlong(&convolved, w, h)?;
+    let base = kind.factors(coeffs.order);
+    // The first synthesis reports a bad size; past it synthesis cannot fail (same size and
+    // order), so the search may unwrap into an empty image without hiding an error.
+    let first = synthesize_latlong(&window::apply(&convolved, &base), w, h)?;
     let min = |img: &RgbImage| img.pixels.iter().flatten().fold(0.0f64, |m, &v| m.min(v as f64));
+    if !kind.guarded() {
+        return Ok((first, None));
+    }
     if min(&first) >= 0.0 {
         return Ok((first, Some(0.0)));
     }
     let found = window::nonneg(
+        &base,
         kernel,
         |f| synthesize_latlong(&window::apply(&convolved, f), w, h).unwrap_or_else(|_| RgbImage::new(w, h)),
         min,

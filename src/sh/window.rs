@@ -20,6 +20,14 @@
 //!   bracketed: for t large enough the kernel (1) is non-negative, and a non-negative kernel
 //!   maps every non-negative environment to a non-negative result (the projection is a
 //!   weighted sum of texels with positive solid angles), so a non-negative map is always found.
+//!
+//! **The non-negativity guard.** Every window but `none` ends with that search: `hann`,
+//! `lanczos` and `sigma` damp Gibbs ripples but keep kernels with negative lobes, so next to a
+//! bright window a dark texel can still go below zero (Lanczos on Grace at order 174: 0.1 % of
+//! the texels). A radiance map with negative texels is never what a user wants (`convert`
+//! refuses it), so the fixed window is multiplied by the gentlest exp(−t·l(l+1)) that makes
+//! the map non-negative — t = 0, the window alone, whenever it already is — and the document
+//! records t. `nonneg` is the guard alone; `none` is the raw expansion, unguarded.
 
 #[cfg(test)]
 use super::index;
@@ -45,6 +53,11 @@ pub enum Window {
 }
 
 impl Window {
+    /// Whether the synthesis ends with the non-negativity guard (every window but `none`).
+    pub fn guarded(self) -> bool {
+        self != Window::None
+    }
+
     /// The name used on the command line and in documents.
     pub fn name(self) -> &'static str {
         match self {
@@ -56,8 +69,8 @@ impl Window {
         }
     }
 
-    /// The factors w_0..=w_F of a fixed window of order F (`nonneg` is data-dependent: its
-    /// factors come from [`nonneg`]; here it gives the raw expansion, t = 0).
+    /// The factors w_0..=w_F of the window of order F before the guard (`nonneg`: the raw
+    /// expansion, t = 0; its factors come from [`nonneg`]).
     pub fn factors(self, order: usize) -> Vec<f64> {
         let n = (order + 1) as f64;
         (0..=order)
@@ -84,7 +97,8 @@ impl Window {
 pub struct WindowReport {
     /// `none`, `hann`, `lanczos`, `sigma` or `nonneg`.
     pub kind: Window,
-    /// For `nonneg`: the heat parameter t of exp(−t·l(l+1)) it needed (0: none).
+    /// The heat parameter t of exp(−t·l(l+1)) the non-negativity guard multiplied the window
+    /// by (0: the window alone was non-negative); absent for `none`, which is not guarded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub t: Option<f64>,
 }
@@ -152,24 +166,32 @@ pub struct NonNeg<T> {
     pub map: T,
 }
 
-/// The gentlest heat window that makes `synthesize(factors)` non-negative (`min_of` gives the
-/// map's smallest value), given the zonal `kernel` the window multiplies (see
-/// [`kernel_nonneg_t`], the bracket of the search). Synthesizes about a dozen times.
-pub fn nonneg<T>(kernel: &[f64], synthesize: impl Fn(&[f64]) -> T, min_of: impl Fn(&T) -> f64) -> NonNeg<T> {
+/// The guard: the gentlest heat factor exp(−t·l(l+1)) on top of the window's `base` factors
+/// that makes `synthesize(factors)` non-negative (`min_of` gives the map's smallest value),
+/// given the zonal `kernel` the window multiplies (see [`kernel_nonneg_t`], the bracket of the
+/// search). One synthesis when the window alone is non-negative, about a dozen otherwise.
+pub fn nonneg<T>(
+    base: &[f64],
+    kernel: &[f64],
+    synthesize: impl Fn(&[f64]) -> T,
+    min_of: impl Fn(&T) -> f64,
+) -> NonNeg<T> {
     let order = kernel.len().saturating_sub(1);
-    let raw = synthesize(&heat_factors(order, 0.0));
+    let with = |t: f64| -> Vec<f64> { heat_factors(order, t).iter().zip(base).map(|(h, b)| h * b).collect() };
+    let raw = synthesize(&with(0.0));
     if min_of(&raw) >= 0.0 {
-        return NonNeg { t: 0.0, factors: heat_factors(order, 0.0), map: raw };
+        return NonNeg { t: 0.0, factors: with(0.0), map: raw };
     }
     // The kernel bound guarantees a non-negative result for exact, non-negative inputs; grow it
     // until this map is non-negative (inputs may carry small negative noise of their own).
-    let ok = |t: f64| min_of(&synthesize(&heat_factors(order, t))) >= 0.0;
-    let mut hi = kernel_nonneg_t(kernel).max(1e-6 / (order * (order + 1)).max(1) as f64);
+    let ok = |t: f64| min_of(&synthesize(&with(t))) >= 0.0;
+    let windowed: Vec<f64> = kernel.iter().zip(base).map(|(k, b)| k * b).collect();
+    let mut hi = kernel_nonneg_t(&windowed).max(1e-6 / (order * (order + 1)).max(1) as f64);
     while !ok(hi) && hi < 1e3 {
         hi *= 2.0;
     }
     let t = bisect(0.0, hi, ok);
-    let factors = heat_factors(order, t);
+    let factors = with(t);
     let map = synthesize(&factors);
     NonNeg { t, factors, map }
 }
@@ -220,11 +242,32 @@ mod tests {
         let min = |img: &crate::io::RgbImage| img.pixels.iter().flatten().fold(f64::INFINITY, |m, &v| m.min(v as f64));
         assert!(min(&synth(&heat_factors(order, 0.0))) < 0.0, "the raw spike rings");
         let kernel = vec![1.0; order + 1];
-        let found = nonneg(&kernel, synth, min);
+        let found = nonneg(&kernel, &kernel, synth, min);
         assert!(found.t > 0.0 && min(&found.map) >= 0.0);
         assert!(min(&synth(&heat_factors(order, 0.9 * found.t))) < 0.0, "t = {} is not the gentlest", found.t);
         // The data-independent bracket is at least as strong.
         assert!(kernel_nonneg_t(&kernel) >= 0.99 * found.t);
+    }
+
+    /// A fixed window keeps negative lobes: Lanczos on a spike still rings below zero, and the
+    /// guard multiplies it by the gentlest heat factor that does not.
+    #[test]
+    fn the_guard_completes_a_fixed_window() {
+        let order = 12;
+        let mut delta = ShCoeffs::zeros(order);
+        for l in 0..=order {
+            delta.rgb[index(l, 0)] = [((2 * l + 1) as f64 / (4.0 * PI)).sqrt(); 3];
+        }
+        let synth = |w: &[f64]| synthesize_latlong(&apply(&delta, w), 64, 32).unwrap();
+        let min = |img: &crate::io::RgbImage| img.pixels.iter().flatten().fold(f64::INFINITY, |m, &v| m.min(v as f64));
+        let lanczos = Window::Lanczos.factors(order);
+        assert!(min(&synth(&lanczos)) < 0.0, "Lanczos alone rings negative on a spike");
+        let found = nonneg(&lanczos, &vec![1.0; order + 1], synth, min);
+        assert!(found.t > 0.0 && min(&found.map) >= 0.0, "t = {}", found.t);
+        for (l, f) in found.factors.iter().enumerate() {
+            let want = lanczos[l] * (-found.t * (l * (l + 1)) as f64).exp();
+            assert!((f - want).abs() < 1e-15, "band {l}: {f} vs {want}");
+        }
     }
 
     #[test]
@@ -233,6 +276,7 @@ mod tests {
         c.rgb[0] = [1.0; 3];
         c.rgb[index(1, 0)] = [0.1; 3];
         let found = nonneg(
+            &[1.0; 5],
             &[1.0; 5],
             |w| synthesize_latlong(&apply(&c, w), 16, 8).unwrap(),
             |img| img.pixels.iter().flatten().fold(f64::INFINITY, |m, &v| m.min(v as f64)),

@@ -84,8 +84,8 @@ pub struct Args {
     pub bright: BrightRule,
 
     /// Window applied to the lighting's bands at synthesis: none, hann, lanczos, sigma, or
-    /// nonneg (no window unless a texel would be negative; then the gentlest heat window that
-    /// makes every texel non-negative).
+    /// nonneg. Every window but none is followed by the gentlest heat window that makes every
+    /// texel non-negative; nonneg is that alone (the BRDF's kernel damps the top bands already).
     #[arg(long, value_enum, default_value_t = Window::Nonneg)]
     pub window: Window,
 

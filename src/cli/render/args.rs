@@ -73,8 +73,8 @@ pub struct Args {
 
     /// irradiance and shrm: window at synthesis, on the lighting's bands l (irradiance) or the
     /// SHRM's view bands p (shrm; its lighting bands carry prefilter's window already): none,
-    /// hann, lanczos, sigma, or nonneg (no window unless a pixel of the object would be
-    /// negative; then the gentlest heat window that makes every one non-negative).
+    /// hann, lanczos, sigma, or nonneg. Every window but none is followed by the gentlest heat
+    /// window that makes every pixel of the object non-negative; nonneg is that alone.
     /// [default: nonneg]
     #[arg(long, value_enum)]
     pub window: Option<crate::sh::window::Window>,

@@ -27,9 +27,11 @@ pub struct Args {
     pub epsilon: Option<f64>,
 
     /// Window applied to the bands of --reconstruct and --irradiance images (the coefficients
-    /// written stay raw): none, hann, lanczos, sigma, or nonneg (none unless a texel would be
-    /// negative; then the gentlest heat window that makes every texel non-negative).
-    #[arg(long, value_enum, default_value_t = Window::Nonneg)]
+    /// written stay raw): none, hann, lanczos, sigma, or nonneg. Every window but none is
+    /// followed by the gentlest heat window that makes every texel non-negative (nonneg is that
+    /// alone). The default lanczos damps the ripples a step such as the horizon leaves across a
+    /// reconstruction (nonneg alone removes negatives, not ripples; docs/sh-project.md).
+    #[arg(long, value_enum, default_value_t = Window::Lanczos)]
     pub window: Window,
 
     /// Output JSON document (`-` for stdout).
