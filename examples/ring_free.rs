@@ -10,17 +10,19 @@
 //! file or a cube-face directory; `scripts/ring-free-table.sh` runs it on the shared probes and
 //! the demo sky). References are cached in CACHE_DIR: they take most of the time.
 
+mod common;
+
 use anyhow::{bail, Context};
+use common::{grazing, probe_map, probe_name, reference, reference_file, SIZE};
 use glam::DVec3;
 use prtkit::brdf::Brdf;
 use prtkit::envmap::bright::BrightRule;
-use prtkit::envmap::{resample, EnvMap, Layout, LoadOptions};
-use prtkit::io::image::{read_image, write_image};
+use prtkit::envmap::EnvMap;
 use prtkit::io::RgbImage;
 use prtkit::metrics::{compare, Metrics};
 use prtkit::prefilter::orders::OrderRule;
 use prtkit::prefilter::pipeline::Lighting;
-use prtkit::prefilter::stage::{self, Config, MapRequest, Method};
+use prtkit::prefilter::stage::{self, Config, MapRequest};
 use prtkit::progress::NoProgress;
 use prtkit::sh::window::Window;
 use std::fmt::Write as _;
@@ -51,7 +53,7 @@ fn main() -> anyhow::Result<()> {
         bail!("usage: ring_free OUT.md CACHE_DIR PROBE...");
     };
     std::fs::create_dir_all(cache)?;
-    let grazing = DVec3::new(1.0, 0.0, 0.2).normalize();
+    let grazing = grazing();
     let mut table = String::new();
     let (mut worst_p99, mut worst_rms, mut negatives, mut worst_ratio) = (0.0f64, 0.0f64, 0usize, 0.0f64);
     let mut worst_tight = 0.0f64;
@@ -66,7 +68,7 @@ fn main() -> anyhow::Result<()> {
                 &[("+Z", DVec3::Z), ("grazing", grazing)]
             };
             for &(view_name, view) in views {
-                let file = |eps: &str| Path::new(cache).join(format!("{name}-{spec}-{view_name}{eps}.exr"));
+                let file = |suffix: &str| reference_file(cache, &name, spec, view_name, suffix);
                 let loose = reference(&map, &brdf, view, 0.001, BrightRule::Auto, &file(""))?;
                 let tight = reference(&map, &brdf, view, TIGHT, BrightRule::Off, &file("-tight"))?;
                 let (default, default_s, f_b, p_b) = bake(&map, &brdf, view, defaults)?;
@@ -151,21 +153,6 @@ fn row(
     )
 }
 
-/// The probe as a 256×128 lat-long map.
-fn probe_map(path: &Path) -> anyhow::Result<EnvMap> {
-    let map = LoadOptions::default().load(path).with_context(|| format!("cannot read {}", path.display()))?.map;
-    Ok(resample(&map, Layout::LatLong, 256, 128, 4)?)
-}
-
-fn probe_name(path: &str) -> String {
-    let path = Path::new(path.trim_end_matches('/'));
-    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    match path.parent().and_then(|p| p.file_name()) {
-        Some(parent) if parent == "dxsdk_cubes" => format!("{stem} (cube)"),
-        _ => stem,
-    }
-}
-
 fn defaults(config: Config) -> Config {
     config
 }
@@ -182,7 +169,7 @@ fn bake(
     setup: fn(Config) -> Config,
 ) -> anyhow::Result<(RgbImage, f64, usize, usize)> {
     let config = setup(Config {
-        size: Some((256, 128)),
+        size: Some(SIZE),
         maps: vec![MapRequest { file: "map.exr".into(), view }],
         ..Config::new(brdf.clone())
     });
@@ -190,29 +177,4 @@ fn bake(
     let mut out = stage::run(&config, Lighting::Map(map), &NoProgress)?;
     let seconds = start.elapsed().as_secs_f64();
     Ok((out.maps.remove(0), seconds, out.summary.f_b, out.summary.p_b))
-}
-
-/// The angular reference at `epsilon`, cached in `file`.
-fn reference(
-    map: &EnvMap,
-    brdf: &Brdf,
-    view: DVec3,
-    epsilon: f64,
-    bright: BrightRule,
-    file: &Path,
-) -> anyhow::Result<RgbImage> {
-    if let Ok(image) = read_image(file) {
-        return Ok(image);
-    }
-    let config = Config {
-        method: Method::Angular,
-        epsilon,
-        bright,
-        size: Some((256, 128)),
-        maps: vec![MapRequest { file: file.display().to_string(), view }],
-        ..Config::new(brdf.clone())
-    };
-    let image = stage::run(&config, Lighting::Map(map), &NoProgress)?.maps.remove(0);
-    write_image(file, &image, 0.0)?;
-    Ok(image)
 }

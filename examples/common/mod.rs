@@ -1,6 +1,21 @@
-//! What the measuring examples share.
+//! What the measuring examples share: the shared light probes, as paths and (for the ring-free
+//! tables) as 256×128 lat-long maps, and the angular references those tables are measured
+//! against, cached on disk (they take most of the time).
 
-use std::path::PathBuf;
+// Each example compiles this module on its own and uses a part of it.
+#![allow(dead_code)]
+
+use anyhow::Context;
+use glam::DVec3;
+use prtkit::brdf::Brdf;
+use prtkit::envmap::bright::BrightRule;
+use prtkit::envmap::{resample, EnvMap, Layout, LoadOptions};
+use prtkit::io::image::{read_image, write_image};
+use prtkit::io::RgbImage;
+use prtkit::prefilter::pipeline::Lighting;
+use prtkit::prefilter::stage::{self, Config, MapRequest, Method};
+use prtkit::progress::NoProgress;
+use std::path::{Path, PathBuf};
 
 /// The shared light probes (`../shared/testdata/envmaps`, SOURCES.md there): the directory and
 /// each probe's path in it (a cube's six faces are a directory), or `None` when it is absent.
@@ -16,4 +31,59 @@ pub fn shared_probes() -> Option<(PathBuf, Vec<String>)> {
         .chain(["grace", "rnl", "stpeters", "galileo"].map(|probe| format!("dxsdk_cubes/{probe}/")))
         .collect();
     Some((dir, names))
+}
+
+/// The size every probe is resampled to, and every map baked at.
+pub const SIZE: (usize, usize) = (256, 128);
+
+/// The grazing view of the tables: 11° above the horizon of +X.
+pub fn grazing() -> DVec3 {
+    DVec3::new(1.0, 0.0, 0.2).normalize()
+}
+
+/// The probe (a map file or a cube-face directory) as a 256×128 lat-long map.
+pub fn probe_map(path: &Path) -> anyhow::Result<EnvMap> {
+    let map = LoadOptions::default().load(path).with_context(|| format!("cannot read {}", path.display()))?.map;
+    Ok(resample(&map, Layout::LatLong, SIZE.0, SIZE.1, 4)?)
+}
+
+/// The probe's name in tables and cache files: the file stem, "(cube)" for face directories.
+pub fn probe_name(path: &str) -> String {
+    let path = Path::new(path.trim_end_matches('/'));
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    match path.parent().and_then(|p| p.file_name()) {
+        Some(parent) if parent == "dxsdk_cubes" => format!("{stem} (cube)"),
+        _ => stem,
+    }
+}
+
+/// The cache file of a reference: `{probe}-{brdf}-{view}{suffix}.exr` in `cache`.
+pub fn reference_file(cache: &str, probe: &str, spec: &str, view: &str, suffix: &str) -> PathBuf {
+    Path::new(cache).join(format!("{probe}-{spec}-{view}{suffix}.exr"))
+}
+
+/// The angular reference (`--method angular`) at `epsilon` for `view`, read from `file` when
+/// it is there, else computed and written to it.
+pub fn reference(
+    map: &EnvMap,
+    brdf: &Brdf,
+    view: DVec3,
+    epsilon: f64,
+    bright: BrightRule,
+    file: &Path,
+) -> anyhow::Result<RgbImage> {
+    if let Ok(image) = read_image(file) {
+        return Ok(image);
+    }
+    let config = Config {
+        method: Method::Angular,
+        epsilon,
+        bright,
+        size: Some(SIZE),
+        maps: vec![MapRequest { file: file.display().to_string(), view }],
+        ..Config::new(brdf.clone())
+    };
+    let image = stage::run(&config, Lighting::Map(map), &NoProgress)?.maps.remove(0);
+    write_image(file, &image, 0.0)?;
+    Ok(image)
 }
