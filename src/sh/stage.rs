@@ -14,9 +14,9 @@
 //! ([`super::window`]) and its non-negativity guard; the coefficients stay raw. The default is
 //! `lanczos`, not the `nonneg` of the bakes: a reconstruction has no BRDF kernel to damp its top
 //! bands, and a step such as the horizon rings through the whole ground. On the demo sky at
-//! order 27, a 10:1 horizon leaves row means of the ground 0.78–1.18 × the map's under `nonneg`
-//! (non-negative, still banded) and 0.97–1.02 × under Lanczos's σ-factors, whose horizon is the
-//! sharpest of the three fixed windows (docs/sh-project.md). On an irradiance map (Â_l falls as
+//! order 30, a 10:1 horizon leaves row means of the ground 0.69–1.28 × the map's under `nonneg`
+//! (non-negative, still banded) and 0.96–1.03 × under Lanczos's σ-factors, whose horizon is the
+//! sharpest of the three fixed windows (`docs/results/windows.md`). On an irradiance map (Â_l falls as
 //! l^-5/2) the σ-factors of bands 1–2 are 1 − O((l/F)²): 0.99 at F = 27.
 //!
 //! **Reconstruction, bright sources apart.** At any finite order a sun rings (Gibbs), and no
