@@ -471,6 +471,8 @@ fn render_irradiance_window_nonneg_removes_the_negative_lobes_of_a_point_light()
     }
     assert!(negatives[0] > 20, "the raw order-4 irradiance is negative over the dark half: {negatives:?}");
     assert_eq!(negatives[1], 0, "nonneg leaves no negative pixel: {negatives:?}");
+    // Hann keeps a kernel with negative lobes; its guard leaves no negative pixel either.
+    assert_eq!(negatives[2], 0, "hann is guarded: {negatives:?}");
     // A smooth sky needs no window: nonneg keeps the raw render (t = 0), bit for bit.
     let sky = write_env(dir.path(), "sky.exr", 64, 32, smooth);
     let run = |window: &str, name: &str| {

@@ -111,7 +111,8 @@ fn sh_project_library_and_binary_write_the_same_bytes() {
         reconstruction: true,
         irradiance: true,
         size: None,
-        window: prtkit::sh::window::Window::Nonneg,
+        window: prtkit::sh::window::Window::Lanczos,
+        irradiance_window: prtkit::sh::window::Window::Nonneg,
         source: b.sky.clone(),
         args: argv,
     };

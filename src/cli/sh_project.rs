@@ -8,6 +8,7 @@ use super::outputs::{check_writable, Outputs};
 use crate::io::Output;
 use crate::sh::project::OrderChoice;
 use crate::sh::stage::{self, Config, MAX_EPSILON_ORDER};
+use crate::sh::window::Window;
 use anyhow::Result;
 pub use args::*;
 
@@ -24,7 +25,8 @@ impl TryFrom<&Args> for Config {
             reconstruction: !args.reconstruct.is_empty(),
             irradiance: !args.irradiance.is_empty(),
             size: args.size,
-            window: args.window,
+            window: args.window.unwrap_or(Window::Lanczos),
+            irradiance_window: args.window.unwrap_or(Window::Nonneg),
             source: args.input.name(),
             args: std::env::args().collect(),
         })

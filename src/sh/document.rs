@@ -48,8 +48,11 @@ pub struct OrderSelection {
 /// How the images written beside the document were synthesized from the (raw) coefficients.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Synthesis {
-    /// The window applied to the bands: none, hann, lanczos, sigma or nonneg.
+    /// The window applied to the reconstruction's bands: none, hann, lanczos, sigma or nonneg.
     pub window: crate::sh::window::Window,
+    /// The window applied to the irradiance map's bands.
+    #[serde(default)]
+    pub irradiance_window: crate::sh::window::Window,
     /// Lat-long size [W, H].
     pub size: [usize; 2],
     /// The heat parameter t of exp(−t·l(l+1)) the non-negativity guard multiplied the window by

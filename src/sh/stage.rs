@@ -11,13 +11,14 @@
 //! written are those of the whole map; the document records the clipping level and both ε.
 //!
 //! **Synthesis.** Reconstructions and irradiance maps are synthesized with a window
-//! ([`super::window`]) and its non-negativity guard; the coefficients stay raw. The default is
-//! `lanczos`, not the `nonneg` of the bakes: a reconstruction has no BRDF kernel to damp its top
+//! ([`super::window`]) and its non-negativity guard; the coefficients stay raw. The
+//! reconstruction's default is `lanczos`, not the `nonneg` of the bakes: a reconstruction has no BRDF kernel to damp its top
 //! bands, and a step such as the horizon rings through the whole ground. On the demo sky at
 //! order 30, a 10:1 horizon leaves row means of the ground 0.69–1.28 × the map's under `nonneg`
 //! (non-negative, still banded) and 0.96–1.03 × under Lanczos's σ-factors, whose horizon is the
-//! sharpest of the three fixed windows (`docs/results/windows.md`). On an irradiance map (Â_l falls as
-//! l^-5/2) the σ-factors of bands 1–2 are 1 − O((l/F)²): 0.99 at F = 27.
+//! sharpest of the three fixed windows (`docs/results/windows.md`). The irradiance map keeps
+//! `nonneg` by default: Â_l falls as l^-5/2, so it does not ring, and at the usual F = 2 the
+//! σ-factors would scale bands 1 and 2 by 0.83 and 0.41.
 //!
 //! **Reconstruction, bright sources apart.** At any finite order a sun rings (Gibbs), and no
 //! window removes rings 10⁴ times the ground's radiance without blurring the sky away. So the
@@ -55,8 +56,10 @@ pub struct Config {
     /// Size of the lat-long images; `None`: the input's size for a lat-long input, else 2S × S
     /// with S ≈ √(texels/2).
     pub size: Option<(usize, usize)>,
-    /// The window applied at synthesis (the coefficients written stay raw).
+    /// The window of the reconstruction (the coefficients written stay raw).
     pub window: Window,
+    /// The window of the irradiance map.
+    pub irradiance_window: Window,
     /// The input's name, for the document.
     pub source: String,
     /// The command line, for the document's provenance.
@@ -71,6 +74,7 @@ impl Default for Config {
             irradiance: false,
             size: None,
             window: Window::Lanczos,
+            irradiance_window: Window::Nonneg,
             source: String::new(),
             args: Vec::new(),
         }
@@ -158,7 +162,13 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
     let mut synthesis = None;
     if config.reconstruction || config.irradiance {
         let (w, h) = image_size(map, coeffs.order, config.size);
-        synthesis = Some(Synthesis { window: config.window, size: [w, h], reconstruction_t: None, irradiance_t: None });
+        synthesis = Some(Synthesis {
+            window: config.window,
+            irradiance_window: config.irradiance_window,
+            size: [w, h],
+            reconstruction_t: None,
+            irradiance_t: None,
+        });
         if config.reconstruction {
             let smooth = crate::sh::project::project(&clipped, coeffs.order, progress).map_err(|e| select(e.into()))?;
             let (mut image, t) = windowed_synthesis(&smooth, &vec![1.0; coeffs.order + 1], config.window, w, h)?;
@@ -167,7 +177,7 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
         }
         if config.irradiance {
             let cosine: Vec<f64> = (0..=coeffs.order).map(convolve::clamped_cosine).collect();
-            irradiance = Some(windowed_synthesis(coeffs, &cosine, config.window, w, h)?);
+            irradiance = Some(windowed_synthesis(coeffs, &cosine, config.irradiance_window, w, h)?);
         }
         if let Some(s) = &mut synthesis {
             s.reconstruction_t = reconstruction.as_ref().and_then(|r| r.1);

@@ -29,10 +29,11 @@ pub struct Args {
     /// Window applied to the bands of --reconstruct and --irradiance images (the coefficients
     /// written stay raw): none, hann, lanczos, sigma, or nonneg. Every window but none is
     /// followed by the gentlest heat window that makes every texel non-negative (nonneg is that
-    /// alone). The default lanczos damps the ripples a step such as the horizon leaves across a
-    /// reconstruction (nonneg alone removes negatives, not ripples; docs/sh-project.md).
-    #[arg(long, value_enum, default_value_t = Window::Lanczos)]
-    pub window: Window,
+    /// alone). Default: lanczos for --reconstruct, which damps the ripples a step such as the
+    /// horizon leaves (nonneg alone removes negatives, not ripples), and nonneg for
+    /// --irradiance, which does not ring (docs/sh-project.md).
+    #[arg(long, value_enum)]
+    pub window: Option<Window>,
 
     /// Output JSON document (`-` for stdout).
     #[arg(short, long, default_value = "-", value_parser = parse_output)]
