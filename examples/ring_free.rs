@@ -13,21 +13,16 @@
 mod common;
 
 use anyhow::{bail, Context};
-use common::{grazing, probe_map, probe_name, reference, reference_file, SIZE};
+use common::{bake, grazing, probe_map, probe_name, reference, reference_file};
 use glam::DVec3;
 use prtkit::brdf::Brdf;
 use prtkit::envmap::bright::BrightRule;
-use prtkit::envmap::EnvMap;
-use prtkit::io::RgbImage;
 use prtkit::metrics::{compare, Metrics};
 use prtkit::prefilter::orders::OrderRule;
-use prtkit::prefilter::pipeline::Lighting;
-use prtkit::prefilter::stage::{self, Config, MapRequest};
-use prtkit::progress::NoProgress;
+use prtkit::prefilter::stage::Config;
 use prtkit::sh::window::Window;
 use std::fmt::Write as _;
 use std::path::Path;
-use std::time::Instant;
 
 /// The tight reference's ε: the ε = 0.001 leaves 0.1 % of each lobe out, which under a
 /// sun 10⁴ times the ground is itself a visible error in the ground's texels.
@@ -71,8 +66,10 @@ fn main() -> anyhow::Result<()> {
                 let file = |suffix: &str| reference_file(cache, &name, spec, view_name, suffix);
                 let loose = reference(&map, &brdf, view, 0.001, BrightRule::Auto, &file(""))?;
                 let tight = reference(&map, &brdf, view, TIGHT, BrightRule::Off, &file("-tight"))?;
-                let (default, default_s, f_b, p_b) = bake(&map, &brdf, view, defaults)?;
-                let (_, paper_s, ..) = bake(&map, &brdf, view, paper)?;
+                let (mut default, default_s) = bake(&map, &brdf, view, defaults)?;
+                let (_, paper_s) = bake(&map, &brdf, view, paper)?;
+                let (f_b, p_b) = (default.summary.f_b, default.summary.p_b);
+                let default = default.maps.remove(0);
                 let (m, _) = compare(&default, &loose, &[])?;
                 let (t, _) = compare(&default, &tight, &[])?;
                 let ratio = default_s / paper_s;
@@ -159,22 +156,4 @@ fn defaults(config: Config) -> Config {
 
 fn paper(config: Config) -> Config {
     Config { order_rule: OrderRule::Energy, bright: BrightRule::Off, window: Window::None, ..config }
-}
-
-/// One bake of the reflection map for `view` at 256×128: (map, seconds, F_B, P_B).
-fn bake(
-    map: &EnvMap,
-    brdf: &Brdf,
-    view: DVec3,
-    setup: fn(Config) -> Config,
-) -> anyhow::Result<(RgbImage, f64, usize, usize)> {
-    let config = setup(Config {
-        size: Some(SIZE),
-        maps: vec![MapRequest { file: "map.exr".into(), view }],
-        ..Config::new(brdf.clone())
-    });
-    let start = Instant::now();
-    let mut out = stage::run(&config, Lighting::Map(map), &NoProgress)?;
-    let seconds = start.elapsed().as_secs_f64();
-    Ok((out.maps.remove(0), seconds, out.summary.f_b, out.summary.p_b))
 }

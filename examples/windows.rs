@@ -14,15 +14,14 @@
 mod common;
 
 use anyhow::{bail, Context};
-use common::{probe_map, probe_name, reference, reference_file, SIZE};
+use common::{bake, probe_map, probe_name, reference, reference_file, SIZE};
 use glam::DVec3;
 use prtkit::brdf::Brdf;
 use prtkit::envmap::bright::BrightRule;
 use prtkit::envmap::EnvMap;
 use prtkit::io::RgbImage;
 use prtkit::metrics::{compare, Metrics};
-use prtkit::prefilter::pipeline::Lighting;
-use prtkit::prefilter::stage::{self, Config, MapRequest};
+use prtkit::prefilter::stage::Config;
 use prtkit::progress::NoProgress;
 use prtkit::sh::project::OrderChoice;
 use prtkit::sh::stage as sh_stage;
@@ -74,7 +73,9 @@ fn main() -> anyhow::Result<()> {
                 &reference_file(cache, &name, spec, "+Z", ""),
             )?;
             for window in WINDOWS {
-                let (image, f_b, t) = bake(&map, &brdf, window)?;
+                let (mut out, _) = bake(&map, &brdf, DVec3::Z, |c| Config { window, ..c })?;
+                let t = out.document.body.bake.as_ref().and_then(|b| b.window.t);
+                let (image, f_b) = (out.maps.remove(0), out.summary.f_b);
                 let (m, _) = compare(&image, &reference_map, &[])?;
                 let row = bake_row(&name, spec, window, f_b, t, &m);
                 eprintln!("{row}");
@@ -166,19 +167,6 @@ fn reconstruction(map: &EnvMap, window: Window) -> anyhow::Result<(RgbImage, usi
     let out = sh_stage::run(&config, map, &NoProgress)?;
     let synthesis = out.document.body.synthesis.context("no synthesis recorded")?;
     Ok((out.reconstruction.context("no reconstruction")?, out.document.body.order, synthesis.reconstruction_t))
-}
-
-/// The default `prefilter` reflection map for +Z with `window`: (map, F_B, t).
-fn bake(map: &EnvMap, brdf: &Brdf, window: Window) -> anyhow::Result<(RgbImage, usize, Option<f64>)> {
-    let config = Config {
-        size: Some(SIZE),
-        window,
-        maps: vec![MapRequest { file: "map.exr".into(), view: DVec3::Z }],
-        ..Config::new(brdf.clone())
-    };
-    let mut out = stage::run(&config, Lighting::Map(map), &NoProgress)?;
-    let t = out.document.body.bake.as_ref().and_then(|b| b.window.t);
-    Ok((out.maps.remove(0), out.summary.f_b, t))
 }
 
 /// The lowest and highest ratio of a ground row's mean (rows 9H/16 to H − 1) in `image` to the

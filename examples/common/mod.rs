@@ -16,6 +16,7 @@ use prtkit::prefilter::pipeline::Lighting;
 use prtkit::prefilter::stage::{self, Config, MapRequest, Method};
 use prtkit::progress::NoProgress;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// The shared light probes (`../shared/testdata/envmaps`, SOURCES.md there): the directory and
 /// each probe's path in it (a cube's six faces are a directory), or `None` when it is absent.
@@ -86,4 +87,23 @@ pub fn reference(
     let image = stage::run(&config, Lighting::Map(map), &NoProgress)?.maps.remove(0);
     write_image(file, &image, 0.0)?;
     Ok(image)
+}
+
+/// One `prefilter` bake of the reflection map for `view` at 256×128, the configuration as
+/// `setup` makes it from the defaults: the stage's output and the library call's wall-clock
+/// seconds.
+pub fn bake(
+    map: &EnvMap,
+    brdf: &Brdf,
+    view: DVec3,
+    setup: impl FnOnce(Config) -> Config,
+) -> anyhow::Result<(stage::Output, f64)> {
+    let config = setup(Config {
+        size: Some(SIZE),
+        maps: vec![MapRequest { file: "map.exr".into(), view }],
+        ..Config::new(brdf.clone())
+    });
+    let start = Instant::now();
+    let out = stage::run(&config, Lighting::Map(map), &NoProgress)?;
+    Ok((out, start.elapsed().as_secs_f64()))
 }

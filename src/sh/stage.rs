@@ -12,8 +12,9 @@
 //!
 //! **Synthesis.** Reconstructions and irradiance maps are synthesized with a window
 //! ([`super::window`]) and its non-negativity guard; the coefficients stay raw. The
-//! reconstruction's default is `lanczos`, not the `nonneg` of the bakes: a reconstruction has no BRDF kernel to damp its top
-//! bands, and a step such as the horizon rings through the whole ground. On the demo sky at
+//! reconstruction's default is `lanczos`, not the `nonneg` of the bakes: a reconstruction has no
+//! BRDF kernel to damp its top bands, and a step such as the horizon rings through the whole
+//! ground. On the demo sky at
 //! order 30, a 10:1 horizon leaves row means of the ground 0.69–1.28 × the map's under `nonneg`
 //! (non-negative, still banded) and 0.96–1.03 × under Lanczos's σ-factors, whose horizon is the
 //! sharpest of the three fixed windows (`docs/results/windows.md`). The irradiance map keeps

@@ -23,11 +23,11 @@
 //!
 //! **The non-negativity guard.** Every window but `none` ends with that search: `hann`,
 //! `lanczos` and `sigma` damp Gibbs ripples but keep kernels with negative lobes, so next to a
-//! bright window a dark texel can still go below zero (Lanczos on Grace at order 174: 0.1 % of
-//! the texels). A radiance map with negative texels is never what a user wants (`convert`
-//! refuses it), so the fixed window is multiplied by the gentlest exp(−t·l(l+1)) that makes
-//! the map non-negative — t = 0, the window alone, whenever it already is — and the document
-//! records t. `nonneg` is the guard alone; `none` is the raw expansion, unguarded.
+//! bright window a dark texel can still go below zero (Lanczos on Grace at order 30 does: the
+//! guard needs t = 1.7 · 10⁻³ there, `docs/results/windows.md`). A radiance map with negative
+//! texels is never what a user wants (`convert` refuses it), so the fixed window is multiplied
+//! by the gentlest exp(−t·l(l+1)) that makes the map non-negative — t = 0, the window alone,
+//! whenever it already is — and the document records t. `nonneg` is the guard alone; `none` is the raw expansion, unguarded.
 
 #[cfg(test)]
 use super::index;
@@ -228,18 +228,26 @@ mod tests {
         assert_eq!(Window::None.factors(3), vec![1.0; 4]);
     }
 
+    /// A delta at +Z truncated at `order`: L_lm = Y_lm(+Z) = √((2l+1)/4π) for m = 0.
+    fn spike(order: usize) -> ShCoeffs {
+        let mut delta = ShCoeffs::zeros(order);
+        for l in 0..=order {
+            delta.rgb[index(l, 0)] = [((2 * l + 1) as f64 / (4.0 * PI)).sqrt(); 3];
+        }
+        delta
+    }
+
+    fn min(img: &crate::io::RgbImage) -> f64 {
+        img.pixels.iter().flatten().fold(f64::INFINITY, |m, &v| m.min(v as f64))
+    }
+
     /// The truncated expansion of a narrow positive spike rings negative; the nonneg window
     /// removes exactly that, gently: a slightly smaller t still rings.
     #[test]
     fn nonneg_finds_the_gentlest_heat_window() {
         let order = 12;
-        // A delta at +Z: L_lm = Y_lm(+Z) = √((2l+1)/4π) for m = 0.
-        let mut delta = ShCoeffs::zeros(order);
-        for l in 0..=order {
-            delta.rgb[index(l, 0)] = [((2 * l + 1) as f64 / (4.0 * PI)).sqrt(); 3];
-        }
+        let delta = spike(order);
         let synth = |w: &[f64]| synthesize_latlong(&apply(&delta, w), 64, 32).unwrap();
-        let min = |img: &crate::io::RgbImage| img.pixels.iter().flatten().fold(f64::INFINITY, |m, &v| m.min(v as f64));
         assert!(min(&synth(&heat_factors(order, 0.0))) < 0.0, "the raw spike rings");
         let kernel = vec![1.0; order + 1];
         let found = nonneg(&kernel, &kernel, synth, min);
@@ -250,24 +258,24 @@ mod tests {
     }
 
     /// A fixed window keeps negative lobes: Lanczos on a spike still rings below zero, and the
-    /// guard multiplies it by the gentlest heat factor that does not.
+    /// guard multiplies it by the gentlest heat factor that does not: a slightly smaller t on
+    /// top of Lanczos still rings.
     #[test]
     fn the_guard_completes_a_fixed_window() {
         let order = 12;
-        let mut delta = ShCoeffs::zeros(order);
-        for l in 0..=order {
-            delta.rgb[index(l, 0)] = [((2 * l + 1) as f64 / (4.0 * PI)).sqrt(); 3];
-        }
+        let delta = spike(order);
         let synth = |w: &[f64]| synthesize_latlong(&apply(&delta, w), 64, 32).unwrap();
-        let min = |img: &crate::io::RgbImage| img.pixels.iter().flatten().fold(f64::INFINITY, |m, &v| m.min(v as f64));
         let lanczos = Window::Lanczos.factors(order);
         assert!(min(&synth(&lanczos)) < 0.0, "Lanczos alone rings negative on a spike");
         let found = nonneg(&lanczos, &vec![1.0; order + 1], synth, min);
         assert!(found.t > 0.0 && min(&found.map) >= 0.0, "t = {}", found.t);
-        for (l, f) in found.factors.iter().enumerate() {
-            let want = lanczos[l] * (-found.t * (l * (l + 1)) as f64).exp();
+        let on_lanczos = |t: f64| -> Vec<f64> {
+            lanczos.iter().enumerate().map(|(l, w)| w * (-t * (l * (l + 1)) as f64).exp()).collect()
+        };
+        for (l, (f, want)) in found.factors.iter().zip(on_lanczos(found.t)).enumerate() {
             assert!((f - want).abs() < 1e-15, "band {l}: {f} vs {want}");
         }
+        assert!(min(&synth(&on_lanczos(0.9 * found.t))) < 0.0, "t = {} is not the gentlest", found.t);
     }
 
     #[test]
@@ -275,12 +283,7 @@ mod tests {
         let mut c = ShCoeffs::zeros(4);
         c.rgb[0] = [1.0; 3];
         c.rgb[index(1, 0)] = [0.1; 3];
-        let found = nonneg(
-            &[1.0; 5],
-            &[1.0; 5],
-            |w| synthesize_latlong(&apply(&c, w), 16, 8).unwrap(),
-            |img| img.pixels.iter().flatten().fold(f64::INFINITY, |m, &v| m.min(v as f64)),
-        );
+        let found = nonneg(&[1.0; 5], &[1.0; 5], |w| synthesize_latlong(&apply(&c, w), 16, 8).unwrap(), min);
         assert_eq!(found.t, 0.0);
         assert_eq!(found.factors, vec![1.0; 5]);
     }
