@@ -63,6 +63,8 @@ impl Output {
                 ),
             ));
         }
+        // Under the pending lock: an interruption waits until the probe file is gone again.
+        let _list = pending();
         temp_file_in(dir).map(drop).map_err(|e| IoError::os(path, e))
     }
 }
@@ -228,8 +230,14 @@ fn refuse_directory(path: &Path) -> Result<(), IoError> {
 
 /// Writes `bytes` to a registered temporary file beside `dest`, with the mode `dest` will have.
 fn stage_file(dest: &Path, bytes: &[u8]) -> Result<tempfile::TempPath, IoError> {
-    let mut tmp = temp_file_in(parent_dir(dest)).map_err(|e| IoError::os(dest, e))?;
-    pending().push(tmp.path().to_path_buf());
+    // Created and registered under one lock: an interruption in between would find the file on
+    // disk but not on the list, and leave it behind.
+    let mut tmp = {
+        let mut list = pending();
+        let tmp = temp_file_in(parent_dir(dest)).map_err(|e| IoError::os(dest, e))?;
+        list.push(tmp.path().to_path_buf());
+        tmp
+    };
     let temp = (|| {
         tmp.write_all(bytes)?;
         tmp.as_file().sync_data()?;
@@ -247,6 +255,8 @@ fn stage_file(dest: &Path, bytes: &[u8]) -> Result<tempfile::TempPath, IoError> 
     match temp {
         Ok(()) => Ok(tmp.into_temp_path()),
         Err(e) => {
+            // Removed before it leaves the list, for the same reason.
+            drop(tmp);
             pending().retain(|p| *p != path);
             Err(IoError::os(dest, e))
         }
