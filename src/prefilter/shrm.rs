@@ -22,6 +22,7 @@ use crate::io::RgbImage;
 use crate::progress::Progress;
 use crate::sh::rotate::ShRotation;
 use crate::sh::synth::RowSynth;
+use crate::sh::wigner::YRotationRows;
 use crate::sh::{count, index, ShCoeffs};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -123,7 +124,8 @@ pub fn local_shrm(
         .into_par_iter()
         .map(|y| {
             let alpha = PI * (y as f64 + 0.5) / height as f64;
-            let d = ShRotation::new(DMat3::from_rotation_y(-alpha), f);
+            // Only the rows |q| ≤ P_B of D^l(R_y(−α)) are read: Wigner-d rows, O(P_B·F_B²).
+            let d = YRotationRows::new(-alpha, f, p);
             let mut out = vec![[0.0f32; 3]; nlayers * width];
             let mut buffers = rows.buffers();
             let (mut a, mut b) = (vec![0.0; f + 1], vec![0.0; f + 1]);

@@ -19,6 +19,7 @@ pub mod project;
 pub mod rotate;
 pub mod stage;
 pub mod synth;
+pub mod wigner;
 pub mod window;
 
 pub use basis::{eval_basis, eval_basis_dir};
