@@ -25,18 +25,15 @@
 pub struct YRotationRows {
     p: usize,
     order: usize,
-    /// Band l at offset (2p+1)·l², row q + p of 2l + 1 entries (rows |q| > l stay zero).
+    /// Element (l, q, m) at [`offset`] (rows |q| > l stay zero).
     values: Vec<f64>,
 }
 
 impl YRotationRows {
     /// The rows |q| ≤ `p` of D^l(R_y(`alpha`)) for l ≤ `order`.
     pub fn new(alpha: f64, order: usize, p: usize) -> Self {
-        let rows = 2 * p + 1;
-        let mut values = vec![0.0; rows * (order + 1) * (order + 1)];
-        let offset = |l: usize, q: isize, m: isize| {
-            rows * l * l + (q + p as isize) as usize * (2 * l + 1) + (m + l as isize) as usize
-        };
+        let mut values = vec![0.0; (2 * p + 1) * (order + 1) * (order + 1)];
+        let offset = |l: usize, q: isize, m: isize| offset(p, l, q, m);
         let cos_a = alpha.cos();
         let (c, s) = ((0.5 * alpha).cos(), (0.5 * alpha).sin());
         let sqrt2 = std::f64::consts::SQRT_2;
@@ -70,8 +67,14 @@ impl YRotationRows {
     #[inline]
     pub fn element(&self, l: usize, q: isize, m: isize) -> f64 {
         debug_assert!(l <= self.order && q.unsigned_abs() <= self.p && m.unsigned_abs() <= l);
-        self.values[(2 * self.p + 1) * l * l + (q + self.p as isize) as usize * (2 * l + 1) + (m + l as isize) as usize]
+        self.values[offset(self.p, l, q, m)]
     }
+}
+
+/// Where element (l, q, m) of rows |q| ≤ p is kept: band l at (2p+1)·l², row q + p of 2l + 1.
+#[inline]
+fn offset(p: usize, l: usize, q: isize, m: isize) -> usize {
+    (2 * p + 1) * l * l + (q + p as isize) as usize * (2 * l + 1) + (m + l as isize) as usize
 }
 
 /// d^l_{q m}(α) for l = max(|q|, |m|) … `out.len()` − 1 into `out` (lower entries untouched),
