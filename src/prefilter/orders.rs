@@ -258,13 +258,14 @@ impl ViewSamples {
             .map(|q| (0..NODES).map(|k| (q as f64 * 2.0 * PI * (k as f64 + 0.5) / NODES as f64).cos()).collect())
             .collect();
         let y = |q: usize| if q == 0 { 1.0 } else { std::f64::consts::SQRT_2 };
-        self.angles
+        // c_lq per angle.
+        let c: Vec<Vec<Vec<f64>>> = self
+            .angles
             .iter()
-            .zip(&self.samples)
-            .map(|(&deg, samples)| {
+            .map(|&deg| {
                 let theta_o = deg.to_radians();
                 table_o.eval(theta_o.cos(), theta_o.sin().abs(), &mut plm_o);
-                let c: Vec<Vec<f64>> = (0..=f)
+                (0..=f)
                     .map(|l| {
                         (0..=l.min(p))
                             .map(|q| {
@@ -274,31 +275,28 @@ impl ViewSamples {
                             })
                             .collect()
                     })
-                    .collect();
-                let (mut err, mut norm) = (0.0, 0.0);
-                for (row, &(x, w)) in self.nodes.iter().enumerate() {
-                    table_i.eval(x, (1.0 - x * x).max(0.0).sqrt(), &mut plm_i);
-                    let g: Vec<f64> = (0..=p)
-                        .map(|q| {
-                            (q..=f)
-                                .map(|l| c[l].get(q).copied().unwrap_or(0.0) * plm_i[index(l, q as isize)] * y(q))
-                                .sum()
-                        })
-                        .collect();
-                    for k in 0..NODES {
-                        let approx: f64 = (0..=p).map(|q| g[q] * cos_q[q][k]).sum();
-                        let exact = samples[row * NODES + k];
-                        err += w * (exact - approx).powi(2);
-                        norm += w * exact * exact;
-                    }
-                }
-                if norm > 0.0 {
-                    (err / norm).sqrt()
-                } else {
-                    0.0
-                }
+                    .collect()
             })
-            .collect()
+            .collect();
+        let (mut err, mut norm) = (vec![0.0; self.angles.len()], vec![0.0; self.angles.len()]);
+        let mut g = vec![0.0; p + 1];
+        for (row, &(x, w)) in self.nodes.iter().enumerate() {
+            // Only the orders q ≤ P of the bands l ≤ F are read: O(F·P) per node.
+            table_i.eval_to_m(x, (1.0 - x * x).max(0.0).sqrt(), p, &mut plm_i);
+            for (a, (c, samples)) in c.iter().zip(&self.samples).enumerate() {
+                for (q, gq) in g.iter_mut().enumerate() {
+                    *gq =
+                        (q..=f).map(|l| c[l].get(q).copied().unwrap_or(0.0) * plm_i[index(l, q as isize)] * y(q)).sum();
+                }
+                for k in 0..NODES {
+                    let approx: f64 = (0..=p).map(|q| g[q] * cos_q[q][k]).sum();
+                    let exact = samples[row * NODES + k];
+                    err[a] += w * (exact - approx).powi(2);
+                    norm[a] += w * exact * exact;
+                }
+            }
+        }
+        err.iter().zip(&norm).map(|(e, n)| if *n > 0.0 { (e / n).sqrt() } else { 0.0 }).collect()
     }
 }
 

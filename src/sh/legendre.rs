@@ -64,10 +64,16 @@ impl LegendreTable {
     /// Fills `out[index(l, m)]` (m ≥ 0 only; entries with m < 0 are left untouched) with
     /// P̄_l^m(cos θ) for all l ≤ order, given cos θ and sin θ ≥ 0.
     pub fn eval(&self, cos_theta: f64, sin_theta: f64, out: &mut [f64]) {
+        self.eval_to_m(cos_theta, sin_theta, self.order, out);
+    }
+
+    /// [`LegendreTable::eval`] for the orders m ≤ `max_m` only (other entries untouched), in
+    /// O(order · max_m): for sums that read a few orders of many bands.
+    pub fn eval_to_m(&self, cos_theta: f64, sin_theta: f64, max_m: usize, out: &mut [f64]) {
         let order = self.order;
         debug_assert!(out.len() >= super::count(order));
         let mut pmm = 0.5 / PI.sqrt();
-        for m in 0..=order {
+        for m in 0..=order.min(max_m) {
             if m > 0 {
                 pmm *= self.diag[m] * sin_theta;
             }
