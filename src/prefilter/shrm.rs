@@ -22,7 +22,7 @@ use crate::io::RgbImage;
 use crate::progress::Progress;
 use crate::sh::rotate::ShRotation;
 use crate::sh::synth::RowSynth;
-use crate::sh::wigner::YRotationRows;
+use crate::sh::wigner::YRotationPlan;
 use crate::sh::{count, index, ShCoeffs};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -119,40 +119,62 @@ pub fn local_shrm(
     let rows = RowSynth::new(width);
     let nlayers = count(p);
     progress.start("SHRM", height as u64);
+    let plan = YRotationPlan::new(f, p);
     // Each α row is independent: compute all layers' rows, then scatter.
     let row_data: Vec<Vec<[f32; 3]>> = (0..height)
         .into_par_iter()
         .map(|y| {
             let alpha = PI * (y as f64 + 0.5) / height as f64;
             // Only the rows |q| ≤ P_B of D^l(R_y(−α)) are read: Wigner-d rows, O(P_B·F_B²).
-            let d = YRotationRows::new(-alpha, f, p);
+            let d = plan.rows(-alpha);
             let mut out = vec![[0.0f32; 3]; nlayers * width];
             let mut buffers = rows.buffers();
             let (mut a, mut b) = (vec![0.0; f + 1], vec![0.0; f + 1]);
-            for pp in 0..=p {
-                for q in -(pp as isize)..=(pp as isize) {
-                    for ch in 0..3 {
-                        a.iter_mut().for_each(|v| *v = 0.0);
-                        b.iter_mut().for_each(|v| *v = 0.0);
-                        for l in (q.unsigned_abs())..=f {
+            // Per q and channel, the products D^l_{q,±m} L_{l,±m} that every p ≥ |q| sums with
+            // its own ρ̂_lpq: triangular in (l, m ≤ l), so each (p, l) term is one contiguous
+            // multiply-add over m.
+            let tri = |l: usize| l * (l + 1) / 2;
+            let mut dl = [(); 3].map(|_| (vec![0.0; tri(f + 1)], vec![0.0; tri(f + 1)]));
+            for q in -(p as isize)..=(p as isize) {
+                for l in q.unsigned_abs()..=f {
+                    let li = l as isize;
+                    for (ch, (da, db)) in dl.iter_mut().enumerate() {
+                        let (da, db) = (&mut da[tri(l)..=tri(l) + l], &mut db[tri(l)..=tri(l) + l]);
+                        let light_at = |m: isize| light.rgb[index(l, m)][ch];
+                        if q >= 0 {
+                            da[0] = d.element(l, q, 0) * light_at(0);
+                            db[0] = 0.0;
+                            for m in 1..=li {
+                                let dq = d.element(l, q, m);
+                                da[m as usize] = dq * light_at(m);
+                                db[m as usize] = dq * light_at(-m);
+                            }
+                        } else {
+                            da[0] = 0.0;
+                            db[0] = 0.0;
+                            for m in 1..=li {
+                                let dq = d.element(l, q, -m);
+                                da[m as usize] = dq * light_at(-m);
+                                db[m as usize] = -dq * light_at(m);
+                            }
+                        }
+                    }
+                }
+                for pp in q.unsigned_abs()..=p {
+                    for (ch, (da, db)) in dl.iter().enumerate() {
+                        a.fill(0.0);
+                        b.fill(0.0);
+                        for l in q.unsigned_abs()..=f {
                             let r = brdf.get(l, pp, q)[ch];
                             if r == 0.0 {
                                 continue;
                             }
-                            let li = l as isize;
-                            if q >= 0 {
-                                a[0] += r * d.element(l, q, 0) * light.rgb[index(l, 0)][ch];
-                                for m in 1..=li {
-                                    let dq = r * d.element(l, q, m);
-                                    a[m as usize] += dq * light.rgb[index(l, m)][ch];
-                                    b[m as usize] += dq * light.rgb[index(l, -m)][ch];
-                                }
-                            } else {
-                                for m in 1..=li {
-                                    let dq = r * d.element(l, q, -m);
-                                    a[m as usize] += dq * light.rgb[index(l, -m)][ch];
-                                    b[m as usize] -= dq * light.rgb[index(l, m)][ch];
-                                }
+                            let span = tri(l)..=tri(l) + l;
+                            for ((av, bv), (x, y)) in
+                                a.iter_mut().zip(b.iter_mut()).zip(da[span.clone()].iter().zip(&db[span]))
+                            {
+                                *av += r * x;
+                                *bv += r * y;
                             }
                         }
                         rows.synth(&a, &b, &mut buffers);

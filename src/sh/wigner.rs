@@ -13,27 +13,114 @@
 //!
 //! started at l₀ = max(|q|, |m|) from the one term of Wigner's sum that survives there (taken in
 //! logarithms, so the tiny starts near α = 0 and π do not underflow before they need to), with
-//! d^{l₀−1} = 0: O(P·F²) a rotation. The recurrence runs up in degree like Legendre's; the tests
+//! d^{l₀−1} = 0: O(P·F²) a rotation. The starts' logarithms and the recurrence's coefficients
+//! do not depend on α, so a [`YRotationPlan`] computes them once for the rows of every angle. The recurrence runs up in degree like Legendre's; the tests
 //! hold every element to the Ivanic–Ruedenberg matrix at order 40 and Σ_m (d^l_{qm})² = 1 at
 //! l = 255 next to both poles, each to 10⁻¹⁰.
 //!
 //! Rotation about +Y preserves parity in y (φ → −φ), so the real matrix does not mix the cos qφ
 //! (q ≥ 0) and sin qφ (q < 0) harmonics; its blocks are sums and differences of d^l_{q,±m}.
 
-/// Rows |q| ≤ p of the real SH rotation matrix of R_y(α), bands 0 to `order`: element (l, q, m)
-/// equals [`super::rotate::ShRotation::element`] of
-/// `ShRotation::new(DMat3::from_rotation_y(α), order)`.
+/// What the rows of every angle share: for each (q, m), the start of d^l_{q m} at l₀ and the
+/// recurrence's coefficients, so that an angle costs three multiply-adds per element.
 #[derive(Clone, Debug)]
-pub struct YRotationRows {
+pub struct YRotationPlan {
     p: usize,
     order: usize,
-    /// Element (l, q, m) at [`offset`] (rows |q| > l stay zero).
-    values: Vec<f64>,
+    /// Chains (q, m), q = 0..=min(p, order) major, m = −order..=order.
+    chains: Vec<Chain>,
 }
 
-impl YRotationRows {
-    /// The rows |q| ≤ `p` of D^l(R_y(`alpha`)) for l ≤ `order`.
-    pub fn new(alpha: f64, order: usize, p: usize) -> Self {
+/// The recurrence of d^l_{q m} in l for one (q, m).
+#[derive(Clone, Debug)]
+struct Chain {
+    q: isize,
+    m: isize,
+    /// ln |d^{l₀}| without its powers of cos α/2 and sin α/2, and those powers.
+    ln_magnitude: f64,
+    powers: (isize, isize),
+    /// (−1)^{q − m + k} of Wigner's term.
+    sign: f64,
+    /// (c_l, e_l, b_l) for l = l₀ + 1 …: d^l = (c_l cos α − e_l) d^{l−1} − b_l d^{l−2}.
+    steps: Vec<[f64; 3]>,
+}
+
+impl YRotationPlan {
+    /// The plan for rows |q| ≤ `p` of bands 0 to `order`.
+    pub fn new(order: usize, p: usize) -> Self {
+        let ln_fact: Vec<f64> = std::iter::once(0.0)
+            .chain((1..=2 * order + 2).scan(0.0, |acc, k| {
+                *acc += (k as f64).ln();
+                Some(*acc)
+            }))
+            .collect();
+        let mut chains = Vec::new();
+        for q in 0..=p.min(order) as isize {
+            for m in -(order as isize)..=order as isize {
+                let l0 = q.abs().max(m.abs());
+                // The one surviving term of Wigner's sum at j = l₀: s_k = max(0, m − q) (the
+                // bounds j + m − s_k ≥ 0, j − q − s_k ≥ 0 and q − m + s_k ≥ 0 then pin it).
+                let (j, k) = (l0, (m - q).max(0));
+                let lf = |n: isize| ln_fact[n as usize];
+                let ln_magnitude = 0.5 * (lf(j + q) + lf(j - q) + lf(j + m) + lf(j - m))
+                    - lf(j + m - k)
+                    - lf(k)
+                    - lf(q - m + k)
+                    - lf(j - q - k);
+                let powers = (2 * j + m - q - 2 * k, q - m + 2 * k);
+                let sign = if (q - m + k) % 2 == 0 { 1.0 } else { -1.0 };
+                let (qf, mf) = (q as f64, m as f64);
+                let steps = ((l0 + 1) as usize..=order)
+                    .map(|l| {
+                        if l == 1 {
+                            // l₀ = 0 (q = m = 0): Legendre's P₁, where the general step divides
+                            // 0 by 0.
+                            return [1.0, 0.0, 0.0];
+                        }
+                        let lf = l as f64;
+                        let den = (lf - 1.0) * ((lf * lf - mf * mf) * (lf * lf - qf * qf)).sqrt();
+                        let a = (2.0 * lf - 1.0) / den;
+                        let b = lf * (((lf - 1.0).powi(2) - mf * mf) * ((lf - 1.0).powi(2) - qf * qf)).sqrt() / den;
+                        [a * lf * (lf - 1.0), a * qf * mf, b]
+                    })
+                    .collect();
+                chains.push(Chain { q, m, ln_magnitude, powers, sign, steps });
+            }
+        }
+        YRotationPlan { p, order, chains }
+    }
+
+    /// d^l_{q m}(α) for the chain's l ≥ l₀ into `out[l]` (lower entries untouched), given
+    /// cos α, cos α/2 and sin α/2.
+    fn small_d(chain: &Chain, cos_a: f64, c: f64, s: f64, out: &mut [f64]) {
+        let l0 = chain.q.abs().max(chain.m.abs()) as usize;
+        if l0 >= out.len() {
+            return;
+        }
+        let (pc, ps) = chain.powers;
+        let magnitude = (chain.ln_magnitude + pc as f64 * c.abs().ln() + ps as f64 * s.abs().ln()).exp();
+        let mut sign = chain.sign;
+        if c < 0.0 && pc % 2 == 1 {
+            sign = -sign;
+        }
+        if s < 0.0 && ps % 2 == 1 {
+            sign = -sign;
+        }
+        // 0^0 = 1: a power that is zero contributes nothing whatever its base.
+        let start = if (pc > 0 && c == 0.0) || (ps > 0 && s == 0.0) { 0.0 } else { sign * magnitude };
+        let (mut prev2, mut prev) = (0.0, start);
+        out[l0] = start;
+        for (o, [cl, el, bl]) in out[l0 + 1..].iter_mut().zip(&chain.steps) {
+            let cur = (cl * cos_a - el) * prev - bl * prev2;
+            *o = cur;
+            prev2 = prev;
+            prev = cur;
+        }
+    }
+
+    /// The rows |q| ≤ p of D^l(R_y(`alpha`)) for l ≤ order.
+    pub fn rows(&self, alpha: f64) -> YRotationRows {
+        let (p, order) = (self.p, self.order);
         let mut values = vec![0.0; (2 * p + 1) * (order + 1) * (order + 1)];
         let offset = |l: usize, q: isize, m: isize| offset(p, l, q, m);
         let cos_a = alpha.cos();
@@ -41,10 +128,12 @@ impl YRotationRows {
         let sqrt2 = std::f64::consts::SQRT_2;
         let mut d = vec![0.0; order + 1];
         let mut d_neg = vec![0.0; order + 1];
+        let width = 2 * order + 1;
         for q in 0..=p.min(order) as isize {
+            let chains = &self.chains[q as usize * width..(q as usize + 1) * width];
             for m in 0..=order as isize {
-                small_d(q, m, cos_a, c, s, &mut d);
-                small_d(q, -m, cos_a, c, s, &mut d_neg);
+                Self::small_d(&chains[(order as isize + m) as usize], cos_a, c, s, &mut d);
+                Self::small_d(&chains[(order as isize - m) as usize], cos_a, c, s, &mut d_neg);
                 // Real Y_{l,±m} ∝ (Y_l^m ± (−1)^m Y_l^{−m}); prtkit's real harmonics and the
                 // active rotation add the factor (−1)^{q+m} (d^l_{qm}(−α) = d^l_{mq}(α)).
                 let parity = |k: isize| if k % 2 == 0 { 1.0 } else { -1.0 };
@@ -64,6 +153,25 @@ impl YRotationRows {
         }
         YRotationRows { p, order, values }
     }
+}
+
+/// Rows |q| ≤ p of the real SH rotation matrix of R_y(α), bands 0 to `order`: element (l, q, m)
+/// equals [`super::rotate::ShRotation::element`] of
+/// `ShRotation::new(DMat3::from_rotation_y(α), order)`.
+#[derive(Clone, Debug)]
+pub struct YRotationRows {
+    p: usize,
+    order: usize,
+    /// Element (l, q, m) at [`offset`] (rows |q| > l stay zero).
+    values: Vec<f64>,
+}
+
+impl YRotationRows {
+    /// The rows |q| ≤ `p` of D^l(R_y(`alpha`)) for l ≤ `order` (one angle; many angles share a
+    /// [`YRotationPlan`]).
+    pub fn new(alpha: f64, order: usize, p: usize) -> Self {
+        YRotationPlan::new(order, p).rows(alpha)
+    }
 
     /// Element (q, m) of band l (|q| ≤ p, |m| ≤ l).
     #[inline]
@@ -77,57 +185,6 @@ impl YRotationRows {
 #[inline]
 fn offset(p: usize, l: usize, q: isize, m: isize) -> usize {
     (2 * p + 1) * l * l + (q + p as isize) as usize * (2 * l + 1) + (m + l as isize) as usize
-}
-
-/// d^l_{q m}(α) for l = max(|q|, |m|) … `out.len()` − 1 into `out` (lower entries untouched),
-/// given cos α, cos α/2 and sin α/2.
-fn small_d(q: isize, m: isize, cos_a: f64, c: f64, s: f64, out: &mut [f64]) {
-    let l0 = q.abs().max(m.abs());
-    if l0 as usize >= out.len() {
-        return;
-    }
-    // The one surviving term of Wigner's sum at j = l₀: s_k = max(0, m − q) (the bounds
-    // j + m − s_k ≥ 0, j − q − s_k ≥ 0 and q − m + s_k ≥ 0 then pin it).
-    let j = l0;
-    let k = (m - q).max(0);
-    let ln_fact = |n: isize| ln_factorial(n as usize);
-    let ln_mag = 0.5 * (ln_fact(j + q) + ln_fact(j - q) + ln_fact(j + m) + ln_fact(j - m))
-        - ln_fact(j + m - k)
-        - ln_fact(k)
-        - ln_fact(q - m + k)
-        - ln_fact(j - q - k);
-    let (pc, ps) = (2 * j + m - q - 2 * k, q - m + 2 * k);
-    let magnitude = (ln_mag + pc as f64 * c.abs().ln() + ps as f64 * s.abs().ln()).exp();
-    let mut sign = if (q - m + k) % 2 == 0 { 1.0 } else { -1.0 };
-    if c < 0.0 && pc % 2 == 1 {
-        sign = -sign;
-    }
-    if s < 0.0 && ps % 2 == 1 {
-        sign = -sign;
-    }
-    // 0^0 = 1: a power that is zero contributes nothing whatever its base.
-    let start = if (pc > 0 && c == 0.0) || (ps > 0 && s == 0.0) { 0.0 } else { sign * magnitude };
-    let (qf, mf) = (q as f64, m as f64);
-    let (mut prev2, mut prev) = (0.0, start);
-    out[l0 as usize] = start;
-    for l in (l0 + 1) as usize..out.len() {
-        let lf = l as f64;
-        let cur = if l == 1 {
-            // l₀ = 0 (q = m = 0): Legendre's P₁, where the general step divides 0 by 0.
-            cos_a
-        } else {
-            let a = (2.0 * lf - 1.0) * (lf * (lf - 1.0) * cos_a - qf * mf) * prev;
-            let b = lf * (((lf - 1.0).powi(2) - mf * mf) * ((lf - 1.0).powi(2) - qf * qf)).sqrt() * prev2;
-            (a - b) / ((lf - 1.0) * ((lf * lf - mf * mf) * (lf * lf - qf * qf)).sqrt())
-        };
-        out[l] = cur;
-        prev2 = prev;
-        prev = cur;
-    }
-}
-
-fn ln_factorial(n: usize) -> f64 {
-    (2..=n).map(|k| (k as f64).ln()).sum()
 }
 
 #[cfg(test)]
