@@ -147,6 +147,11 @@ impl ConeIntegrator {
         self.source.grid
     }
 
+    /// The environment's lat-long image.
+    pub fn image(&self) -> &RgbImage {
+        &self.source.image
+    }
+
     /// The source rows whose texel centres can lie within θ* of a reflection vector at polar
     /// angle θ_R, with their φ windows (closed form of cos θ_c cos θ_R + sin θ_c sin θ_R cos Δφ
     /// ≥ cos θ*).
@@ -375,9 +380,14 @@ impl ConePyramid {
     /// ∫ L(ω) weight(ω) dω over the cone of half-angle `theta_star` about `axis`, on the level
     /// fit for that cone.
     pub fn integrate(&self, axis: DVec3, theta_star: f64, weight: impl FnMut(DVec3) -> [f64; 3]) -> [f64; 3] {
+        self.level(theta_star).integrate(axis, theta_star, weight)
+    }
+
+    /// The level a cone of half-angle `theta_star` is summed on: the coarsest whose texels are
+    /// at most θ*/[`Self::TEXELS_PER_CONE`] (the finest when none is).
+    pub fn level(&self, theta_star: f64) -> &ConeIntegrator {
         let fits = |c: &&ConeIntegrator| PI / c.grid().height as f64 <= theta_star / Self::TEXELS_PER_CONE;
-        let level = self.levels.iter().rev().find(fits).unwrap_or(&self.levels[0]);
-        level.integrate(axis, theta_star, weight)
+        self.levels.iter().rev().find(fits).unwrap_or(&self.levels[0])
     }
 }
 

@@ -8,7 +8,8 @@
 //!    bound on the remainder's band energies (or the paper's energy rule); P_B from how well the
 //!    expansion represents ρ̂ per view angle.
 //! 3. **Out-of-range texels in angle**: for view-dependent BRDFs, reflection-map texels whose
-//!    view angle θ_o lies beyond the SHRM's valid range (grazing views) are integrated directly.
+//!    view angle θ_o lies beyond the SHRM's valid range (grazing views) are integrated in angle,
+//!    all of a view's at once in the frame whose pole is the view ([`super::view_axis`]).
 //! 4. **Window** ([`crate::sh::window`]): applied to the lighting's bands at synthesis; the
 //!    default `nonneg` leaves a non-negative map alone and otherwise finds the gentlest heat
 //!    window that makes it non-negative.
@@ -23,6 +24,7 @@ use super::model::Model;
 use super::orders::{texel_orders, OrderRule, TexelOrders};
 use super::pipeline::{brdf_coefficients, Lighting, Orders, PrefilterError};
 use super::shrm::{self, texel_frame, Shrm, ShrmError};
+use super::view_axis;
 use crate::envmap::bright::{split, BrightReport, BrightRule, BrightSources};
 use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
@@ -324,7 +326,9 @@ impl Prefiltered {
                 let mut added = RgbImage::new(w, h);
                 add_bright(&mut added, model, &self.bright, cutoff.as_ref().map(|c| (view, c)));
                 let replaced = match (&cone, &cutoff) {
-                    (Some(cone), Some(cutoff)) if valid < PI => fallback(w, h, model, cone, cutoff, view, valid),
+                    (Some(cone), Some(cutoff)) if valid < PI => {
+                        view_axis::beyond(cone, model, cutoff, view, valid, LatLong::new(w, h))
+                    }
                     _ => Vec::new(),
                 };
                 AngularPart { added, replaced }
@@ -424,36 +428,6 @@ fn add_bright(map: &mut RgbImage, model: &Model, bright: &BrightSources, view: O
             }
         }
     });
-}
-
-/// The texels whose view angle θ_o (cos θ_o = R·V) exceeds `valid`, with the angular integral
-/// of the remainder (the SHRM does not represent ρ̂ there within the tolerance; the bright part
-/// is added exactly to every texel).
-fn fallback(
-    w: usize,
-    h: usize,
-    model: &Model,
-    cone: &ConePyramid,
-    cutoff: &CutoffTable,
-    view: DVec3,
-    valid: f64,
-) -> Vec<(usize, [f32; 3])> {
-    let grid = LatLong::new(w, h);
-    (0..w * h)
-        .into_par_iter()
-        .filter_map(|i| {
-            let r = grid.texel_direction(i % w, i / w);
-            let theta_o = r.dot(view).clamp(-1.0, 1.0).acos();
-            if theta_o <= valid {
-                return None;
-            }
-            let v = match model.prepare_view(r, view) {
-                Some(prepared) => cone.integrate(r, cutoff.at(theta_o), |l| model.rho_hat_prepared(&prepared, l)),
-                None => [0.0; 3],
-            };
-            Some((i, v.map(|c| c as f32)))
-        })
-        .collect()
 }
 
 /// Adds the bright texels to a local SHRM of a view-dependent BRDF: per texel R,

@@ -11,3 +11,4 @@ pub mod pipeline;
 pub mod shrm;
 pub mod stage;
 pub mod verify;
+pub mod view_axis;
