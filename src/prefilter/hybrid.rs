@@ -26,9 +26,10 @@ use super::pipeline::{brdf_coefficients, Lighting, Orders, PrefilterError};
 use super::shrm::{self, texel_frame, Shrm, ShrmError};
 use super::view_axis;
 use crate::envmap::bright::{split, BrightReport, BrightRule, BrightSources};
+use crate::envmap::zonal::{rule_for_kernel, zonal_filter};
 use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
-use crate::progress::Progress;
+use crate::progress::{NoProgress, Progress};
 use crate::sh::project::project;
 use crate::sh::window::{self, Window, WindowReport};
 use crate::sh::{lm, ShCoeffs};
@@ -44,6 +45,10 @@ pub const MAX_TEXEL_ORDER: usize = 255;
 
 /// Lobe energy left outside the cone of the exact angular passes (bright texels, fallbacks).
 const ANGULAR_EPSILON: f64 = 1e-5;
+
+/// The share of a radially symmetric lobe's weight the bright texels' rule may misplace
+/// ([`rule_for_kernel`]).
+const BRIGHT_RULE_TOLERANCE: f64 = 1e-3;
 
 /// How the prefilter chooses its orders and treats the lighting.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -249,7 +254,7 @@ impl Prefiltered {
         if !self.bright.is_empty() {
             if model.centre().is_some() {
                 let mut layer = RgbImage::new(out.width(), out.height());
-                add_bright(&mut layer, model, &self.bright, None);
+                add_bright(&mut layer, model, &self.bright, self.source_grid(), None);
                 let s = (4.0 * PI).sqrt() as f32;
                 for (o, b) in out.layers[0].pixels.iter_mut().zip(&layer.pixels) {
                     for c in 0..3 {
@@ -310,6 +315,11 @@ impl Prefiltered {
         found.map
     }
 
+    /// The lat-long grid the bright texels were split on.
+    fn source_grid(&self) -> Option<LatLong> {
+        self.remainder_map.as_ref().map(|m| LatLong::new(m.image().width, m.image().height))
+    }
+
     /// What each view's map takes from angle: the bright texels' exact contribution, and the
     /// remainder of the texels beyond the SHRM's valid view angle, integrated in angle.
     fn angular_parts(&self, model: &Model, views: &[DVec3]) -> Result<Vec<AngularPart>, PrefilterError> {
@@ -324,7 +334,7 @@ impl Prefiltered {
             .iter()
             .map(|&view| {
                 let mut added = RgbImage::new(w, h);
-                add_bright(&mut added, model, &self.bright, cutoff.as_ref().map(|c| (view, c)));
+                add_bright(&mut added, model, &self.bright, self.source_grid(), cutoff.as_ref().map(|c| (view, c)));
                 let replaced = match (&cone, &cutoff) {
                     (Some(cone), Some(cutoff)) if valid < PI => {
                         view_axis::beyond(cone, model, cutoff, view, valid, LatLong::new(w, h))
@@ -378,10 +388,39 @@ fn has_negative(map: &RgbImage) -> bool {
 /// lat-long map of R (of N for Lambert). `view`: `None` for radially symmetric lobes. A texel
 /// visits only the bright texels within its lobe's cone (1 − 10⁻⁵ of the lobe; for
 /// view-dependent BRDFs per view angle, from `cutoff`): the bright texels are sorted by θ, and a
-/// row of texels at θ_R takes the range θ_R ± θ*.
-fn add_bright(map: &mut RgbImage, model: &Model, bright: &BrightSources, view: Option<(DVec3, &CutoffTable)>) {
+/// row of texels at θ_R takes the range θ_R ± θ*. A radially symmetric lobe on a map as wide as
+/// the `source` grid the texels were split on is the zonal filter of their excess instead (FFT
+/// rows: its cost does not grow with the number of bright texels, which a wide lobe visits
+/// nearly all of per texel).
+fn add_bright(
+    map: &mut RgbImage,
+    model: &Model,
+    bright: &BrightSources,
+    source: Option<LatLong>,
+    view: Option<(DVec3, &CutoffTable)>,
+) {
     if bright.is_empty() {
         return;
+    }
+    if let (None, Some(grid)) = (view, source) {
+        if grid.width == map.width {
+            let mut excess = RgbImage::new(grid.width, grid.height);
+            bright.add_to_latlong(&mut excess);
+            let cone = radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON);
+            // The texel rule integrates a lobe narrow against the texels over their extent (a
+            // sun's few texels under Phong s = 512), chosen by measurement as the references do.
+            let kernel = |x: f64| model.lobe(x)[1];
+            let rule = rule_for_kernel(grid.width, grid.height, &kernel, cone, map.height, BRIGHT_RULE_TOLERANCE).rule;
+            // Beyond the filter's size bound, the texel-by-texel sum below.
+            if let Ok(filtered) = zonal_filter(&excess, kernel, cone, &rule, map.height, &NoProgress) {
+                for (px, f) in map.pixels.iter_mut().zip(&filtered.pixels) {
+                    for c in 0..3 {
+                        px[c] += f[c] as f32;
+                    }
+                }
+                return;
+            }
+        }
     }
     let (w, h) = (map.width, map.height);
     let grid = LatLong::new(w, h);
