@@ -41,7 +41,7 @@ use crate::quadrature::gauss_legendre_cached;
 use crate::sphere::{self, LatLong};
 use rayon::prelude::*;
 use realfft::num_complex::Complex;
-use realfft::RealFftPlanner;
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
 
@@ -336,24 +336,7 @@ pub fn zonal_filter(
     let forward = planner.plan_fft_forward(width);
     let inverse = planner.plan_fft_inverse(width);
 
-    // The spectra of every source row and channel: [y][channel][m].
-    let spectra: Vec<Complex<f64>> = (0..height)
-        .into_par_iter()
-        .flat_map_iter(|y| {
-            let mut input = forward.make_input_vec();
-            let mut scratch = forward.make_scratch_vec();
-            let mut out = Vec::with_capacity(3 * bins);
-            for c in 0..3 {
-                for (v, p) in input.iter_mut().zip(latlong.row(y)) {
-                    *v = p[c] as f64;
-                }
-                let mut spectrum = forward.make_output_vec();
-                forward.process_with_scratch(&mut input, &mut spectrum, &mut scratch).expect("sizes from the plan");
-                out.extend(spectrum);
-            }
-            out
-        })
-        .collect();
+    let spectra = row_spectra(latlong, &*forward);
 
     let out_grid = LatLong::new(width, out_height);
     let mut pixels = vec![[0.0; 3]; width * out_height];
@@ -407,7 +390,6 @@ pub fn zonal_filter(
                     }
                 }
             }
-            let scale = 1.0 / width as f64;
             let mut outputs = vec![(row, weight, &mut s.acc)];
             let count = if let Some((mirror_row, mirror_weight)) = mirror {
                 outputs.push((mirror_row, mirror_weight, &mut s.acc_mirror));
@@ -418,16 +400,9 @@ pub fn zonal_filter(
             for (row, weight, acc) in outputs {
                 *weight = total;
                 for c in 0..3 {
-                    // The DC and Nyquist bins of a real signal's spectrum are real.
-                    acc[c][0].im = 0.0;
-                    if width % 2 == 0 {
-                        acc[c][bins - 1].im = 0.0;
-                    }
-                    inverse
-                        .process_with_scratch(&mut acc[c], &mut s.out, &mut s.inverse_scratch)
-                        .expect("sizes from the plan");
+                    inverse_row(&*inverse, &mut acc[c], &mut s.out, &mut s.inverse_scratch);
                     for (p, v) in row.iter_mut().zip(&s.out) {
-                        p[c] = v * scale;
+                        p[c] = *v;
                     }
                 }
             }
@@ -436,6 +411,48 @@ pub fn zonal_filter(
     );
     progress.finish();
     Ok(ZonalMap { width, height: out_height, pixels, row_weight })
+}
+
+/// The spectra of every row and channel of a lat-long image, laid out [y][channel][m] (W/2 + 1
+/// bins each): what the rows of a circular correlation in φ are multiplied with.
+pub(crate) fn row_spectra(latlong: &RgbImage, forward: &dyn RealToComplex<f64>) -> Vec<Complex<f64>> {
+    let bins = latlong.width / 2 + 1;
+    (0..latlong.height)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let mut input = forward.make_input_vec();
+            let mut scratch = forward.make_scratch_vec();
+            let mut out = Vec::with_capacity(3 * bins);
+            for c in 0..3 {
+                for (v, p) in input.iter_mut().zip(latlong.row(y)) {
+                    *v = p[c] as f64;
+                }
+                let mut spectrum = forward.make_output_vec();
+                forward.process_with_scratch(&mut input, &mut spectrum, &mut scratch).expect("sizes from the plan");
+                out.extend(spectrum);
+            }
+            out
+        })
+        .collect()
+}
+
+/// The row whose (unnormalized) spectrum `acc` holds, into `out` (1/W applied). `acc` is used
+/// as scratch.
+pub(crate) fn inverse_row(
+    inverse: &dyn ComplexToReal<f64>,
+    acc: &mut [Complex<f64>],
+    out: &mut [f64],
+    scratch: &mut [Complex<f64>],
+) {
+    let (width, bins) = (out.len(), acc.len());
+    // The DC and Nyquist bins of a real signal's spectrum are real.
+    acc[0].im = 0.0;
+    if width % 2 == 0 {
+        acc[bins - 1].im = 0.0;
+    }
+    inverse.process_with_scratch(acc, out, scratch).expect("sizes from the plan");
+    let scale = 1.0 / width as f64;
+    out.iter_mut().for_each(|v| *v *= scale);
 }
 
 /// Per-thread buffers of [`zonal_filter`].
@@ -452,7 +469,7 @@ struct RowScratch {
 }
 
 impl RowScratch {
-    fn new(forward: &dyn realfft::RealToComplex<f64>, inverse: &dyn realfft::ComplexToReal<f64>, width: usize) -> Self {
+    fn new(forward: &dyn RealToComplex<f64>, inverse: &dyn ComplexToReal<f64>, width: usize) -> Self {
         RowScratch {
             half: vec![0.0; width / 2 + 1],
             full: forward.make_input_vec(),

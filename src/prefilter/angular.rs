@@ -389,6 +389,14 @@ impl ConePyramid {
         let fits = |c: &&ConeIntegrator| PI / c.grid().height as f64 <= theta_star / Self::TEXELS_PER_CONE;
         self.levels.iter().rev().find(fits).unwrap_or(&self.levels[0])
     }
+
+    /// [`ConePyramid::level`], or the finest coarser level of at most `max_texels` texels (the
+    /// coarsest level when none is that small).
+    pub fn level_within(&self, theta_star: f64, max_texels: usize) -> &ConeIntegrator {
+        let height = self.level(theta_star).grid().height;
+        let small = |c: &&ConeIntegrator| c.grid().height <= height && c.grid().width * c.grid().height <= max_texels;
+        self.levels.iter().find(small).unwrap_or(&self.levels[self.levels.len() - 1])
+    }
 }
 
 /// A truncation of a lobe: the cone angle θ* and the share of the lobe's weight outside it.
@@ -605,6 +613,21 @@ mod tests {
     use crate::brdf::Brdf;
     use crate::prefilter::model::Model;
     use crate::progress::NoProgress;
+
+    #[test]
+    fn a_texel_budget_moves_the_pyramid_to_coarser_levels_only() {
+        let env = EnvMap::latlong(RgbImage::new(256, 128)).unwrap();
+        let pyramid = ConePyramid::new(&env).unwrap();
+        let height = |c: &ConeIntegrator| c.grid().height;
+        // Within budget: the level the cone picks (0.1 rad: the full map; 3 rad: 32 rows).
+        assert_eq!(height(pyramid.level_within(0.1, usize::MAX)), 128);
+        assert_eq!(height(pyramid.level_within(3.0, usize::MAX)), 32);
+        // Over it: the finest level of at most that many texels, never a finer one than picked.
+        assert_eq!(height(pyramid.level_within(0.1, 64 * 32)), 32);
+        assert_eq!(height(pyramid.level_within(3.0, 128 * 64)), 32);
+        // Nothing small enough: the coarsest.
+        assert_eq!(height(pyramid.level_within(0.1, 1)), 8);
+    }
 
     #[test]
     fn each_pyramid_level_keeps_the_integral_and_wide_lobes_read_coarse_levels() {
