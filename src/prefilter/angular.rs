@@ -349,13 +349,13 @@ impl ConeIntegrator {
     }
 }
 
-/// Cone sums over a pyramid of a smooth lat-long map: each level halves the last (2 × 2 texels
+/// A pyramid of a smooth lat-long map for cone sums: each level halves the last (2 × 2 texels
 /// averaged with their solid angles, so every level keeps the map's integral), and a lobe is
 /// summed on the coarsest level whose texels are at most 1/[`ConePyramid::TEXELS_PER_CONE`] of
-/// its cone angle θ*. Midpoint sums of a smooth lobe over box-filtered texels err by
-/// O((Δ/θ*)²), so on a smooth map (the remainder once bright sources are apart) this costs a
-/// fraction of the full-resolution sum for wide lobes at no visible loss (measured in
-/// `docs/prefilter.md`, "Ring-free bakes").
+/// its cone angle θ* ([`ConePyramid::level`]). Midpoint sums of a smooth lobe over box-filtered
+/// texels err by O((Δ/θ*)²), so on a smooth map (the remainder once bright sources are apart)
+/// wide lobes read a fraction of the full-resolution texels at no visible loss; the ring-free
+/// fallback ([`super::view_axis`]) takes its source from here.
 pub struct ConePyramid {
     levels: Vec<ConeIntegrator>,
 }
@@ -375,12 +375,6 @@ impl ConePyramid {
             levels.push(ConeIntegrator::new(&level)?);
         }
         Ok(ConePyramid { levels })
-    }
-
-    /// ∫ L(ω) weight(ω) dω over the cone of half-angle `theta_star` about `axis`, on the level
-    /// fit for that cone.
-    pub fn integrate(&self, axis: DVec3, theta_star: f64, weight: impl FnMut(DVec3) -> [f64; 3]) -> [f64; 3] {
-        self.level(theta_star).integrate(axis, theta_star, weight)
     }
 
     /// The level a cone of half-angle `theta_star` is summed on: the coarsest whose texels are
@@ -649,7 +643,7 @@ mod tests {
         for s in [4.0f64, 16.0] {
             let theta_star = radial_cutoff(|x| if x > 0.0 { x.powf(s) } else { 0.0 }, 1e-5);
             let lobe = |l: DVec3| [axis.dot(l).max(0.0).powf(s); 3];
-            let coarse = pyramid.integrate(axis, theta_star, lobe);
+            let coarse = pyramid.level(theta_star).integrate(axis, theta_star, lobe);
             let fine = pyramid.levels[0].integrate(axis, theta_star, lobe);
             assert!((0..3).all(|k| (coarse[k] - fine[k]).abs() < 1e-3 * fine[k]), "s={s}: {coarse:?} vs {fine:?}");
         }

@@ -140,6 +140,26 @@ mod tests {
     use super::*;
 
     #[test]
+    fn orders_up_to_m_are_those_of_the_full_table_and_the_rest_untouched() {
+        let t = LegendreTable::new(40);
+        let (c, s) = (0.37f64, (1.0f64 - 0.37 * 0.37).sqrt());
+        let mut full = vec![0.0; crate::sh::count(40)];
+        t.eval(c, s, &mut full);
+        let mut part = vec![f64::NAN; crate::sh::count(40)];
+        t.eval_to_m(c, s, 6, &mut part);
+        for l in 0..=40usize {
+            for m in 0..=l as isize {
+                let i = crate::sh::index(l, m);
+                if m <= 6 {
+                    assert_eq!(part[i], full[i], "l = {l}, m = {m}");
+                } else {
+                    assert!(part[i].is_nan(), "l = {l}, m = {m} written");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn low_orders_match_closed_forms() {
         let t = LegendreTable::new(3);
         let mut out = vec![0.0; 16];
