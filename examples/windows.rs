@@ -14,7 +14,7 @@
 mod common;
 
 use anyhow::{bail, Context};
-use common::{bake, probe_map, probe_name, reference, reference_file, SIZE};
+use common::{bake, probe_map, probe_name, reference, reference_file, LOOSE, SIZE};
 use glam::DVec3;
 use prtkit::brdf::Brdf;
 use prtkit::envmap::bright::BrightRule;
@@ -70,7 +70,7 @@ fn main() -> anyhow::Result<()> {
                 DVec3::Z,
                 0.001,
                 BrightRule::Auto,
-                &reference_file(cache, &name, spec, "+Z", ""),
+                &reference_file(cache, &name, spec, "+Z", LOOSE),
             )?;
             for window in WINDOWS {
                 let (mut out, _) = bake(&map, &brdf, DVec3::Z, |c| Config { window, ..c })?;

@@ -58,6 +58,11 @@ pub fn probe_name(path: &str) -> String {
     }
 }
 
+/// The cache suffix of the ε = 0.001 reference (`--method angular`'s default settings). It
+/// changes when that reference does, so that no cache serves an older one: "-bands" since the
+/// reference sums the map in luminance bands.
+pub const LOOSE: &str = "-bands";
+
 /// The cache file of a reference: `{probe}-{brdf}-{view}{suffix}.exr` in `cache`.
 pub fn reference_file(cache: &str, probe: &str, spec: &str, view: &str, suffix: &str) -> PathBuf {
     Path::new(cache).join(format!("{probe}-{spec}-{view}{suffix}.exr"))

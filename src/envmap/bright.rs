@@ -174,6 +174,68 @@ pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
     (remainder, sources)
 }
 
+/// Successive bands of [`luminance_bands`] differ by this factor in luminance.
+pub const BAND_RATIO: f64 = 4.0;
+
+/// One band of [`luminance_bands`]: the texels of a map whose luminance lies in the band, whole,
+/// every other texel zero.
+#[derive(Clone, Debug)]
+pub struct LuminanceBand {
+    /// The band's texels (same layout and size as the map).
+    pub map: EnvMap,
+    /// The band's upper luminance bound: no texel of it is brighter.
+    pub upper: f64,
+    /// Texels with radiance in the band.
+    pub texels: usize,
+}
+
+/// A map partitioned by luminance Y, every texel whole in one band: from its largest luminance
+/// M down by [`BAND_RATIO`], (M/4, M], (M/16, M/4], …, to the first bound F = M/4^B at or below
+/// `floor`, and last the floor band [0, F] (the whole map when M ≤ `floor`). The bands sum to
+/// the map texel for texel. The angular reference sums each with its own cone, so that what a
+/// band's truncation leaves out, at most ε_band × its upper bound, is the same ε F for every band
+/// (`docs/prefilter.md`, "The angular reference").
+pub fn luminance_bands(map: &EnvMap, floor: f64) -> Vec<LuminanceBand> {
+    let largest = map.images().iter().flat_map(|i| &i.pixels).map(|&p| luminance(p)).fold(0.0, f64::max);
+    let mut uppers = vec![largest];
+    while uppers.last().is_some_and(|&u| u > floor && u > 0.0) {
+        let next = uppers[uppers.len() - 1] / BAND_RATIO;
+        uppers.push(next);
+    }
+    // uppers: M, M/4, …, F; band k is (uppers[k + 1], uppers[k]], the last [0, F].
+    let band_of = |y: f64| uppers.iter().rposition(|&u| y <= u).unwrap_or(0);
+    let mut bands: Vec<LuminanceBand> = uppers
+        .iter()
+        .map(|&upper| {
+            let mut empty = map.clone();
+            empty.images_mut().iter_mut().for_each(|i| i.pixels.fill([0.0; 3]));
+            LuminanceBand { map: empty, upper, texels: 0 }
+        })
+        .collect();
+    for (face, img) in map.images().iter().enumerate() {
+        for (i, &px) in img.pixels.iter().enumerate() {
+            let band = &mut bands[band_of(luminance(px))];
+            band.map.images_mut()[face].pixels[i] = px;
+            band.texels += usize::from(px != [0.0; 3]);
+        }
+    }
+    bands
+}
+
+/// The mean luminance ∫ Y dω / 4π of a map (texels weighed by their solid angles).
+pub fn mean_luminance(map: &EnvMap) -> f64 {
+    let (mut sum, mut area) = (0.0, 0.0);
+    map.for_each_texel(|t| {
+        sum += luminance(t.rgb) * t.solid_angle;
+        area += t.solid_angle;
+    });
+    if area > 0.0 {
+        sum / area
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -231,6 +293,48 @@ mod tests {
         }
         // The remainder keeps each texel's colour and is clipped at the threshold.
         assert!(rest.image().pixels.iter().all(|p| luminance(*p) <= bright.threshold * (1.0 + 1e-6)));
+    }
+
+    #[test]
+    fn luminance_bands_partition_the_map_by_factors_of_four_down_to_the_floor() {
+        // Luminances 0.5 … 1000 over a 64×32 map: M = 1000, floor 3 → bounds 1000, 250, 62.5,
+        // 15.6, 3.9, 0.98 (the first ≤ 3): five bands above the floor band.
+        let grid = LatLong::new(64, 32);
+        let map = EnvMap::latlong(RgbImage::from_fn(64, 32, |x, y| {
+            let v = 0.5 * (2000f64).powf((x + 64 * y) as f64 / (64.0 * 32.0 - 1.0));
+            [v as f32, (0.5 * v) as f32, (1.5 * v) as f32]
+        }))
+        .unwrap();
+        let bands = luminance_bands(&map, 3.0);
+        let uppers: Vec<f64> = bands.iter().map(|b| b.upper).collect();
+        let want = [1000.0, 250.0, 62.5, 15.625, 3.90625, 0.9765625];
+        assert_eq!(uppers.len(), want.len(), "{uppers:?}");
+        for (u, w) in uppers.iter().zip(want) {
+            assert!((u - w).abs() < 1e-3 * w, "{uppers:?}");
+        }
+        // Every texel in exactly one band, whole, within that band's bounds; the texel counts add up.
+        let mut sum = RgbImage::new(64, 32);
+        for (k, band) in bands.iter().enumerate() {
+            let lower = if k + 1 < bands.len() { band.upper / BAND_RATIO } else { 0.0 };
+            let lit: Vec<&[f32; 3]> = band.map.image().pixels.iter().filter(|p| **p != [0.0; 3]).collect();
+            assert_eq!(lit.len(), band.texels);
+            assert!(lit
+                .iter()
+                .all(|p| luminance(**p) > lower * (1.0 - 1e-9) && luminance(**p) <= band.upper * (1.0 + 1e-6)));
+            for (s, p) in sum.pixels.iter_mut().zip(&band.map.image().pixels) {
+                *s = [0, 1, 2].map(|c| s[c] + p[c]);
+            }
+        }
+        assert_eq!(&sum, map.image());
+        assert_eq!(bands.iter().map(|b| b.texels).sum::<usize>(), 64 * 32);
+        // A map no brighter than the floor is one band, the whole map.
+        let whole = luminance_bands(&map, 1e4);
+        assert_eq!(whole.len(), 1);
+        assert_eq!(whole[0].map.image(), map.image());
+        // The mean luminance weighs texels by solid angle: a map of 1 + z has mean 1.
+        let tilt = EnvMap::latlong(RgbImage::from_fn(64, 32, |x, y| [(1.0 + grid.texel_direction(x, y).z) as f32; 3]))
+            .unwrap();
+        assert!((mean_luminance(&tilt) - 1.0).abs() < 1e-6, "{}", mean_luminance(&tilt));
     }
 
     #[test]

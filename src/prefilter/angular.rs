@@ -227,8 +227,11 @@ impl ConeIntegrator {
             let (w, n) = (self.source.grid.width, &self.single_nodes);
             self.for_each_in_cone(r, windows, theta_star, |x, y| {
                 let t = y * w + x;
-                let v = f(n[t]);
                 let l = self.source.radiance[t];
+                if l == [0.0; 3] {
+                    return;
+                }
+                let v = f(n[t]);
                 let wt = self.sub_rows[y].weight * self.phi_weights[0];
                 for k in 0..3 {
                     acc[k] += l[k] * wt * v[k];
@@ -237,8 +240,12 @@ impl ConeIntegrator {
             return acc;
         }
         self.for_each_in_cone(r, windows, theta_star, |x, y| {
-            let texel = self.texel_integral(x, y, &mut f);
+            // A part of a map (a luminance band) is mostly zero: no integral for those.
             let l = self.source.radiance[y * self.source.grid.width + x];
+            if l == [0.0; 3] {
+                return;
+            }
+            let texel = self.texel_integral(x, y, &mut f);
             for k in 0..3 {
                 acc[k] += l[k] * texel[k];
             }

@@ -4,7 +4,7 @@ use super::angular::{self, ConeIntegrator, CutoffTable};
 use super::brdf_sh::BrdfSh;
 use super::model::{Model, ModelError};
 use super::shrm::{self, Shrm, ShrmError};
-use crate::envmap::bright::{luminance, split, BrightReport, BrightRule, BrightSources};
+use crate::envmap::bright::{luminance_bands, mean_luminance, split, BrightReport, BrightRule};
 use crate::envmap::zonal::RuleChoice;
 use crate::envmap::EnvMap;
 use crate::io::RgbImage;
@@ -180,7 +180,7 @@ pub enum AngularPath {
 }
 
 /// What the angular reference used: no SH orders, only the truncation and the texel rule.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AngularReport {
     /// The requested truncation ε.
     pub epsilon: f64,
@@ -195,9 +195,16 @@ pub struct AngularReport {
     pub quadrature_error: f64,
     /// Zonal FFT or cone sum.
     pub path: AngularPath,
-    /// The bright sources summed apart, with a cone that leaves out at most ε M / e_max of the
-    /// lobe (M: the remainder's largest luminance, e_max: the largest excess).
+    /// The bright sources split off (as the frequency method splits them).
     pub bright: BrightReport,
+    /// F: the luminance below which texels take the cone of ε (the remainder's mean; absent
+    /// with `--bright off`, where the whole map does).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor_luminance: Option<f64>,
+    /// The luminance bands above F, brightest first, then the bright sources' excess, each
+    /// summed with a cone that leaves out ε F / its largest luminance ([`AngularIntegral`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parts: Vec<PassReport>,
 }
 
 /// The angular reference's maps and what it used.
@@ -213,11 +220,11 @@ pub struct AngularMaps {
 pub struct AngularSettings {
     /// The share ε of the lobe's weight a cone may leave out (App. D).
     pub epsilon: f64,
-    /// The bright sources apart ([`crate::envmap::bright`]): their texels are summed with a cone
-    /// that leaves out ε M / e_max of the lobe (M: the remainder's largest luminance, e_max: the
-    /// largest excess), so that what any texel misses is at most 2 ε M ∫ρ̂ whatever the sun.
-    /// `Off`: the paper's truncation, which misses up to ε L_max ∫ρ̂: under a sun 10⁴ × the sky,
-    /// 10⁴ ε of the sky's level.
+    /// The bright sources split off as the frequency method splits them
+    /// ([`crate::envmap::bright`]), and the map summed in parts, each with its own cone
+    /// ([`AngularIntegral`]), so that what any texel misses is a few ε F ∫ρ̂, F the map's mean
+    /// luminance, whatever the sun. `Off`: the paper's truncation, one cone for the whole map,
+    /// which misses up to ε L_max ∫ρ̂: under a sun 10⁴ × the sky, 10⁴ ε of the sky's level.
     pub bright: BrightRule,
 }
 
@@ -285,27 +292,125 @@ impl Cone {
     }
 }
 
-/// The bright texels of the environment, summed one by one with their own, wider cone.
-struct BrightPass {
-    /// The excess over the threshold (zero elsewhere), with the reference's texel rule.
+/// One part of the environment (a luminance band, or the bright sources' excess) summed with
+/// its own cone: the one that leaves out ε F / Y_max of the lobe, Y_max the part's largest
+/// luminance, so that every part misses at most ε F ∫ρ̂ ([`AngularIntegral`]).
+struct Pass {
+    /// The part (zero elsewhere), with the texel rule chosen for its ε.
     env: ConeIntegrator,
-    /// Row-major indices of the texels with an excess.
-    texels: Vec<usize>,
+    /// Row-major indices of its texels when they are fewer than a cone holds (then visited one
+    /// by one); `None`: the cone's rows.
+    texels: Option<Vec<usize>>,
     cone: Cone,
-    report: BrightReport,
+    report: PassReport,
+}
+
+/// One part of the angular reference's environment, in figures (for documents).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PassReport {
+    /// The part's largest luminance (for the bright sources, the largest excess).
+    pub max_luminance: f64,
+    /// Texels with radiance.
+    pub texels: usize,
+    /// The share of the lobe's weight its cone leaves out.
+    pub epsilon: f64,
+    /// Its widest cone half-angle θ*, in radians.
+    pub cone_angle: f64,
+    /// Sub-samples per texel axis of its texel rule.
+    pub subsamples: usize,
+}
+
+impl Pass {
+    /// `part` (lat-long) summed with the cone that leaves out `epsilon` of `model`'s lobe and
+    /// the texel rule that misplaces at most ε/10 of it on an output of `height` rows; `dense`:
+    /// by the cone's rows whatever its texels, else one by one when fewer than a cone holds.
+    fn new(
+        model: &Model,
+        part: &EnvMap,
+        max_luminance: f64,
+        epsilon: f64,
+        height: usize,
+        dense: bool,
+    ) -> Result<(Self, RuleChoice), PrefilterError> {
+        let (env, cone, choice) = Cone::prepared(model, part, epsilon, height)?;
+        let lit: Vec<usize> =
+            (part.image().pixels.iter().enumerate()).filter(|(_, p)| **p != [0.0; 3]).map(|(i, _)| i).collect();
+        // A cone of half-angle θ holds (1 − cos θ)/2 of the sphere's texels, roughly.
+        let in_cone = (1.0 - cone.widest().min(PI).cos()) / 2.0 * part.texel_count() as f64;
+        let report = PassReport {
+            max_luminance,
+            texels: lit.len(),
+            epsilon: cone.left_out(),
+            cone_angle: cone.widest(),
+            subsamples: choice.rule.subsamples(),
+        };
+        let texels = (!dense && (lit.len() as f64) < in_cone).then_some(lit);
+        Ok((Pass { env, texels, cone, report }, choice))
+    }
+
+    /// The part's share of B(R) for `view`.
+    fn texel(&self, model: &Model, r: DVec3, view: DVec3) -> [f64; 3] {
+        cone_sum(model, &self.cone, r, view, |theta_star, f| match &self.texels {
+            Some(texels) => self.env.integrate_texels(texels, r, theta_star, f),
+            None => self.env.integrate(r, theta_star, f),
+        })
+    }
+
+    /// The part's map for `view` on a `width`×`height` lat-long grid: for a dense part the
+    /// paths of [`angular`] (the zonal FFT for a radial lobe on an output as wide as the
+    /// input), for a sparse one its texels per output texel.
+    fn map(
+        &self,
+        model: &Model,
+        view: DVec3,
+        width: usize,
+        height: usize,
+        progress: &dyn Progress,
+    ) -> Result<RgbImage, PrefilterError> {
+        match (&self.texels, &self.cone) {
+            (None, Cone::Radial(t)) => {
+                Ok(angular::radial_map(&self.env, |x| model.lobe(x)[0], t.theta_star, width, height, progress)?)
+            }
+            (None, Cone::View(cutoff)) => {
+                Ok(angular::view_map(&self.env, model, cutoff, view, width, height, progress))
+            }
+            (Some(_), _) => {
+                let grid = LatLong::new(width, height);
+                let mut map = RgbImage::new(width, height);
+                map.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+                    for (x, px) in row.iter_mut().enumerate() {
+                        let v = self.texel(model, grid.texel_direction(x, y), view);
+                        *px = v.map(|c| c as f32);
+                    }
+                });
+                Ok(map)
+            }
+        }
+    }
 }
 
 /// The angular reference's integral for one model and environment, set up as `--method angular`
-/// sets it up for an output of a given height: the lobe truncated at ε (App. D), the bright
-/// sources apart with a wider cone, and the texel rule that misplaces at most ε/10 of its weight
-/// ([`angular`]). [`angular_reference`] computes whole maps with it, [`AngularIntegral::texel`]
-/// single texels (`prefilter --verify`).
+/// sets it up for an output of a given height: App. D's truncation at ε with the texel rule
+/// that misplaces at most ε/10 of the lobe ([`angular`]), and, unless the bright rule is `Off`,
+/// the environment in parts, each with its own cone.
+///
+/// **Why parts.** One cone for the whole map leaves ε of each lobe out, so a texel misses up to
+/// ε Y_max ∫ρ̂: under a sun 10⁴× the sky, at ε = 0.001, ten times the sky's level. So the map is
+/// split as the frequency method splits it (the bright sources' excess over T, `--bright`), and
+/// the remainder is cut into luminance bands of ratio 4 down to F, the remainder's mean
+/// luminance ([`luminance_bands`]). The band below F takes the cone of ε; every other part, of
+/// largest luminance Y_max, the cone that leaves out ε F / Y_max. Each part then misses at most
+/// ε F ∫ρ̂, so a texel misses at most (parts) × ε F ∫ρ̂ whatever the sun: relative to the map's
+/// mean, not to its brightest texel. The brighter parts are few texels, and those are visited one
+/// by one ([`Pass`]). [`angular_reference`] computes whole maps with it,
+/// [`AngularIntegral::texel`] single texels (`prefilter --verify`).
 pub struct AngularIntegral<'m> {
     model: &'m Model,
-    /// The environment (its remainder when the bright sources are apart).
-    env: ConeIntegrator,
-    cone: Cone,
-    bright: Option<BrightPass>,
+    /// The whole map (`--bright off`) or its band below F, with the cone of ε.
+    floor: Pass,
+    /// The bands above F, brightest first, then the bright sources' excess.
+    parts: Vec<Pass>,
+    bright: BrightReport,
     choice: RuleChoice,
     epsilon: f64,
 }
@@ -320,22 +425,43 @@ impl<'m> AngularIntegral<'m> {
         height: usize,
     ) -> Result<Self, PrefilterError> {
         let epsilon = settings.epsilon;
+        if settings.bright == BrightRule::Off {
+            let (floor, choice) = Pass::new(model, env, f64::NAN, epsilon, height, true)?;
+            return Ok(AngularIntegral {
+                model,
+                floor,
+                parts: Vec::new(),
+                bright: BrightReport::default(),
+                choice,
+                epsilon,
+            });
+        }
         let (remainder, sources) = split(env, settings.bright);
-        let (env_rest, cone, choice) = Cone::prepared(model, &remainder, epsilon, height)?;
-        let bright = match sources.is_empty() {
-            true => None,
-            false => Some(BrightPass::new(model, env, &remainder, &sources, epsilon, height)?),
-        };
-        Ok(AngularIntegral { model, env: env_rest, cone, bright, choice, epsilon })
+        let floor_luminance = mean_luminance(&remainder);
+        // Never looser than ε, and no tighter than 10⁻¹² unless ε itself is.
+        let epsilon_of = |y_max: f64| (epsilon * floor_luminance / y_max.max(1e-300)).max(1e-12).min(epsilon);
+        let mut bands = luminance_bands(&remainder, floor_luminance);
+        let below = bands.pop().expect("luminance_bands returns the floor band");
+        let (floor, choice) = Pass::new(model, &below.map, below.upper, epsilon, height, true)?;
+        let mut parts = Vec::new();
+        for band in bands.iter().filter(|b| b.texels > 0) {
+            parts.push(Pass::new(model, &band.map, band.upper, epsilon_of(band.upper), height, false)?.0);
+        }
+        if !sources.is_empty() {
+            let excess = excess_map(env, &remainder)?;
+            let e_max = sources.texels.iter().map(|t| t.excess.iter().sum::<f64>() / 3.0).fold(0.0, f64::max);
+            parts.push(Pass::new(model, &excess, e_max, epsilon_of(e_max), height, false)?.0);
+        }
+        Ok(AngularIntegral { model, floor, parts, bright: sources.report(), choice, epsilon })
     }
 
-    /// The widest cone half-angle θ*, in radians: no reflection vector farther than this from a
-    /// texel of the environment sees it (the bright sources' cones are wider).
+    /// The widest cone half-angle θ* of the floor's cone, in radians (the brighter parts' cones
+    /// are wider).
     pub fn cone_angle(&self) -> f64 {
-        self.cone.widest()
+        self.floor.cone.widest()
     }
 
-    /// Sub-samples per texel axis of the texel rule.
+    /// Sub-samples per texel axis of the floor's texel rule.
     pub fn subsamples(&self) -> usize {
         self.choice.rule.subsamples()
     }
@@ -344,43 +470,61 @@ impl<'m> AngularIntegral<'m> {
     pub fn report(&self, path: AngularPath) -> AngularReport {
         AngularReport {
             epsilon: self.epsilon,
-            epsilon_achieved: self.cone.left_out(),
+            epsilon_achieved: self.floor.cone.left_out(),
             cone_angle: self.cone_angle(),
             subsamples: self.subsamples(),
             quadrature_error: self.choice.estimated_error,
             path,
-            bright: self.bright.as_ref().map(|b| b.report).unwrap_or_default(),
+            bright: self.bright,
+            floor_luminance: (!self.parts.is_empty()).then_some(self.floor.report.max_luminance),
+            parts: self.parts.iter().map(|p| p.report).collect(),
         }
     }
 
     /// B(R) for one reflection vector `r` (unit) and `view` (ignored by radially symmetric
-    /// lobes): the sum [`angular::radial_map`] and [`angular::view_map`] compute per texel, plus
-    /// the bright sources. With bright sources the remainder's sum is rounded to f32 first, as a
-    /// map holds it before they are added, so that a map and its texels agree to the bit.
+    /// lobes): the floor's cone sum (as [`angular::radial_map`] and [`angular::view_map`]
+    /// compute it per texel) and every part's, added in the order and with the roundings of
+    /// [`angular_reference`], so that a map and its texels agree to the bit.
     pub fn texel(&self, r: DVec3, view: DVec3) -> [f64; 3] {
-        let rest = cone_sum(self.model, &self.cone, r, view, |theta_star, f| self.env.integrate(r, theta_star, f));
-        match &self.bright {
-            None => rest,
-            Some(b) => {
-                let bright = b.texel(self.model, r, view);
-                [0, 1, 2].map(|c| rest[c] as f32 as f64 + bright[c])
-            }
+        let floor = self.floor.texel(self.model, r, view);
+        if self.parts.is_empty() {
+            return floor;
         }
+        let mut acc = floor.map(|c| c as f32 as f64);
+        for part in &self.parts {
+            let v = part.texel(self.model, r, view).map(|c| c as f32 as f64);
+            acc = [0, 1, 2].map(|c| (acc[c] + v[c]) as f32 as f64);
+        }
+        acc
     }
 
-    /// Adds the bright sources to a `width`×`height` lat-long map for `view`.
-    fn add_bright(&self, map: &mut RgbImage, view: DVec3) {
-        let Some(bright) = &self.bright else { return };
-        let grid = LatLong::new(map.width, map.height);
-        map.pixels.par_chunks_mut(grid.width).enumerate().for_each(|(y, row)| {
-            for (x, px) in row.iter_mut().enumerate() {
-                let v = bright.texel(self.model, grid.texel_direction(x, y), view);
-                for c in 0..3 {
-                    px[c] = (px[c] as f64 + v[c]) as f32;
-                }
+    /// The whole map for `view`: the floor's, then every part's added.
+    fn map(
+        &self,
+        view: DVec3,
+        width: usize,
+        height: usize,
+        progress: &dyn Progress,
+    ) -> Result<RgbImage, PrefilterError> {
+        let mut map = self.floor.map(self.model, view, width, height, progress)?;
+        for part in &self.parts {
+            let add = part.map(self.model, view, width, height, &crate::progress::NoProgress)?;
+            for (px, a) in map.pixels.iter_mut().zip(&add.pixels) {
+                *px = [0, 1, 2].map(|c| (px[c] as f64 + a[c] as f64) as f32);
             }
-        });
+        }
+        Ok(map)
     }
+}
+
+/// The excess of `env` over its `remainder` (the bright split), zero elsewhere.
+fn excess_map(env: &EnvMap, remainder: &EnvMap) -> Result<EnvMap, PrefilterError> {
+    let (whole, rest) = (env.image(), remainder.image());
+    let mut excess = RgbImage::new(whole.width, whole.height);
+    for (px, (a, b)) in excess.pixels.iter_mut().zip(whole.pixels.iter().zip(&rest.pixels)) {
+        *px = [0, 1, 2].map(|c| a[c] - b[c]);
+    }
+    EnvMap::latlong(excess).map_err(|e| PrefilterError::Resample(e.to_string()))
 }
 
 /// One cone sum of `model`'s lobe about `r` for `view`: `integrate(θ*, weight)` with the
@@ -404,47 +548,11 @@ fn cone_sum(
     }
 }
 
-impl BrightPass {
-    /// The excess of `env` over its `remainder` (the split into `sources`), summed with a cone
-    /// that leaves out ε_b = ε M / e_max of the lobe (M: the remainder's largest luminance,
-    /// e_max: the largest excess) and a texel rule that misplaces at most ε_b/10 of it, so that
-    /// it misses at most ε M ∫ρ̂, as the remainder's cone does.
-    fn new(
-        model: &Model,
-        env: &EnvMap,
-        remainder: &EnvMap,
-        sources: &BrightSources,
-        epsilon: f64,
-        height: usize,
-    ) -> Result<Self, PrefilterError> {
-        let (whole, rest) = (env.image(), remainder.image());
-        let mut excess = RgbImage::new(whole.width, whole.height);
-        let mut texels = Vec::new();
-        for (i, (px, (a, b))) in excess.pixels.iter_mut().zip(whole.pixels.iter().zip(&rest.pixels)).enumerate() {
-            *px = [0, 1, 2].map(|c| a[c] - b[c]);
-            if px.iter().any(|&v| v != 0.0) {
-                texels.push(i);
-            }
-        }
-        let excess = EnvMap::latlong(excess).map_err(|e| PrefilterError::Resample(e.to_string()))?;
-        let m_rest = rest.pixels.iter().map(|&p| luminance(p)).fold(0.0, f64::max);
-        let e_max = sources.texels.iter().map(|t| t.excess.iter().sum::<f64>() / 3.0).fold(0.0, f64::max);
-        // Never looser than ε, and no tighter than 10⁻¹² unless ε itself is.
-        let epsilon_b = (epsilon * m_rest / e_max.max(1e-300)).max(1e-12).min(epsilon);
-        let (env, cone, _) = Cone::prepared(model, &excess, epsilon_b, height)?;
-        Ok(BrightPass { env, texels, cone, report: sources.report() })
-    }
-
-    /// The bright texels' share of B(R) for `view`.
-    fn texel(&self, model: &Model, r: DVec3, view: DVec3) -> [f64; 3] {
-        cone_sum(model, &self.cone, r, view, |theta_star, f| self.env.integrate_texels(&self.texels, r, theta_star, f))
-    }
-}
-
 /// The angular reference (App. D): for radially symmetric BRDFs one map (views ignored),
-/// otherwise one reflection map per view, on a `width`×`height` lat-long grid. The lobe is
-/// truncated as `settings` say, and its texel integrals use the smallest Gauss–Legendre rule
-/// that misplaces at most ε/10 of its weight ([`angular`]). No spherical harmonics are involved.
+/// otherwise one reflection map per view, on a `width`×`height` lat-long grid, as
+/// [`AngularIntegral`] sets it up: the lobe truncated as `settings` say, its texel integrals by
+/// the smallest Gauss–Legendre rule that misplaces at most ε/10 of its weight ([`angular`]). No
+/// spherical harmonics are involved.
 pub fn angular_reference(
     model: &Model,
     env: &EnvMap,
@@ -455,25 +563,15 @@ pub fn angular_reference(
     progress: &dyn Progress,
 ) -> Result<AngularMaps, PrefilterError> {
     let integral = AngularIntegral::new(model, env, settings, height)?;
-    let cone = &integral.env;
-    match &integral.cone {
-        Cone::Radial(t) => {
-            let u = |x: f64| model.lobe(x)[0];
-            let mut map = angular::radial_map(cone, u, t.theta_star, width, height, progress)?;
-            integral.add_bright(&mut map, DVec3::Z);
-            let path = if width == cone.grid().width { AngularPath::Zonal } else { AngularPath::ConeSum };
+    match &integral.floor.cone {
+        Cone::Radial(_) => {
+            let map = integral.map(DVec3::Z, width, height, progress)?;
+            let path = if width == integral.floor.env.grid().width { AngularPath::Zonal } else { AngularPath::ConeSum };
             Ok(AngularMaps { maps: vec![map], report: integral.report(path) })
         }
-        Cone::View(cutoff) => {
+        Cone::View(_) => {
             progress.start("angular", (views.len() * height) as u64);
-            let maps = views
-                .iter()
-                .map(|&v| {
-                    let mut map = angular::view_map(cone, model, cutoff, v, width, height, progress);
-                    integral.add_bright(&mut map, v);
-                    map
-                })
-                .collect();
+            let maps = views.iter().map(|&v| integral.map(v, width, height, progress)).collect::<Result<_, _>>()?;
             progress.finish();
             Ok(AngularMaps { maps, report: integral.report(AngularPath::ConeSum) })
         }
@@ -516,8 +614,9 @@ mod tests {
     fn bright_sources_apart_make_the_reference_honest_per_texel() {
         // The paper's truncation at ε = 10⁻³ leaves 0.1 % of each lobe out, 20 × the sky's level
         // under this sun: dark texels come out several per cent low. With the sun summed apart
-        // (its cone leaves out ε M / e_max), the same ε agrees with a 10⁻⁷ truncation of the
-        // whole map within its bound, and both ways agree when nothing is cut.
+        // (its cone leaves out ε F / e_max, F the remainder's mean), the same ε agrees with a
+        // 10⁻⁷ truncation of the whole map within its bound, and both ways agree when nothing
+        // is cut.
         let env = sun_sky();
         let view = DVec3::new(0.3, 0.0, 1.0).normalize();
         for (spec, cosine) in [("phong:s=32", true), ("torrance-sparrow:sigma=0.3", false)] {
@@ -529,13 +628,45 @@ mod tests {
                 angular_reference(&model, &env, &[view], AngularSettings::new(1e-3), 64, 32, &NoProgress).unwrap();
             let (apart, _) = compare(&honest.maps[0], &exact, &[]).unwrap();
             assert!(paper.max_texel_error > 0.03, "{spec}: the paper's truncation is off by {paper:?}");
-            // The bound 2 ε M ∫ρ̂ is ~1 % of the darkest texels here (M ≈ 4 × the sky's mean).
+            // The bound (parts + 1) ε F ∫ρ̂ is ~0.5 % of the darkest texels here.
             assert!(apart.max_texel_error < 5e-3, "{spec}: bright apart is off by {apart:?}");
             assert_eq!(honest.report.bright.texels, 4, "{spec}: {:?}", honest.report.bright);
             assert!(honest.report.bright.energy_fraction > 0.9, "{:?}", honest.report.bright);
             let (same, _) = compare(&map(AngularSettings::new(1e-7)), &exact, &[]).unwrap();
             // Within the texel rules' tolerance (ε/10 of the lobe, times a sun of 2 · 10⁴).
             assert!(same.max_texel_error < 1e-3, "{spec}: {same:?}");
+        }
+    }
+
+    #[test]
+    fn luminance_bands_make_the_reference_honest_under_a_wide_bright_window() {
+        // A window of 30 over a sixth of the sky's width, 1 + z⁺ elsewhere: too wide to be a
+        // bright source (nothing lies above the threshold), so one cone of ε = 10⁻³ misses up
+        // to ε × 29 ∫ρ̂ (29 the window's luminance), 1.5 % of a texel of 2. In luminance bands
+        // each part misses at most ε F ∫ρ̂ with F the mean: the error against a 10⁻⁷
+        // truncation drops by the ratio of the bounds.
+        let grid = LatLong::new(64, 32);
+        let env = EnvMap::latlong(RgbImage::from_fn(64, 32, |x, y| {
+            let d = grid.texel_direction(x, y);
+            let v = if (20..31).contains(&x) && (6..16).contains(&y) { 30.0 } else { 1.0 + d.z.max(0.0) };
+            [v as f32, v as f32, (0.9 * v) as f32]
+        }))
+        .unwrap();
+        let view = DVec3::new(0.3, 0.0, 1.0).normalize();
+        for (spec, cosine) in [("phong:s=32", true), ("torrance-sparrow:sigma=0.3", false)] {
+            let model = Model::new(Brdf::parse(spec).unwrap(), cosine).unwrap();
+            let map = |settings| angular_maps(&model, &env, &[view], settings, 64, 32, &NoProgress).unwrap().remove(0);
+            let exact = map(AngularSettings::paper(1e-7));
+            let (one_cone, _) = compare(&map(AngularSettings::paper(1e-3)), &exact, &[]).unwrap();
+            let banded =
+                angular_reference(&model, &env, &[view], AngularSettings::new(1e-3), 64, 32, &NoProgress).unwrap();
+            let (bands, _) = compare(&banded.maps[0], &exact, &[]).unwrap();
+            assert_eq!(banded.report.bright.texels, 0, "{:?}", banded.report.bright);
+            // Bands (1.8, 7.25], (7.25, 29] above F = 1.81: the bound drops 29 / (3 × 1.81) ≈ 5×
+            // (measured: 4.1× for Phong, 6.5× for Torrance-Sparrow).
+            assert_eq!(banded.report.parts.len(), 2, "{:?}", banded.report);
+            assert!(one_cone.max_texel_error > 0.006, "{spec}: {one_cone:?}");
+            assert!(bands.max_texel_error < 0.3 * one_cone.max_texel_error, "{spec}: {bands:?} vs {one_cone:?}");
         }
     }
 

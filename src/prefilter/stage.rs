@@ -305,13 +305,14 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
             let settings = AngularSettings { epsilon: config.epsilon, bright: config.bright };
             let reference = pipeline::angular_reference(&model, &latlong, &wanted, settings, size.0, size.1, progress)
                 .map_err(fail)?;
+            let epsilon_achieved = reference.report.epsilon_achieved;
             angular = Some(reference.report);
             timings.angular_seconds = t.elapsed().as_secs_f64();
             // Radially symmetric BRDFs give one map whatever the view.
             let images = reference.maps;
             let maps = if model.centre().is_some() { vec![images[0].clone(); wanted.len()] } else { images };
             // F_B = P_B = 0: no orders; ε achieved is the lobe weight the truncation left out.
-            (maps, None, 0, 0, reference.report.epsilon_achieved, 0, None, size)
+            (maps, None, 0, 0, epsilon_achieved, 0, None, size)
         }
     };
 

@@ -78,8 +78,9 @@ pub struct Args {
 
     /// Bright sources filtered in angle with the exact lobe, the rest through SH: auto (a
     /// threshold from the map's histogram, docs/prefilter.md), off (the paper's method), or a
-    /// luminance threshold. With --method angular: the bright texels are summed with a wider
-    /// cone, so that under a sun no texel misses more than 2ε × the rest's brightest texel.
+    /// luminance threshold. With --method angular: the map is summed in luminance parts, each
+    /// with its own cone, so that no texel misses more than a few ε × the map's mean luminance
+    /// whatever the sun (off: one cone, App. D as written).
     #[arg(long, value_name = "auto|off|Y", default_value = "auto", value_parser = parse_bright)]
     pub bright: BrightRule,
 
