@@ -1,6 +1,7 @@
 //! Gauss–Legendre quadrature on [−1, 1]: exact for polynomials of degree < 2n, the natural rule
 //! for integrals over cos θ.
 
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -25,7 +26,9 @@ pub fn gauss_legendre_cached(n: usize) -> Rule {
 /// n Gauss–Legendre nodes and weights on [−1, 1], ascending, by Newton's method on P_n from the
 /// Tricomi initial guesses. Accurate to ~1e-15 for n up to several thousand.
 pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+    // Each node is its own Newton iteration (O(n) per step): in parallel, the same bits.
     let mut out: Vec<(f64, f64)> = (0..n)
+        .into_par_iter()
         .map(|i| {
             let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
             for _ in 0..100 {

@@ -455,55 +455,66 @@ pub fn reference_rule(
 }
 
 /// θ*(θ_o) for a 3-D ρ̂ in the reflection frame, tabulated on `bins` values of θ_o ∈ [0, π]: the
-/// cone around R that holds 1 − ε of ∫ ρ̂ dω_i for that view angle.
+/// cone around R that holds 1 − ε of ∫ ρ̂ dω_i for that view angle; beside it the lobe's width
+/// √(∫ ρ̂ dω_i / max ρ̂), the side of a square of the lobe's effective solid angle (2.5 s for a
+/// Gaussian of deviation s): how fine a grid must be to resolve the lobe, wherever its peak lies.
 pub struct CutoffTable {
     theta_star: Vec<f64>,
+    width: Vec<f64>,
     left_out: f64,
 }
 
 impl CutoffTable {
-    /// Tabulates θ* for ρ̂(ω_i, ω_o) (reflection frame, luminance).
+    /// Tabulates θ* and the width for ρ̂(ω_i, ω_o) (reflection frame, luminance), which must be
+    /// even in φ_i (ω_o lies at φ = 0: the mirror y → −y leaves an isotropic ρ̂ unchanged), so
+    /// only φ_i ∈ [0, π] is sampled.
     pub fn new(rho_hat: impl Fn(DVec3, DVec3) -> f64 + Sync, epsilon: f64, bins: usize) -> Self {
         let n_theta = 512;
-        let n_phi = 48;
-        let per_bin: Vec<(f64, f64)> = (0..bins)
+        let n_phi = 24;
+        let per_bin: Vec<(f64, f64, f64)> = (0..bins)
             .into_par_iter()
             .map(|b| {
                 let theta_o = PI * b as f64 / (bins - 1).max(1) as f64;
                 let wo = sphere::direction(theta_o.min(PI - 1e-6), 0.0);
-                // Mass per θ_i band (midpoint rule in θ_i, uniform φ_i).
+                // Mass per θ_i band (midpoint rule in θ_i, uniform φ_i), and the largest sample.
+                let mut peak = 0.0f64;
                 let mass: Vec<f64> = (0..n_theta)
                     .map(|i| {
                         let theta_i = PI * (i as f64 + 0.5) / n_theta as f64;
                         let s: f64 = (0..n_phi)
-                            .map(|k| rho_hat(sphere::direction(theta_i, TAU * (k as f64 + 0.5) / n_phi as f64), wo))
+                            .map(|k| rho_hat(sphere::direction(theta_i, PI * (k as f64 + 0.5) / n_phi as f64), wo))
+                            .inspect(|&v| peak = peak.max(v))
                             .sum();
                         s * theta_i.sin()
                     })
                     .collect();
                 let total: f64 = mass.iter().sum();
                 if total <= 0.0 {
-                    return (0.0, 0.0);
+                    return (0.0, 0.0, f64::INFINITY);
                 }
+                // ∫ ρ̂ dω_i over the sphere: the half sphere's midpoint sums, twice.
+                let integral = 2.0 * total * (PI / n_theta as f64) * (PI / n_phi as f64);
+                let width = (integral / peak).sqrt();
                 let mut acc = 0.0;
                 for (i, m) in mass.iter().enumerate() {
                     acc += m;
                     if acc >= (1.0 - epsilon) * total {
-                        return ((PI * (i + 1) as f64 / n_theta as f64).min(PI), (1.0 - acc / total).max(0.0));
+                        return ((PI * (i + 1) as f64 / n_theta as f64).min(PI), (1.0 - acc / total).max(0.0), width);
                     }
                 }
-                (PI, 0.0)
+                (PI, 0.0, width)
             })
             .collect();
         CutoffTable {
             theta_star: per_bin.iter().map(|b| b.0).collect(),
+            width: per_bin.iter().map(|b| b.2).collect(),
             left_out: per_bin.iter().map(|b| b.1).fold(0.0, f64::max),
         }
     }
 
     /// The same θ* for every view angle (π: no truncation).
     pub fn constant(theta_star: f64) -> Self {
-        CutoffTable { theta_star: vec![theta_star; 2], left_out: 0.0 }
+        CutoffTable { theta_star: vec![theta_star; 2], width: vec![theta_star; 2], left_out: 0.0 }
     }
 
     /// θ* for view angle θ_o: the larger of the two neighbouring bins (conservative).
@@ -512,6 +523,15 @@ impl CutoffTable {
         let t = (theta_o / PI).clamp(0.0, 1.0) * (n - 1) as f64;
         let (i0, i1) = (t.floor() as usize, (t.ceil() as usize).min(n - 1));
         self.theta_star[i0].max(self.theta_star[i1])
+    }
+
+    /// The lobe's width for view angle θ_o: the smaller of the two neighbouring bins
+    /// (conservative: a grid chosen by it is fine enough for both).
+    pub fn width_at(&self, theta_o: f64) -> f64 {
+        let n = self.width.len();
+        let t = (theta_o / PI).clamp(0.0, 1.0) * (n - 1) as f64;
+        let (i0, i1) = (t.floor() as usize, (t.ceil() as usize).min(n - 1));
+        self.width[i0].min(self.width[i1])
     }
 
     /// The widest cone of the table.
@@ -755,6 +775,21 @@ mod tests {
                 let r = grid.texel_direction(x, y);
                 let cone = env.integrate(r, 0.8, |l| [u(r.dot(l)); 3]);
                 assert!(relative(zonal.pixels[y * 32 + x], cone) < 1e-9, "({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
+    fn the_cutoff_table_width_is_the_side_of_the_lobes_effective_solid_angle() {
+        // A normalized Phong lobe about R, whatever the view: ∫ u dω = 1 and max u = (s + 1)/2π,
+        // so the width is √(2π/(s + 1)) exactly.
+        for s in [8, 64, 512] {
+            let u = move |wi: DVec3, _wo: DVec3| (s as f64 + 1.0) / TAU * wi.z.max(0.0).powi(s);
+            let table = CutoffTable::new(u, 1e-3, 5);
+            let exact = (TAU / (s as f64 + 1.0)).sqrt();
+            for theta_o in [0.0, 1.0, 2.5] {
+                let w = table.width_at(theta_o);
+                assert!((w / exact - 1.0).abs() < 5e-3, "s = {s}, θ_o = {theta_o}: {w} against {exact}");
             }
         }
     }

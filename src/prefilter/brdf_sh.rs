@@ -187,7 +187,8 @@ pub fn from_isotropic(
     let mut out = BrdfSh { f, p, coeffs: vec![[0.0; 3]; (f + 1) * (p + 1) * (p + 1)], total_energy: 0.0 };
     let mut plm = vec![0.0; count(f)];
     for (&(theta_i, w_i), (rho_pq, energy)) in nodes_i.iter().zip(&per_theta_i) {
-        table_i.eval(theta_i.cos(), theta_i.sin(), &mut plm);
+        // Only the orders q ≤ P are read: O(F·P) per node, not O(F²).
+        table_i.eval_to_m(theta_i.cos(), theta_i.sin(), p, &mut plm);
         out.total_energy += energy;
         for l in 0..=f {
             for pp in 0..=p {

@@ -324,11 +324,11 @@ impl Prefiltered {
     /// remainder of the texels beyond the SHRM's valid view angle, integrated in angle.
     fn angular_parts(&self, model: &Model, views: &[DVec3]) -> Result<Vec<AngularPart>, PrefilterError> {
         let (w, h) = (self.remainder_shrm.width(), self.remainder_shrm.height());
-        let cone = self.remainder_map.as_ref().map(ConePyramid::new).transpose()?;
         let valid = self.report.texel.as_ref().map_or(PI, |t| t.valid_view_angle.to_radians());
-        let cutoff = model
-            .centre()
-            .is_none()
+        let fallback = model.centre().is_none() && valid < PI;
+        let cone = self.remainder_map.as_ref().filter(|_| fallback).map(ConePyramid::new).transpose()?;
+        // The view-dependent cones, when anything is summed in angle.
+        let cutoff = (model.centre().is_none() && (!self.bright.is_empty() || fallback))
             .then(|| CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), ANGULAR_EPSILON, 65));
         Ok(views
             .iter()
@@ -336,7 +336,7 @@ impl Prefiltered {
                 let mut added = RgbImage::new(w, h);
                 add_bright(&mut added, model, &self.bright, self.source_grid(), cutoff.as_ref().map(|c| (view, c)));
                 let replaced = match (&cone, &cutoff) {
-                    (Some(cone), Some(cutoff)) if valid < PI => {
+                    (Some(cone), Some(cutoff)) => {
                         view_axis::beyond(cone, model, cutoff, view, valid, LatLong::new(w, h))
                     }
                     _ => Vec::new(),

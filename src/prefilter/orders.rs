@@ -34,6 +34,7 @@ use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use crate::sh::legendre::LegendreTable;
 use crate::sh::{count, index};
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -213,30 +214,35 @@ pub const VIEW_ANGLES: &[f64] = &[
 
 /// ρ̂(·, ω_o) sampled over ω_i for ω_o at each of a list of angles (degrees) from R in the
 /// reflection frame (φ_o = 0), on a Gauss–Legendre grid in cos θ_i × a uniform grid in φ_i, to
-/// measure how well truncated expansions represent it (green channel).
+/// measure how well truncated expansions represent it (green channel). ρ̂ and its expansion are
+/// even in φ_i (the mirror y → −y), and the midpoints k and NODES − 1 − k mirror each other, so
+/// only φ_i ∈ [0, π] is sampled and its sums count twice.
 pub struct ViewSamples {
     angles: Vec<f64>,
     nodes: Vec<(f64, f64)>,
-    /// Per angle, NODES × NODES samples (θ_i node major).
+    /// Per angle, NODES × HALF samples (θ_i node major).
     samples: Vec<Vec<f64>>,
 }
 
 /// Grid size of [`ViewSamples`] per axis.
 const NODES: usize = 192;
 
+/// The φ_i midpoints in [0, π].
+const HALF: usize = NODES / 2;
+
 impl ViewSamples {
     /// Samples `model`'s ρ̂ at `angles_deg`.
     pub fn new(model: &Model, angles_deg: &[f64]) -> Self {
         let nodes = gauss_legendre(NODES).to_vec();
         let samples = angles_deg
-            .iter()
+            .par_iter()
             .map(|&deg| {
                 let theta_o = deg.to_radians();
                 let wo = DVec3::new(theta_o.sin(), 0.0, theta_o.cos());
-                let mut out = Vec::with_capacity(NODES * NODES);
+                let mut out = Vec::with_capacity(NODES * HALF);
                 for &(x, _) in &nodes {
                     let sin_i = (1.0 - x * x).max(0.0).sqrt();
-                    for k in 0..NODES {
+                    for k in 0..HALF {
                         let phi = 2.0 * PI * (k as f64 + 0.5) / NODES as f64;
                         out.push(model.rho_hat(DVec3::new(sin_i * phi.cos(), sin_i * phi.sin(), x), wo)[1]);
                     }
@@ -253,9 +259,9 @@ impl ViewSamples {
     pub fn residuals(&self, brdf: &BrdfSh, f: usize, p: usize) -> Vec<f64> {
         let (f, p) = (f.min(brdf.f), p.min(brdf.p));
         let (table_o, table_i) = (LegendreTable::new(p), LegendreTable::new(f));
-        let (mut plm_o, mut plm_i) = (vec![0.0; count(p)], vec![0.0; count(f)]);
+        let mut plm_o = vec![0.0; count(p)];
         let cos_q: Vec<Vec<f64>> = (0..=p)
-            .map(|q| (0..NODES).map(|k| (q as f64 * 2.0 * PI * (k as f64 + 0.5) / NODES as f64).cos()).collect())
+            .map(|q| (0..HALF).map(|k| (q as f64 * 2.0 * PI * (k as f64 + 0.5) / NODES as f64).cos()).collect())
             .collect();
         let y = |q: usize| if q == 0 { 1.0 } else { std::f64::consts::SQRT_2 };
         // c_lq per angle.
@@ -278,22 +284,39 @@ impl ViewSamples {
                     .collect()
             })
             .collect();
+        // Rows in fixed chunks, each summed by one thread, the chunks added in order: the same
+        // figures for any number of threads.
+        let partial = |rows: &[(f64, f64)], first: usize| {
+            let (mut err, mut norm) = (vec![0.0; self.angles.len()], vec![0.0; self.angles.len()]);
+            let mut plm_i = vec![0.0; count(f)];
+            let mut g = vec![0.0; p + 1];
+            for (row, &(x, w)) in rows.iter().enumerate().map(|(i, n)| (first + i, n)) {
+                // Only the orders q ≤ P of the bands l ≤ F are read: O(F·P) per node.
+                table_i.eval_to_m(x, (1.0 - x * x).max(0.0).sqrt(), p, &mut plm_i);
+                for (a, (c, samples)) in c.iter().zip(&self.samples).enumerate() {
+                    for (q, gq) in g.iter_mut().enumerate() {
+                        *gq = (q..=f)
+                            .map(|l| c[l].get(q).copied().unwrap_or(0.0) * plm_i[index(l, q as isize)] * y(q))
+                            .sum();
+                    }
+                    for k in 0..HALF {
+                        let approx: f64 = (0..=p).map(|q| g[q] * cos_q[q][k]).sum();
+                        let exact = samples[row * HALF + k];
+                        err[a] += w * (exact - approx).powi(2);
+                        norm[a] += w * exact * exact;
+                    }
+                }
+            }
+            (err, norm)
+        };
+        const CHUNK: usize = 8;
+        let chunks: Vec<(Vec<f64>, Vec<f64>)> =
+            self.nodes.par_chunks(CHUNK).enumerate().map(|(i, rows)| partial(rows, i * CHUNK)).collect();
         let (mut err, mut norm) = (vec![0.0; self.angles.len()], vec![0.0; self.angles.len()]);
-        let mut g = vec![0.0; p + 1];
-        for (row, &(x, w)) in self.nodes.iter().enumerate() {
-            // Only the orders q ≤ P of the bands l ≤ F are read: O(F·P) per node.
-            table_i.eval_to_m(x, (1.0 - x * x).max(0.0).sqrt(), p, &mut plm_i);
-            for (a, (c, samples)) in c.iter().zip(&self.samples).enumerate() {
-                for (q, gq) in g.iter_mut().enumerate() {
-                    *gq =
-                        (q..=f).map(|l| c[l].get(q).copied().unwrap_or(0.0) * plm_i[index(l, q as isize)] * y(q)).sum();
-                }
-                for k in 0..NODES {
-                    let approx: f64 = (0..=p).map(|q| g[q] * cos_q[q][k]).sum();
-                    let exact = samples[row * NODES + k];
-                    err[a] += w * (exact - approx).powi(2);
-                    norm[a] += w * exact * exact;
-                }
+        for (e, n) in &chunks {
+            for a in 0..err.len() {
+                err[a] += e[a];
+                norm[a] += n[a];
             }
         }
         err.iter().zip(&norm).map(|(e, n)| if *n > 0.0 { (e / n).sqrt() } else { 0.0 }).collect()
@@ -305,6 +328,20 @@ mod tests {
     use super::*;
     use crate::brdf::Brdf;
     use crate::sh::basis::eval_basis_dir;
+
+    #[test]
+    fn view_residuals_are_the_same_for_any_thread_count() {
+        let model = Model::new(Brdf::parse("torrance-sparrow:sigma=0.2").unwrap(), true).unwrap();
+        let brdf = model.coefficients(24, 4);
+        let run = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| ViewSamples::new(&model, VIEW_ANGLES).residuals(&brdf, 24, 4))
+        };
+        let one = run(1);
+        assert!(one.iter().all(|r| r.is_finite()) && one.iter().any(|&r| r > 0.0), "{one:?}");
+        assert_eq!(run(2), one);
+        assert_eq!(run(3), one);
+    }
 
     /// r(θ_o) from Parseval against the brute-force residual: sample ρ̂ and its truncated
     /// expansion over ω_i and integrate the difference.
