@@ -471,6 +471,13 @@ impl CutoffTable {
     pub fn new(rho_hat: impl Fn(DVec3, DVec3) -> f64 + Sync, epsilon: f64, bins: usize) -> Self {
         let n_theta = 512;
         let n_phi = 24;
+        // The sample directions, shared by every bin.
+        let directions: Vec<DVec3> = (0..n_theta)
+            .flat_map(|i| {
+                let theta_i = PI * (i as f64 + 0.5) / n_theta as f64;
+                (0..n_phi).map(move |k| sphere::direction(theta_i, PI * (k as f64 + 0.5) / n_phi as f64))
+            })
+            .collect();
         let per_bin: Vec<(f64, f64, f64)> = (0..bins)
             .into_par_iter()
             .map(|b| {
@@ -478,13 +485,12 @@ impl CutoffTable {
                 let wo = sphere::direction(theta_o.min(PI - 1e-6), 0.0);
                 // Mass per θ_i band (midpoint rule in θ_i, uniform φ_i), and the largest sample.
                 let mut peak = 0.0f64;
-                let mass: Vec<f64> = (0..n_theta)
-                    .map(|i| {
+                let mass: Vec<f64> = directions
+                    .chunks(n_phi)
+                    .enumerate()
+                    .map(|(i, row)| {
                         let theta_i = PI * (i as f64 + 0.5) / n_theta as f64;
-                        let s: f64 = (0..n_phi)
-                            .map(|k| rho_hat(sphere::direction(theta_i, PI * (k as f64 + 0.5) / n_phi as f64), wo))
-                            .inspect(|&v| peak = peak.max(v))
-                            .sum();
+                        let s: f64 = row.iter().map(|&wi| rho_hat(wi, wo)).inspect(|&v| peak = peak.max(v)).sum();
                         s * theta_i.sin()
                     })
                     .collect();

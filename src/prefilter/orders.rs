@@ -234,6 +234,8 @@ impl ViewSamples {
     /// Samples `model`'s ρ̂ at `angles_deg`.
     pub fn new(model: &Model, angles_deg: &[f64]) -> Self {
         let nodes = gauss_legendre(NODES).to_vec();
+        let (sin_phi, cos_phi): (Vec<f64>, Vec<f64>) =
+            (0..HALF).map(|k| (2.0 * PI * (k as f64 + 0.5) / NODES as f64).sin_cos()).unzip();
         let samples = angles_deg
             .par_iter()
             .map(|&deg| {
@@ -243,8 +245,7 @@ impl ViewSamples {
                 for &(x, _) in &nodes {
                     let sin_i = (1.0 - x * x).max(0.0).sqrt();
                     for k in 0..HALF {
-                        let phi = 2.0 * PI * (k as f64 + 0.5) / NODES as f64;
-                        out.push(model.rho_hat(DVec3::new(sin_i * phi.cos(), sin_i * phi.sin(), x), wo)[1]);
+                        out.push(model.rho_hat(DVec3::new(sin_i * cos_phi[k], sin_i * sin_phi[k], x), wo)[1]);
                     }
                 }
                 out

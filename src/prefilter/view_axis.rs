@@ -121,12 +121,17 @@ fn rotated(map: &RgbImage, to_world: DQuat, grid: LatLong) -> RgbImage {
     let mut out = RgbImage::new(grid.width, grid.height);
     let n = (SUPERSAMPLE * src.height).div_ceil(grid.height).max(1);
     let k = n as f64;
+    // The lookups' directions are separable: (sin, cos) of φ per sub-column, of θ per sub-row.
+    let sub = |t: usize, i: usize| t as f64 + (i as f64 + 0.5) / k;
+    let columns: Vec<(f64, f64)> =
+        (0..grid.width * n).map(|c| (TAU * sub(c / n, c % n) / grid.width as f64).sin_cos()).collect();
     out.pixels.par_chunks_mut(grid.width).enumerate().for_each(|(y, row)| {
+        let rows: Vec<(f64, f64)> = (0..n).map(|j| (PI * sub(y, j) / grid.height as f64).sin_cos()).collect();
         for (x, px) in row.iter_mut().enumerate() {
             let mut sum = [0.0f64; 3];
-            for j in 0..n {
-                for i in 0..n {
-                    let d = grid.direction_at(x as f64 + (i as f64 + 0.5) / k, y as f64 + (j as f64 + 0.5) / k);
+            for &(st, ct) in &rows {
+                for &(sp, cp) in &columns[x * n..(x + 1) * n] {
+                    let d = DVec3::new(st * cp, st * sp, ct);
                     let (sx, sy) = src.position(to_world * d);
                     let (sx, sy) = ((sx as usize) % src.width, (sy as usize).min(src.height - 1));
                     let p = map.pixels[sy * src.width + sx];
