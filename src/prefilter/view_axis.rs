@@ -12,10 +12,10 @@
 //! this frame, so each output row has one cone θ*(θ_o) and one prepared view.
 //!
 //! **What is computed.** The source is the lighting rotated into the view's frame (each texel the
-//! mean of point lookups of the piecewise-constant map over its footprint), on a grid [`REFINE`]
-//! times finer than the [`ConePyramid`] level a cone half the range's narrowest would be summed
-//! on (within the zonal filter's size bound);
-//! output rows are computed from the first row at or before `min_theta_o` to the pole −V, and
+//! mean of point lookups of the piecewise-constant map over its footprint), on the
+//! [`ConePyramid`] level a cone half the range's narrowest would be summed on (within the zonal
+//! filter's size bound), [`REFINE`] times finer when the lobe is narrower than
+//! [`TEXELS_PER_WIDTH`] of its texels; output rows are computed from the first row at or before `min_theta_o` to the pole −V, and
 //! the reflection map's texels beyond `min_theta_o` are bilinear in that grid. The sum per output
 //! row is that of [`super::angular::ConeIntegrator`]: the source texels whose centres lie in the
 //! cone, each taken at its z-midpoint with its solid angle.
@@ -37,7 +37,7 @@ use rayon::prelude::*;
 use realfft::RealFftPlanner;
 use std::f64::consts::{PI, TAU};
 
-/// θ_o sampled when looking for the narrowest cone of the range.
+/// θ_o sampled when looking for the narrowest cone and the thinnest lobe of the range.
 const CONE_SAMPLES: usize = 256;
 
 /// Point lookups per axis and per texel of the lighting (not of the frame grid, which may be
