@@ -518,11 +518,6 @@ impl CutoffTable {
         }
     }
 
-    /// The same θ* for every view angle (π: no truncation).
-    pub fn constant(theta_star: f64) -> Self {
-        CutoffTable { theta_star: vec![theta_star; 2], width: vec![theta_star; 2], left_out: 0.0 }
-    }
-
     /// θ* for view angle θ_o: the larger of the two neighbouring bins (conservative).
     pub fn at(&self, theta_o: f64) -> f64 {
         let n = self.theta_star.len();
