@@ -29,6 +29,11 @@ fn writes_an_shrm_its_document_and_reflection_maps() {
     assert_eq!((d.format.as_str(), b.method.as_str(), b.cosine), ("prtkit.shrm", "frequency", false));
     assert_eq!((b.width, b.height, b.layout.as_str(), b.global), (64, 32, "latlong", false));
     assert!(b.epsilon_achieved <= 0.03 && b.epsilon == Some(0.03), "{b:?}");
+    // ε achieved is the bake's own residual against its quadrature's total energy: the same as a
+    // second, larger expansion of the BRDF says (the measure before, independent of the bake).
+    let model = prtkit::prefilter::model::Model::new(prtkit::brdf::Brdf::parse(&b.brdf).unwrap(), false).unwrap();
+    let larger = model.coefficients((2 * b.f_b).max(32), b.p_b + 3).residual(b.f_b, b.p_b);
+    assert!((b.epsilon_achieved - larger).abs() <= 2e-3 * larger, "{} against {larger}", b.epsilon_achieved);
     assert_eq!(b.shrm_file.as_deref(), Some(exr.to_str().unwrap()));
     assert_eq!(b.lighting.order, b.f_b);
     let layers = prtkit::io::exr::decode_layers(&exr, &std::fs::read(&exr).unwrap()).unwrap();

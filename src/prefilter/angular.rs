@@ -520,19 +520,22 @@ impl CutoffTable {
 
     /// θ* for view angle θ_o: the larger of the two neighbouring bins (conservative).
     pub fn at(&self, theta_o: f64) -> f64 {
-        let n = self.theta_star.len();
-        let t = (theta_o / PI).clamp(0.0, 1.0) * (n - 1) as f64;
-        let (i0, i1) = (t.floor() as usize, (t.ceil() as usize).min(n - 1));
+        let (i0, i1) = self.bins(theta_o);
         self.theta_star[i0].max(self.theta_star[i1])
     }
 
     /// The lobe's width for view angle θ_o: the smaller of the two neighbouring bins
     /// (conservative: a grid chosen by it is fine enough for both).
     pub fn width_at(&self, theta_o: f64) -> f64 {
-        let n = self.width.len();
-        let t = (theta_o / PI).clamp(0.0, 1.0) * (n - 1) as f64;
-        let (i0, i1) = (t.floor() as usize, (t.ceil() as usize).min(n - 1));
+        let (i0, i1) = self.bins(theta_o);
         self.width[i0].min(self.width[i1])
+    }
+
+    /// The two bins on either side of view angle θ_o (the same bin on a bin).
+    fn bins(&self, theta_o: f64) -> (usize, usize) {
+        let n = self.theta_star.len();
+        let t = (theta_o / PI).clamp(0.0, 1.0) * (n - 1) as f64;
+        (t.floor() as usize, (t.ceil() as usize).min(n - 1))
     }
 
     /// The widest cone of the table.

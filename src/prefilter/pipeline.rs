@@ -198,7 +198,8 @@ pub struct AngularReport {
     /// The bright sources split off (as the frequency method splits them).
     pub bright: BrightReport,
     /// F: the luminance below which texels take the cone of ε (the remainder's mean; absent
-    /// with `--bright off`, where the whole map does).
+    /// when the map was not cut into parts: `--bright off`, where the whole map takes that cone,
+    /// or a map with nothing above F).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub floor_luminance: Option<f64>,
     /// The luminance bands above F, brightest first, then the bright sources' excess, each

@@ -276,8 +276,9 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
             timings.maps_seconds = t.elapsed().as_secs_f64();
             let (f_b, p_b) = (pre.brdf.f, pre.brdf.p);
             // BRDF energy missed by (F_B, P_B): against the total ∫∫ ρ̂² the coefficients' own
-            // quadrature measured (not their sum), so no larger expansion is needed (within
-            // 0.07 % of one at (2F_B, P_B + 3) for Phong and Torrance-Sparrow, at ~30 % of the bake).
+            // quadrature measured (not their sum), so no larger expansion is needed. A second one
+            // at (2F_B, P_B + 3) agreed within 0.07 % on Phong and Torrance-Sparrow and cost up to
+            // a third of the bake (`tests/prefilter_cli.rs` holds the agreement).
             let epsilon_achieved = pre.brdf.residual(f_b, p_b);
             let bound = config.bound.then(|| app_b_bound(&pre.brdf, &pre.lighting, &pre.bright, lighting));
             let shrm = if config.shrm_file.is_some() || config.kautz_mccool_slices > 0 {

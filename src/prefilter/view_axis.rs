@@ -70,12 +70,10 @@ pub fn beyond(
     min_theta_o: f64,
     out: LatLong,
 ) -> Vec<(usize, [f32; 3])> {
-    let narrowest = (0..=CONE_SAMPLES)
-        .map(|i| cutoff.at(min_theta_o + (PI - min_theta_o) * i as f64 / CONE_SAMPLES as f64))
-        .fold(PI, f64::min);
-    let thinnest = (0..=CONE_SAMPLES)
-        .map(|i| cutoff.width_at(min_theta_o + (PI - min_theta_o) * i as f64 / CONE_SAMPLES as f64))
-        .fold(f64::INFINITY, f64::min);
+    // Over the range of view angles: the narrowest cone and the thinnest lobe.
+    let (narrowest, thinnest) = (0..=CONE_SAMPLES)
+        .map(|i| min_theta_o + (PI - min_theta_o) * i as f64 / CONE_SAMPLES as f64)
+        .fold((PI, f64::INFINITY), |(cone, width), t| (cone.min(cutoff.at(t)), width.min(cutoff.width_at(t))));
     // The frame's grid within the zonal filter's bound: its spectra take 24 bytes a texel.
     let level = pyramid.level_within(narrowest / 2.0, MAX_TEXELS / (REFINE * REFINE)).image();
     let refine = if PI / level.height as f64 <= thinnest / TEXELS_PER_WIDTH { 1 } else { REFINE };
