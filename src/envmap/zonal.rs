@@ -186,6 +186,18 @@ pub fn choose_rule(tolerance: f64, mut weights: impl FnMut(&TexelRule) -> Vec<f6
     RuleChoice { rule: rules[rules.len() - 1].clone(), estimated_error: last_error }
 }
 
+/// Which source rows [`zonal_filter`] visits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rows {
+    /// Every row in the cone, and the kernel's weight per output row is measured.
+    All,
+    /// Only the rows that hold light. A black row adds nothing to B, so a sparse map (the excess
+    /// of a few bright texels, one luminance band) costs what its lit rows cost: the kernel of a
+    /// row pair, its lobe evaluations and its transform, is the filter's main expense. The
+    /// kernel's weight is not measured (it would need every row).
+    Lit,
+}
+
 /// A zonally filtered map in f64, with the kernel's total weight per output row.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ZonalMap {
@@ -197,7 +209,8 @@ pub struct ZonalMap {
     pub pixels: Vec<[f64; 3]>,
     /// Σ_t ∫_t k(R·ω) dω over the kept texels, per output row (the same for every column):
     /// what a white map filters to. Divide by it for a kernel normalized on the texels kept.
-    pub row_weight: Vec<f64>,
+    /// `None` when only the lit rows were visited ([`Rows::Lit`]).
+    pub row_weight: Option<Vec<f64>>,
 }
 
 impl ZonalMap {
@@ -207,18 +220,20 @@ impl ZonalMap {
         RgbImage { width: self.width, height: self.height, pixels }
     }
 
-    /// The map divided, row by row, by the weight of the texels kept (a white map gives 1).
-    pub fn normalized_image(&self) -> RgbImage {
+    /// The map divided, row by row, by the weight of the texels kept (a white map gives 1);
+    /// `None` when the weights were not measured ([`Rows::Lit`]).
+    pub fn normalized_image(&self) -> Option<RgbImage> {
+        let weights = self.row_weight.as_ref()?;
         let pixels = self
             .pixels
             .chunks(self.width)
-            .zip(&self.row_weight)
+            .zip(weights)
             .flat_map(|(row, &w)| {
                 let inv = if w != 0.0 { 1.0 / w } else { 0.0 };
                 row.iter().map(move |p| [(p[0] * inv) as f32, (p[1] * inv) as f32, (p[2] * inv) as f32])
             })
             .collect();
-        RgbImage { width: self.width, height: self.height, pixels }
+        Some(RgbImage { width: self.width, height: self.height, pixels })
     }
 }
 
@@ -318,19 +333,25 @@ impl<'a, K: Fn(f64) -> f64 + Sync> Plan<'a, K> {
 
 /// Filters `latlong` (W × H) with the zonal kernel k(cos γ) truncated to the texels whose centres
 /// lie within `cone` radians of R (π: the whole sphere), into a W × `out_height` lat-long map of
-/// R. Texel integrals use `rule`. See the module documentation for the definition and the
-/// algorithm; `progress` advances once per output row.
+/// R. Texel integrals use `rule`; `rows` says whether black source rows are skipped. See the
+/// module documentation for the definition and the algorithm; `progress` advances once per
+/// output row.
 pub fn zonal_filter(
     latlong: &RgbImage,
     kernel: impl Fn(f64) -> f64 + Sync,
     cone: f64,
     rule: &TexelRule,
     out_height: usize,
+    rows: Rows,
     progress: &dyn Progress,
 ) -> Result<ZonalMap, ZonalError> {
     check(latlong, cone, out_height)?;
     let (width, height) = (latlong.width, latlong.height);
     let plan = Plan::new(width, height, rule, cone, &kernel);
+    // Source rows to visit. Skipping a black one leaves every texel's sum as it was: its
+    // spectrum is exactly zero.
+    let visit: Vec<bool> =
+        (0..height).map(|y| rows == Rows::All || latlong.row(y).iter().flatten().any(|&v| v != 0.0)).collect();
     let bins = width / 2 + 1;
     let mut planner = RealFftPlanner::<f64>::new();
     let forward = planner.plan_fft_forward(width);
@@ -367,7 +388,8 @@ pub fn zonal_filter(
             s.acc.iter_mut().chain(s.acc_mirror.iter_mut()).for_each(|a| a.fill(Complex::new(0.0, 0.0)));
             let mut total = 0.0;
             for y in 0..height {
-                if !plan.pair_kernel((z_r, s_r), theta_r, y, &mut s.half) {
+                let mirrored = mirror.is_some() && visit[height - 1 - y];
+                if !(visit[y] || mirrored) || !plan.pair_kernel((z_r, s_r), theta_r, y, &mut s.half) {
                     continue;
                 }
                 // The even kernel over all W offsets, and its (real) spectrum.
@@ -410,6 +432,7 @@ pub fn zonal_filter(
         },
     );
     progress.finish();
+    let row_weight = (rows == Rows::All).then_some(row_weight);
     Ok(ZonalMap { width, height: out_height, pixels, row_weight })
 }
 
@@ -569,7 +592,7 @@ pub fn zonal_filter_reference(
             pixels.push(acc);
         }
     }
-    Ok(ZonalMap { width, height: out_height, pixels, row_weight })
+    Ok(ZonalMap { width, height: out_height, pixels, row_weight: Some(row_weight) })
 }
 
 #[cfg(test)]
@@ -607,11 +630,11 @@ mod tests {
             let map = test_map(w, h);
             for (s, cone, n) in [(8.0, PI, 2), (8.0, 0.9, 1), (40.0, 0.731, 3), (2.0, 2.2, 2)] {
                 let rule = TexelRule::new(n).unwrap();
-                let fast = zonal_filter(&map, phong(s), cone, &rule, out_h, &NoProgress).unwrap();
+                let fast = zonal_filter(&map, phong(s), cone, &rule, out_h, Rows::All, &NoProgress).unwrap();
                 let slow = zonal_filter_reference(&map, phong(s), cone, &rule, out_h).unwrap();
                 let diff = max_relative_difference(&fast, &slow);
                 assert!(diff < 1e-9, "{w}x{h}→{out_h}, s={s}, cone {cone}, n={n}: {diff:e}");
-                for (a, b) in fast.row_weight.iter().zip(&slow.row_weight) {
+                for (a, b) in fast.row_weight.as_ref().unwrap().iter().zip(slow.row_weight.as_ref().unwrap()) {
                     assert!((a - b).abs() < 1e-12 * b.abs().max(1.0), "{a} vs {b}");
                 }
             }
@@ -623,18 +646,19 @@ mod tests {
         // White furnace: ∫ (s+1)/2π max(x, 0)^s dω = 1 over the whole sphere, and a constant
         // kernel 1/4π integrates exactly to 1 under any rule (the weights sum to solid angles).
         let white = RgbImage::from_fn(64, 32, |_, _| [1.0; 3]);
-        let constant = zonal_filter(&white, |_| 1.0 / (4.0 * PI), PI, &TexelRule::midpoint(), 16, &NoProgress).unwrap();
+        let constant =
+            zonal_filter(&white, |_| 1.0 / (4.0 * PI), PI, &TexelRule::midpoint(), 16, Rows::All, &NoProgress).unwrap();
         assert!(constant.pixels.iter().flatten().all(|v| (v - 1.0).abs() < 1e-12));
         for s in [1.0, 8.0, 64.0] {
             let choice = rule_for_kernel(64, 32, &phong(s), PI, 32, 1e-7);
-            let map = zonal_filter(&white, phong(s), PI, &choice.rule, 32, &NoProgress).unwrap();
-            for (row, w) in map.pixels.chunks(64).zip(&map.row_weight) {
+            let map = zonal_filter(&white, phong(s), PI, &choice.rule, 32, Rows::All, &NoProgress).unwrap();
+            for (row, w) in map.pixels.chunks(64).zip(map.row_weight.as_ref().unwrap()) {
                 for p in row {
                     assert!((p[0] - w).abs() < 1e-12, "{} vs row weight {w}", p[0]);
                 }
                 assert!((w - 1.0).abs() < 1e-6, "s={s} (n={}): {w}", choice.rule.subsamples());
             }
-            assert!(map.normalized_image().pixels.iter().flatten().all(|v| (v - 1.0).abs() < 1e-6));
+            assert!(map.normalized_image().unwrap().pixels.iter().flatten().all(|v| (v - 1.0).abs() < 1e-6));
         }
     }
 
@@ -659,7 +683,9 @@ mod tests {
         let map = test_map(40, 20);
         let run = |threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| zonal_filter(&map, phong(16.0), 1.2, &TexelRule::new(2).unwrap(), 20, &NoProgress).unwrap())
+            pool.install(|| {
+                zonal_filter(&map, phong(16.0), 1.2, &TexelRule::new(2).unwrap(), 20, Rows::All, &NoProgress).unwrap()
+            })
         };
         let one = run(1);
         for threads in [2, 3] {
@@ -668,12 +694,32 @@ mod tests {
     }
 
     #[test]
+    fn skipping_black_rows_changes_no_texel() {
+        // Light in three rows only: one near each pole (whose mirror rows are black, so the
+        // mirrored pairs are visited for one side) and one in the middle (the odd output row).
+        let (w, h) = (32, 17);
+        let lit = [1, 8, 14];
+        let map = RgbImage::from_fn(w, h, |x, y| {
+            let v = if lit.contains(&y) { 1.0 + (x * y % 5) as f32 } else { 0.0 };
+            [v, 0.5 * v, 2.0 * v]
+        });
+        let rule = TexelRule::new(2).unwrap();
+        for (cone, out_h) in [(PI, 17), (0.6, 9)] {
+            let all = zonal_filter(&map, phong(8.0), cone, &rule, out_h, Rows::All, &NoProgress).unwrap();
+            let only_lit = zonal_filter(&map, phong(8.0), cone, &rule, out_h, Rows::Lit, &NoProgress).unwrap();
+            assert!(all.pixels.iter().flatten().any(|&v| v > 0.0));
+            assert_eq!(all.pixels, only_lit.pixels, "cone {cone}, {out_h} rows");
+            assert!(only_lit.row_weight.is_none() && only_lit.normalized_image().is_none());
+        }
+    }
+
+    #[test]
     fn rotating_the_map_about_z_shifts_the_output() {
         let map = test_map(30, 15);
         let rolled = RgbImage::from_fn(30, 15, |x, y| map.get((x + 30 - 7) % 30, y));
         let rule = TexelRule::new(2).unwrap();
-        let a = zonal_filter(&map, phong(8.0), 1.0, &rule, 10, &NoProgress).unwrap();
-        let b = zonal_filter(&rolled, phong(8.0), 1.0, &rule, 10, &NoProgress).unwrap();
+        let a = zonal_filter(&map, phong(8.0), 1.0, &rule, 10, Rows::All, &NoProgress).unwrap();
+        let b = zonal_filter(&rolled, phong(8.0), 1.0, &rule, 10, Rows::All, &NoProgress).unwrap();
         for y in 0..10 {
             for x in 0..30 {
                 let (p, q) = (b.pixels[y * 30 + x], a.pixels[y * 30 + (x + 30 - 7) % 30]);
@@ -686,11 +732,17 @@ mod tests {
     fn bad_requests_are_errors() {
         let map = test_map(8, 4);
         let rule = TexelRule::midpoint();
-        assert!(matches!(zonal_filter(&map, phong(8.0), 1.0, &rule, 0, &NoProgress), Err(ZonalError::Empty { .. })));
-        assert_eq!(zonal_filter(&map, phong(8.0), 0.0, &rule, 4, &NoProgress).unwrap_err(), ZonalError::Cone(0.0));
-        assert!(zonal_filter(&map, phong(8.0), f64::NAN, &rule, 4, &NoProgress).is_err());
         assert!(matches!(
-            zonal_filter(&map, phong(8.0), 1.0, &rule, MAX_TEXELS, &NoProgress),
+            zonal_filter(&map, phong(8.0), 1.0, &rule, 0, Rows::All, &NoProgress),
+            Err(ZonalError::Empty { .. })
+        ));
+        assert_eq!(
+            zonal_filter(&map, phong(8.0), 0.0, &rule, 4, Rows::All, &NoProgress).unwrap_err(),
+            ZonalError::Cone(0.0)
+        );
+        assert!(zonal_filter(&map, phong(8.0), f64::NAN, &rule, 4, Rows::All, &NoProgress).is_err());
+        assert!(matches!(
+            zonal_filter(&map, phong(8.0), 1.0, &rule, MAX_TEXELS, Rows::All, &NoProgress),
             Err(ZonalError::TooLarge { .. })
         ));
         assert_eq!(TexelRule::new(0).unwrap_err(), ZonalError::Subsamples { n: 0, max: 16 });

@@ -58,7 +58,7 @@
 
 use super::ggx::SplitSumLobe;
 use crate::envmap::resample::box_latlong;
-use crate::envmap::zonal::{rule_for_kernel, zonal_filter, ZonalError};
+use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows, ZonalError};
 use crate::io::RgbImage;
 use crate::progress::Progress;
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
@@ -375,8 +375,8 @@ fn filter_pass(
     let kernel = |c: f64| pass.part.kernel(lobe, c);
     let cone = pass.cone();
     let choice = rule_for_kernel(grid.width, grid.height, &kernel, cone, grid.height, RULE_TOLERANCE);
-    let map = zonal_filter(grid, kernel, cone, &choice.rule, grid.height, progress)?;
-    let mut image = map.normalized_image();
+    let map = zonal_filter(grid, kernel, cone, &choice.rule, grid.height, Rows::All, progress)?;
+    let mut image = map.normalized_image().expect("Rows::All measures the row weights");
     // The FFT's rounding can leave −1e-16-sized values where the map is black; radiance is
     // non-negative.
     for p in &mut image.pixels {

@@ -30,7 +30,7 @@
 //! **Determinism.** Output rows run in parallel; each texel is one sequential sum in a fixed
 //! order (source rows, columns, sub-samples), so the result is the same for any thread count.
 
-use crate::envmap::zonal::{self, choose_rule, RuleChoice, SubRow, TexelRule, ZonalError};
+use crate::envmap::zonal::{self, choose_rule, Rows, RuleChoice, SubRow, TexelRule, ZonalError};
 use crate::envmap::{EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::Progress;
@@ -561,7 +561,15 @@ pub fn radial_map(
     progress: &dyn Progress,
 ) -> Result<RgbImage, AngularError> {
     if width == env.grid().width {
-        let map = zonal::zonal_filter(&env.source.image, u, theta_star.clamp(1e-9, PI), &env.rule, height, progress)?;
+        let map = zonal::zonal_filter(
+            &env.source.image,
+            u,
+            theta_star.clamp(1e-9, PI),
+            &env.rule,
+            height,
+            Rows::Lit,
+            progress,
+        )?;
         return Ok(map.to_image());
     }
     Ok(radial_cone_sum(env, u, theta_star, width, height, progress))
@@ -772,7 +780,7 @@ mod tests {
         // forced by asking for the same width through the cone path) agree to rounding.
         let env = ConeIntegrator::new(&sky(32, 16)).unwrap().with_rule(TexelRule::new(2).unwrap());
         let u = |x: f64| if x > 0.0 { 17.0 / TAU * x.powi(16) } else { 0.0 };
-        let zonal = zonal::zonal_filter(&env.source.image, u, 0.8, env.rule(), 16, &NoProgress).unwrap();
+        let zonal = zonal::zonal_filter(&env.source.image, u, 0.8, env.rule(), 16, Rows::All, &NoProgress).unwrap();
         let grid = LatLong::new(32, 16);
         for y in 0..16 {
             for x in 0..32 {

@@ -26,7 +26,7 @@ use super::pipeline::{brdf_coefficients, Lighting, Orders, PrefilterError};
 use super::shrm::{self, texel_frame, Shrm, ShrmError};
 use super::view_axis;
 use crate::envmap::bright::{split, BrightReport, BrightRule, BrightSources};
-use crate::envmap::zonal::{rule_for_kernel, zonal_filter};
+use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows};
 use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::{NoProgress, Progress};
@@ -464,7 +464,7 @@ fn add_bright_zonal(map: &mut RgbImage, model: &Model, bright: &BrightSources, s
     bright.add_to_latlong(&mut excess);
     let kernel = |x: f64| model.lobe(x)[1];
     let rule = rule_for_kernel(source.width, source.height, &kernel, cone, map.height, BRIGHT_RULE_TOLERANCE).rule;
-    let Ok(filtered) = zonal_filter(&excess, kernel, cone, &rule, map.height, &NoProgress) else {
+    let Ok(filtered) = zonal_filter(&excess, kernel, cone, &rule, map.height, Rows::Lit, &NoProgress) else {
         return false;
     };
     for (px, f) in map.pixels.iter_mut().zip(&filtered.pixels) {
