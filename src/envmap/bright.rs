@@ -121,18 +121,40 @@ pub fn auto_threshold(map: &EnvMap) -> f64 {
     let mut texels: Vec<(f64, f64)> = Vec::with_capacity(map.texel_count());
     map.for_each_texel(|t| texels.push((luminance(t.rgb), t.solid_angle)));
     let total_area: f64 = texels.iter().map(|t| t.1).sum();
-    texels.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let mut area = 0.0;
-    let mut q = 0.0;
-    for &(y, omega) in &texels {
-        area += omega;
-        if area > AREA_FRACTION * total_area {
-            q = y;
-            break;
-        }
-    }
+    let q = brightest_area_bound(&mut texels, AREA_FRACTION * total_area);
     let clipped_mean = texels.iter().map(|t| t.0.min(q) * t.1).sum::<f64>() / total_area;
     q.max(MEAN_MULTIPLE * clipped_mean)
+}
+
+/// Q: the luminance of the texel at which the brightest texels' solid angle first exceeds
+/// `area` (0 if it never does). `texels` holds (luminance, solid angle) and is reordered.
+///
+/// Only the brightest few percent of the texels are sorted: they cover the area unless their
+/// solid angles are far below the mean (texels near a lat-long pole), and then all are. Ties in
+/// luminance give the same Q in any order (Q is their common value), so the result is the full
+/// sort's.
+fn brightest_area_bound(texels: &mut [(f64, f64)], area: f64) -> f64 {
+    let n = texels.len();
+    let descending = |a: &(f64, f64), b: &(f64, f64)| b.0.total_cmp(&a.0);
+    let mut head = ((n as f64 * AREA_FRACTION * 4.0).ceil() as usize).min(n);
+    loop {
+        if head < n {
+            texels.select_nth_unstable_by(head, descending);
+        }
+        let top = &mut texels[..head];
+        top.sort_unstable_by(descending);
+        let mut covered = 0.0;
+        for &(y, omega) in top.iter() {
+            covered += omega;
+            if covered > area {
+                return y;
+            }
+        }
+        if head == n {
+            return 0.0;
+        }
+        head = n;
+    }
 }
 
 /// Splits a map into the remainder (clipped at the threshold) and the bright texels, in any
@@ -150,7 +172,7 @@ pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
     for (face, img) in remainder.images_mut().iter_mut().enumerate() {
         let w = img.width;
         for (i, px) in img.pixels.iter_mut().enumerate() {
-            let Some((dir, omega)) = map.texel_geometry(face, i % w, i / w) else { continue };
+            let Some(omega) = map.texel_solid_angle(face, i % w, i / w) else { continue };
             let l = luminance(*px);
             total += l * omega;
             total2 += l * l * omega;
@@ -160,6 +182,7 @@ pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
                 *px = px.map(|c| (c as f64 * keep) as f32);
                 bright += (excess[0] + excess[1] + excess[2]) / 3.0 * omega;
                 bright2 += (l * l - threshold * threshold) * omega;
+                let (dir, _) = map.texel_geometry(face, i % w, i / w).expect("a texel with a solid angle is mapped");
                 texels.push(BrightTexel { dir, solid_angle: omega, excess });
             }
         }
@@ -349,5 +372,27 @@ mod tests {
         assert!(bright.is_empty());
         assert_eq!(rest.image(), map.image());
         assert!(split(&sky_with_sun(), BrightRule::Off).1.is_empty());
+    }
+
+    #[test]
+    fn the_partial_sort_finds_the_full_sorts_bound() {
+        // The definition: sort all texels by luminance, brightest first, and take the one at
+        // which the accumulated solid angle first exceeds the area. Ties (luminance from a few
+        // levels), solid angles spread like a lat-long map's, and areas the brightest 4 % cover
+        // and ones that need the fallback to the full sort.
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let texels: Vec<(f64, f64)> =
+            (0..2000).map(|_| ((rng.range_i64(0, 40) as f64).powi(2), 1e-4 + rng.next_f64().powi(3))).collect();
+        let total: f64 = texels.iter().map(|t| t.1).sum();
+        for share in [0.0, 0.001, 0.01, 0.03, 0.2, 0.9, 1.5] {
+            let area = share * total;
+            let mut sorted = texels.clone();
+            sorted.sort_by(|a, b| b.0.total_cmp(&a.0));
+            let mut covered = 0.0;
+            let expected = sorted.iter().find(|t| (covered += t.1, covered > area).1).map_or(0.0, |t| t.0);
+            let mut work = texels.clone();
+            assert_eq!(brightest_area_bound(&mut work, area), expected, "area share {share}");
+        }
+        assert_eq!(brightest_area_bound(&mut [], 1.0), 0.0);
     }
 }

@@ -158,6 +158,18 @@ impl EnvMap {
         }
     }
 
+    /// The solid angle of pixel (x, y) of image `face`, as [`EnvMap::texel_geometry`] gives it
+    /// (a lat-long row's without computing the direction).
+    pub fn texel_solid_angle(&self, face: usize, x: usize, y: usize) -> Option<f64> {
+        match self.layout {
+            Layout::LatLong => {
+                let img = &self.images[face];
+                Some(LatLong::new(img.width, img.height).row_solid_angle(y))
+            }
+            _ => self.texel_geometry(face, x, y).map(|(_, omega)| omega),
+        }
+    }
+
     /// Calls `f` for every mapped texel, image by image, row by row.
     pub fn for_each_texel(&self, mut f: impl FnMut(Texel)) {
         if self.layout == Layout::LatLong {
