@@ -223,6 +223,10 @@ pub fn from_radial(u: impl Fn(f64) -> [f64; 3], f: usize, nodes: usize) -> BrdfS
         .chain(half.iter().map(|&(t, w)| (0.5 * (t + 1.0), 0.5 * w)));
     for (x, w) in halves {
         let v = u(x);
+        // Lobes about R vanish on a whole half (Phong's below the horizon of R): no work there.
+        if v == [0.0; 3] {
+            continue;
+        }
         table.eval_zonal(x, &mut pl);
         out.total_energy += 4.0 * PI * 2.0 * PI * w * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         for l in 0..=f {
