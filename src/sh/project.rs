@@ -69,7 +69,13 @@ fn add_into(acc: &mut [[f64; 3]], other: &[[f64; 3]]) {
     }
 }
 
-/// The separable lat-long projection (App. C step 1).
+/// The separable lat-long projection (App. C step 1), rows taken in mirrored pairs: row y and
+/// row H − 1 − y have the same solid angle and cos θ of opposite sign, and
+/// P̄_l^m(−z) = (−1)^{l+m} P̄_l^m(z), so one Legendre evaluation serves both, applied to the sum
+/// of their Fourier sums where l + m is even and to the difference where it is odd.
+///
+/// The θ sum runs over contiguous m per band and channel (the sums and the accumulator are
+/// stored per channel, m ≥ 0, cosine and sine apart), so it vectorizes.
 fn project_latlong(map: &EnvMap, order: usize, progress: &dyn Progress) -> ShCoeffs {
     let img = map.image();
     let (w, h) = (img.width, img.height);
@@ -78,64 +84,94 @@ fn project_latlong(map: &EnvMap, order: usize, progress: &dyn Progress) -> ShCoe
     // Phase that moves the FFT's sample points from φ = 2πx/W to the texel centres
     // φ = 2π(x + ½)/W: Σ_x f_x e^{−imφ_x} = e^{−iπm/W} X_m.
     let phase: Vec<(f64, f64)> = (0..=order).map(|m| (PI * m as f64 / w as f64).sin_cos()).collect();
+    // Pairs (y, its mirror) for the top half; an odd middle row stands alone.
+    let pairs: Vec<(usize, Option<usize>)> =
+        (0..h / 2).map(|y| (y, Some(h - 1 - y))).chain((h % 2 == 1).then_some((h / 2, None))).collect();
+    // Band l, order m ≥ 0 of the per-channel accumulators.
+    let at = |l: usize, m: usize| l * (l + 1) / 2 + m;
+    let len = at(order, order) + 1;
     progress.start("projecting", h as u64);
-    let blocks: Vec<Vec<[f64; 3]>> = (0..h.div_ceil(BLOCK_ROWS))
-        .into_par_iter()
+    let blocks: Vec<[[Vec<f64>; 3]; 2]> = pairs
+        .par_chunks(BLOCK_ROWS / 2)
         .map(|block| {
-            let mut acc = vec![[0.0; 3]; count(order)];
+            // [cos or sin][channel][at(l, m)]: the coefficients of m and of −m.
+            let mut acc: [[Vec<f64>; 3]; 2] = std::array::from_fn(|_| std::array::from_fn(|_| vec![0.0; len]));
             let mut input = fft.make_input_vec();
             let mut spectrum = fft.make_output_vec();
             let mut scratch = fft.make_scratch_vec();
-            let mut cos_sum = vec![[0.0f64; 3]; order + 1]; // Σ_x f cos(mφ_x), per channel
-            let mut sin_sum = vec![[0.0f64; 3]; order + 1];
+            // Σ_x f cos(mφ_x) and Σ_x f sin(mφ_x): [row of the pair][cos or sin][channel][m].
+            let mut sums: [[[Vec<f64>; 3]; 2]; 2] =
+                std::array::from_fn(|_| std::array::from_fn(|_| std::array::from_fn(|_| vec![0.0; order + 1])));
+            // What band l takes at m, by l's parity: the even part where l + m is even, else the
+            // odd part, times the row's solid angle and the √2 of m ≠ 0.
+            let mut by_parity = sums.clone();
             let mut plm = vec![0.0; count(order)];
-            let rows = block * BLOCK_ROWS..((block + 1) * BLOCK_ROWS).min(h);
-            for y in rows.clone() {
-                for c in 0..3 {
-                    for (slot, px) in input.iter_mut().zip(img.row(y)) {
-                        *slot = px[c] as f64;
+            for &(y, mirror) in block {
+                for (row, sum) in std::iter::once(y).chain(mirror).zip(sums.iter_mut()) {
+                    for c in 0..3 {
+                        for (slot, px) in input.iter_mut().zip(img.row(row)) {
+                            *slot = px[c] as f64;
+                        }
+                        // Lengths come from the plan, so this cannot fail.
+                        let _ = fft.process_with_scratch(&mut input, &mut spectrum, &mut scratch);
+                        for m in 0..=order {
+                            let (s, co) = phase[m];
+                            let z = spectrum[m];
+                            // e^{−iπm/W}·X_m = (co − i s)(re + i im)
+                            sum[0][c][m] = co * z.re + s * z.im;
+                            sum[1][c][m] = -(co * z.im - s * z.re);
+                        }
                     }
-                    // Lengths come from the plan, so this cannot fail.
-                    let _ = fft.process_with_scratch(&mut input, &mut spectrum, &mut scratch);
-                    for m in 0..=order {
-                        let (s, co) = phase[m];
-                        let z = spectrum[m];
-                        // e^{−iπm/W}·X_m = (co − i s)(re + i im)
-                        let re = co * z.re + s * z.im;
-                        let im = co * z.im - s * z.re;
-                        cos_sum[m][c] = re;
-                        sin_sum[m][c] = -im;
+                }
+                let omega = LatLong::new(w, h).row_solid_angle(y);
+                // Even and odd parts in z: (top + mirror) and (top − mirror); a lone middle
+                // row (z = 0) has only the even part, and its odd functions vanish there.
+                let [top, bottom] = &sums;
+                for k in 0..2 {
+                    for c in 0..3 {
+                        for m in 0..=order {
+                            let (t, b) = (top[k][c][m], if mirror.is_some() { bottom[k][c][m] } else { 0.0 });
+                            let weight = if m == 0 { omega } else { omega * SQRT_2 };
+                            let (even, odd) = ((t + b) * weight, (t - b) * weight);
+                            by_parity[m % 2][k][c][m] = even;
+                            by_parity[1 - m % 2][k][c][m] = odd;
+                        }
                     }
                 }
                 let theta = PI * (y as f64 + 0.5) / h as f64;
                 let (st, ct) = theta.sin_cos();
                 table.eval(ct, st, &mut plm);
-                let omega = LatLong::new(w, h).row_solid_angle(y);
                 for l in 0..=order {
-                    let p0 = plm[index(l, 0)] * omega;
-                    let a = &mut acc[index(l, 0)];
-                    for c in 0..3 {
-                        a[c] += p0 * cos_sum[0][c];
-                    }
-                    for m in 1..=l {
-                        let p = plm[index(l, m as isize)] * omega * SQRT_2;
-                        let pos = index(l, m as isize);
-                        let neg = index(l, -(m as isize));
+                    // P̄_l^m for m = 0..=l sits at l² + l + m.
+                    let p_l = &plm[l * l + l..=l * l + 2 * l];
+                    let band = at(l, 0)..=at(l, l);
+                    for k in 0..2 {
                         for c in 0..3 {
-                            acc[pos][c] += p * cos_sum[m][c];
-                            acc[neg][c] += p * sin_sum[m][c];
+                            let part = &by_parity[l % 2][k][c][..=l];
+                            for ((a, p), v) in acc[k][c][band.clone()].iter_mut().zip(p_l).zip(part) {
+                                *a += p * v;
+                            }
                         }
                     }
                 }
             }
-            progress.advance(rows.len() as u64);
+            progress.advance(block.iter().map(|b| 1 + b.1.is_some() as u64).sum());
             acc
         })
         .collect();
     progress.finish();
     let mut total = vec![[0.0; 3]; count(order)];
     for b in &blocks {
-        add_into(&mut total, b);
+        for l in 0..=order {
+            for m in 0..=l {
+                for c in 0..3 {
+                    total[index(l, m as isize)][c] += b[0][c][at(l, m)];
+                    if m > 0 {
+                        total[index(l, -(m as isize))][c] += b[1][c][at(l, m)];
+                    }
+                }
+            }
+        }
     }
     ShCoeffs { order, rgb: total }
 }
