@@ -169,10 +169,17 @@ pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
     let mut remainder = map.clone();
     let (mut total, mut total2, mut bright, mut bright2) = (0.0, 0.0, 0.0, 0.0);
     let mut texels = Vec::new();
+    let latlong = map.layout() == super::Layout::LatLong;
     for (face, img) in remainder.images_mut().iter_mut().enumerate() {
         let w = img.width;
+        let mut row_omega = None;
         for (i, px) in img.pixels.iter_mut().enumerate() {
-            let Some(omega) = map.texel_solid_angle(face, i % w, i / w) else { continue };
+            let (x, y) = (i % w, i / w);
+            // A lat-long row shares one solid angle: computed at its first texel.
+            if !latlong || x == 0 {
+                row_omega = map.texel_solid_angle(face, x, y);
+            }
+            let Some(omega) = row_omega else { continue };
             let l = luminance(*px);
             total += l * omega;
             total2 += l * l * omega;
@@ -182,7 +189,7 @@ pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
                 *px = px.map(|c| (c as f64 * keep) as f32);
                 bright += (excess[0] + excess[1] + excess[2]) / 3.0 * omega;
                 bright2 += (l * l - threshold * threshold) * omega;
-                let (dir, _) = map.texel_geometry(face, i % w, i / w).expect("a texel with a solid angle is mapped");
+                let (dir, _) = map.texel_geometry(face, x, y).expect("a texel with a solid angle is mapped");
                 texels.push(BrightTexel { dir, solid_angle: omega, excess });
             }
         }
