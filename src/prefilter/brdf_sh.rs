@@ -211,28 +211,47 @@ pub fn from_isotropic(
 /// Gauss–Legendre with `nodes` nodes on each of [−1, 0] and [0, 1]: lobes such as Phong's and the
 /// clamped cosine are polynomials on each half with a kink at 0, so the rule is exact for them
 /// whenever the degree (s + F) is below 2·nodes.
-pub fn from_radial(u: impl Fn(f64) -> [f64; 3], f: usize, nodes: usize) -> BrdfSh {
+pub fn from_radial(u: impl Fn(f64) -> [f64; 3] + Sync, f: usize, nodes: usize) -> BrdfSh {
     let table = LegendreTable::new(f);
-    let mut pl = vec![0.0; f + 1];
-    let mut out = BrdfSh { f, p: 0, coeffs: vec![[0.0; 3]; f + 1], total_energy: 0.0 };
     let scale = (4.0 * PI).sqrt() * 2.0 * PI;
     let half = gauss_legendre(nodes);
-    let halves = half
+    let points: Vec<(f64, f64)> = half
         .iter()
         .map(|&(t, w)| (0.5 * (t - 1.0), 0.5 * w))
-        .chain(half.iter().map(|&(t, w)| (0.5 * (t + 1.0), 0.5 * w)));
-    for (x, w) in halves {
-        let v = u(x);
-        // Lobes about R vanish on a whole half (Phong's below the horizon of R): no work there.
-        if v == [0.0; 3] {
-            continue;
-        }
-        table.eval_zonal(x, &mut pl);
-        out.total_energy += 4.0 * PI * 2.0 * PI * w * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        for l in 0..=f {
-            let k = scale * w * pl[l];
+        .chain(half.iter().map(|&(t, w)| (0.5 * (t + 1.0), 0.5 * w)))
+        .collect();
+    // Fixed chunks of nodes, summed in order: the same for any thread count.
+    let chunks: Vec<(Vec<[f64; 3]>, f64)> = points
+        .par_chunks(128)
+        .map(|chunk| {
+            let mut pl = vec![0.0; f + 1];
+            let mut coeffs = vec![[0.0; 3]; f + 1];
+            let mut energy = 0.0;
+            for &(x, w) in chunk {
+                let v = u(x);
+                // Lobes about R vanish on a whole half (Phong's below the horizon of R): no work
+                // there.
+                if v == [0.0; 3] {
+                    continue;
+                }
+                table.eval_zonal(x, &mut pl);
+                energy += 4.0 * PI * 2.0 * PI * w * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                for l in 0..=f {
+                    let k = scale * w * pl[l];
+                    for ch in 0..3 {
+                        coeffs[l][ch] += k * v[ch];
+                    }
+                }
+            }
+            (coeffs, energy)
+        })
+        .collect();
+    let mut out = BrdfSh { f, p: 0, coeffs: vec![[0.0; 3]; f + 1], total_energy: 0.0 };
+    for (coeffs, energy) in &chunks {
+        out.total_energy += energy;
+        for (o, c) in out.coeffs.iter_mut().zip(coeffs) {
             for ch in 0..3 {
-                out.coeffs[l][ch] += k * v[ch];
+                o[ch] += c[ch];
             }
         }
     }
