@@ -8,7 +8,7 @@ use prtkit::progress::NoProgress;
 use prtkit::quadrature::gauss_legendre;
 use prtkit::sh::basis::eval_basis_dir;
 use prtkit::sh::legendre::LegendreTable;
-use prtkit::sh::project::{map_energy, project, project_naive};
+use prtkit::sh::project::{map_energy, project, project_latlong, project_naive, TexelQuadrature};
 use prtkit::sh::rotate::ShRotation;
 use prtkit::sh::synth::{synthesize_latlong, synthesize_map};
 use prtkit::sh::{count, index, ShCoeffs};
@@ -248,6 +248,51 @@ fn separable_projection_equals_the_naive_sum() {
             }
         }
     }
+}
+
+#[test]
+fn the_texel_integral_projection_integrates_each_texel() {
+    // A sparse map on an odd height: lit texels in a row and its mirror, in a row whose mirror
+    // is black, and in the middle row; every other row black (skipped). Against each texel's
+    // integral of Y_lm by a 64 × 64 midpoint rule in (z, φ) over its extent.
+    let (w, h, order) = (24, 13, 10);
+    let lit: [(usize, usize, f32); 4] = [(3, 2, 7.0), (17, 10, 2.0), (5, 4, 3.0), (20, 6, 5.0)];
+    let mut img = RgbImage::new(w, h);
+    for &(x, y, v) in &lit {
+        img.pixels[y * w + x] = [v, 0.5 * v, 2.0 * v];
+    }
+    let got = project_latlong(&img, order, TexelQuadrature::Integral { z_nodes: 4 }, &NoProgress);
+    let table = LegendreTable::new(order);
+    let mut y_lm = vec![0.0; count(order)];
+    let mut expected = vec![[0.0; 3]; count(order)];
+    let n = 64;
+    for &(x, y, v) in &lit {
+        let (z0, z1) = ((PI * y as f64 / h as f64).cos(), (PI * (y + 1) as f64 / h as f64).cos());
+        let weight = (z0 - z1) / n as f64 * 2.0 * PI / (w * n) as f64;
+        for j in 0..n {
+            let z: f64 = z0 + (z1 - z0) * (j as f64 + 0.5) / n as f64;
+            for k in 0..n {
+                let phi = 2.0 * PI * (x as f64 + (k as f64 + 0.5) / n as f64) / w as f64;
+                let s = (1.0 - z * z).sqrt();
+                eval_basis_dir(&table, DVec3::new(s * phi.cos(), s * phi.sin(), z), &mut y_lm);
+                for (e, y) in expected.iter_mut().zip(&y_lm) {
+                    for (c, scale) in [1.0, 0.5, 2.0].into_iter().enumerate() {
+                        e[c] += weight * v as f64 * scale * y;
+                    }
+                }
+            }
+        }
+    }
+    let scale = expected.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (i, (a, b)) in got.rgb.iter().zip(&expected).enumerate() {
+        for c in 0..3 {
+            assert!((a[c] - b[c]).abs() < 1e-4 * scale, "coefficient {i} channel {c}: {} against {}", a[c], b[c]);
+        }
+    }
+    // The midpoint rule is not the integral at this texel size.
+    let midpoint = project_latlong(&img, order, TexelQuadrature::Midpoint, &NoProgress);
+    let off = midpoint.rgb.iter().zip(&expected).map(|(a, b)| (a[0] - b[0]).abs()).fold(0.0, f64::max);
+    assert!(off > 1e-2 * scale, "midpoint off by {off:e} of {scale:e}");
 }
 
 #[test]

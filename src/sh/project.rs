@@ -15,6 +15,7 @@
 use super::legendre::LegendreTable;
 use super::{count, index, ShCoeffs};
 use crate::envmap::{EnvMap, Layout};
+use crate::io::RgbImage;
 use crate::progress::Progress;
 use crate::sphere::LatLong;
 use rayon::prelude::*;
@@ -56,7 +57,7 @@ pub fn project(map: &EnvMap, order: usize, progress: &dyn Progress) -> Result<Sh
         });
     }
     Ok(match map.layout() {
-        Layout::LatLong => project_latlong(map, order, progress),
+        Layout::LatLong => project_latlong(img, order, TexelQuadrature::Midpoint, progress),
         _ => project_texels(map, order, progress),
     })
 }
@@ -69,28 +70,66 @@ fn add_into(acc: &mut [[f64; 3]], other: &[[f64; 3]]) {
     }
 }
 
-/// The separable lat-long projection (App. C step 1), rows taken in mirrored pairs: row y and
-/// row H − 1 − y have the same solid angle and cos θ of opposite sign, and
-/// P̄_l^m(−z) = (−1)^{l+m} P̄_l^m(z), so one Legendre evaluation serves both, applied to the sum
-/// of their Fourier sums where l + m is even and to the difference where it is odd.
+/// How the lat-long projection integrates Y_lm over a texel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TexelQuadrature {
+    /// Y_lm at the texel's centre times its solid angle (App. C's sum; [`project`]).
+    Midpoint,
+    /// The texel's integral: exact in φ (over a column, ∫ cos or sin mφ dφ is the centre's value
+    /// × Δφ · sinc(mΔφ/2)) and Gauss–Legendre with this many nodes in z. For texels that are
+    /// large against what the coefficients feed: the excess of a few bright texels under a lobe
+    /// a few texels wide.
+    Integral {
+        /// Nodes in z per texel.
+        z_nodes: usize,
+    },
+}
+
+/// The separable projection of a lat-long image (App. C step 1) onto bands 0..=order ≤ W/2,
+/// texels integrated by `quadrature`.
 ///
-/// The θ sum runs over contiguous m per band and channel (the sums and the accumulator are
-/// stored per channel, m ≥ 0, cosine and sine apart), so it vectorizes.
-fn project_latlong(map: &EnvMap, order: usize, progress: &dyn Progress) -> ShCoeffs {
-    let img = map.image();
+/// Rows are taken in mirrored pairs: row y and row H − 1 − y have the same solid angle and z
+/// nodes of opposite sign, and P̄_l^m(−z) = (−1)^{l+m} P̄_l^m(z), so one Legendre evaluation
+/// serves both, applied to the sum of their Fourier sums where l + m is even and to the
+/// difference where it is odd. A pair of black rows is skipped (it adds exactly nothing), so a
+/// sparse image costs what its lit rows cost. The θ sum runs over contiguous m per band and
+/// channel (the sums and the accumulator are stored per channel, m ≥ 0, cosine and sine apart),
+/// so it vectorizes.
+pub fn project_latlong(img: &RgbImage, order: usize, quadrature: TexelQuadrature, progress: &dyn Progress) -> ShCoeffs {
     let (w, h) = (img.width, img.height);
+    // z nodes of a row as (offset from the row's middle in units of its half-height, share of
+    // its solid angle); the midpoint is the row's centre in θ.
+    let z_rule: Vec<(f64, f64)> = match quadrature {
+        TexelQuadrature::Midpoint => Vec::new(),
+        TexelQuadrature::Integral { z_nodes } => {
+            crate::quadrature::gauss_legendre_cached(z_nodes.max(1)).iter().map(|&(x, w)| (x, 0.5 * w)).collect()
+        }
+    };
+    // ∫ over a column of cos or sin mφ, relative to Δφ times the centre's value.
+    let column = |m: usize| {
+        let half = PI * m as f64 / w as f64;
+        if quadrature == TexelQuadrature::Midpoint || m == 0 {
+            1.0
+        } else {
+            half.sin() / half
+        }
+    };
+    let row_is_black = |y: usize| img.row(y).iter().all(|p| *p == [0.0; 3]);
     let table = LegendreTable::new(order);
     let fft = RealFftPlanner::<f64>::new().plan_fft_forward(w);
     // Phase that moves the FFT's sample points from φ = 2πx/W to the texel centres
     // φ = 2π(x + ½)/W: Σ_x f_x e^{−imφ_x} = e^{−iπm/W} X_m.
     let phase: Vec<(f64, f64)> = (0..=order).map(|m| (PI * m as f64 / w as f64).sin_cos()).collect();
     // Pairs (y, its mirror) for the top half; an odd middle row stands alone.
-    let pairs: Vec<(usize, Option<usize>)> =
-        (0..h / 2).map(|y| (y, Some(h - 1 - y))).chain((h % 2 == 1).then_some((h / 2, None))).collect();
+    let pairs: Vec<(usize, Option<usize>)> = (0..h / 2)
+        .map(|y| (y, Some(h - 1 - y)))
+        .chain((h % 2 == 1).then_some((h / 2, None)))
+        .filter(|&(y, mirror)| !(row_is_black(y) && mirror.is_none_or(row_is_black)))
+        .collect();
     // Band l, order m ≥ 0 of the per-channel accumulators.
     let at = |l: usize, m: usize| l * (l + 1) / 2 + m;
     let len = at(order, order) + 1;
-    progress.start("projecting", h as u64);
+    progress.start("projecting", pairs.iter().map(|p| 1 + p.1.is_some() as u64).sum());
     let blocks: Vec<[[Vec<f64>; 3]; 2]> = pairs
         .par_chunks(BLOCK_ROWS / 2)
         .map(|block| {
@@ -131,25 +170,39 @@ fn project_latlong(map: &EnvMap, order: usize, progress: &dyn Progress) -> ShCoe
                     for c in 0..3 {
                         for m in 0..=order {
                             let (t, b) = (top[k][c][m], if mirror.is_some() { bottom[k][c][m] } else { 0.0 });
-                            let weight = if m == 0 { omega } else { omega * SQRT_2 };
+                            let weight = if m == 0 { omega } else { omega * SQRT_2 * column(m) };
                             let (even, odd) = ((t + b) * weight, (t - b) * weight);
                             by_parity[m % 2][k][c][m] = even;
                             by_parity[1 - m % 2][k][c][m] = odd;
                         }
                     }
                 }
-                let theta = PI * (y as f64 + 0.5) / h as f64;
-                let (st, ct) = theta.sin_cos();
-                table.eval(ct, st, &mut plm);
-                for l in 0..=order {
-                    // P̄_l^m for m = 0..=l sits at l² + l + m.
-                    let p_l = &plm[l * l + l..=l * l + 2 * l];
-                    let band = at(l, 0)..=at(l, l);
-                    for k in 0..2 {
-                        for c in 0..3 {
-                            let part = &by_parity[l % 2][k][c][..=l];
-                            for ((a, p), v) in acc[k][c][band.clone()].iter_mut().zip(p_l).zip(part) {
-                                *a += p * v;
+                // (cos θ, sin θ, share of the row's solid angle) of the row's nodes.
+                let nodes: Vec<(f64, f64, f64)> = if z_rule.is_empty() {
+                    let (st, ct) = (PI * (y as f64 + 0.5) / h as f64).sin_cos();
+                    vec![(ct, st, 1.0)]
+                } else {
+                    let (z0, z1) = ((PI * y as f64 / h as f64).cos(), (PI * (y + 1) as f64 / h as f64).cos());
+                    z_rule
+                        .iter()
+                        .map(|&(x, share)| {
+                            let z = (0.5 * (z0 + z1) + 0.5 * (z0 - z1) * x).clamp(-1.0, 1.0);
+                            (z, (1.0 - z * z).sqrt(), share)
+                        })
+                        .collect()
+                };
+                for (ct, st, share) in nodes {
+                    table.eval(ct, st, &mut plm);
+                    for l in 0..=order {
+                        // P̄_l^m for m = 0..=l sits at l² + l + m.
+                        let p_l = &plm[l * l + l..=l * l + 2 * l];
+                        let band = at(l, 0)..=at(l, l);
+                        for k in 0..2 {
+                            for c in 0..3 {
+                                let part = &by_parity[l % 2][k][c][..=l];
+                                for ((a, p), v) in acc[k][c][band.clone()].iter_mut().zip(p_l).zip(part) {
+                                    *a += share * p * v;
+                                }
                             }
                         }
                     }
