@@ -30,7 +30,7 @@ use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows};
 use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::{NoProgress, Progress};
-use crate::sh::project::project;
+use crate::sh::project::{project, project_latlong, TexelQuadrature};
 use crate::sh::window::{self, Window, WindowReport};
 use crate::sh::{lm, ShCoeffs};
 use crate::sphere::LatLong;
@@ -49,6 +49,14 @@ const ANGULAR_EPSILON: f64 = 1e-5;
 /// The share of a radially symmetric lobe's weight the bright texels' rule may misplace
 /// ([`rule_for_kernel`]).
 const BRIGHT_RULE_TOLERANCE: f64 = 1e-3;
+
+/// How many source texels a radially symmetric lobe must span (its width √(∫u dω / u_max)) for
+/// its bright texels to go through spherical harmonics ([`add_bright_sh`]): narrower lobes need
+/// bands the zonal filter's cost does not grow with.
+const SH_BRIGHT_TEXELS_PER_WIDTH: f64 = 8.0;
+
+/// Gauss–Legendre nodes in z per texel of the bright texels' projection ([`add_bright_sh`]).
+const SH_BRIGHT_Z_NODES: usize = 3;
 
 /// How the prefilter chooses its orders and treats the lighting.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -87,6 +95,10 @@ pub struct Report {
 pub struct Prefiltered {
     /// ρ̂_lpq truncated to (F_B, P_B).
     pub brdf: BrdfSh,
+    /// For radially symmetric BRDFs, the zonal kernel k_l = Λ_l ρ̂_l to the highest band the
+    /// order rule computed (the map's l_max under the texel rule, else F_B); empty otherwise.
+    /// The bright texels' spherical-harmonic path reads its tail.
+    pub kernel: Vec<[f64; 3]>,
     /// The remainder's lighting coefficients to F_B (raw, before the window).
     pub lighting: ShCoeffs,
     /// The window's band factors.
@@ -149,6 +161,7 @@ pub fn prefilter(
         (None, Lighting::Coefficients(c)) => Some(c.clone()),
         _ => None,
     };
+    let mut kernel = Vec::new();
     let (brdf, texel) = match (settings.orders, settings.rule, &full_light) {
         (Some((f, p)), _, _) => (brdf_coefficients(model, Orders::Fixed { f, p })?, None),
         (None, OrderRule::Energy, _) => {
@@ -157,6 +170,9 @@ pub fn prefilter(
         (None, OrderRule::Texel, Some(light)) => {
             let l_max = light.order;
             let full = model.coefficients(l_max, max_p);
+            if radial {
+                kernel = (0..=l_max).map(|l| full.radial_kernel(l)).collect();
+            }
             let mean = mean_reflected(&full, light, &bright);
             let orders = texel_orders(model, &full, &light.band_energy_rgb(), mean, settings.epsilon, max_p);
             if let Lighting::Coefficients(c) = lighting {
@@ -172,6 +188,9 @@ pub fn prefilter(
         (None, OrderRule::Texel, None) => unreachable!("the texel rule always has the lighting"),
     };
     let f_b = brdf.f;
+    if radial && kernel.is_empty() {
+        kernel = (0..=f_b).map(|l| brdf.radial_kernel(l)).collect();
+    }
     let light = match (&remainder, lighting, &full_light) {
         (_, Lighting::Coefficients(c), _) if c.order < f_b => {
             return Err(PrefilterError::LightingOrder { have: c.order, need: f_b })
@@ -197,7 +216,7 @@ pub fn prefilter(
         bright: bright.report(),
         window: WindowReport { kind: settings.window, t: settings.window.guarded().then_some(0.0) },
     };
-    Ok(Prefiltered { brdf, lighting: light, factors, remainder_shrm, bright, remainder_map: remainder, report })
+    Ok(Prefiltered { brdf, kernel, lighting: light, factors, remainder_shrm, bright, remainder_map: remainder, report })
 }
 
 /// The mean reflected radiance per channel, which the texel floor is a fraction of: band 0 of
@@ -254,7 +273,7 @@ impl Prefiltered {
         if !self.bright.is_empty() {
             if model.centre().is_some() {
                 let mut layer = RgbImage::new(out.width(), out.height());
-                add_bright(&mut layer, model, &self.bright, self.source_grid(), None);
+                add_bright(&mut layer, model, &self.bright, self.source_grid(), Lobe::Radial(&self.kernel));
                 let s = (4.0 * PI).sqrt() as f32;
                 for (o, b) in out.layers[0].pixels.iter_mut().zip(&layer.pixels) {
                     for c in 0..3 {
@@ -334,7 +353,11 @@ impl Prefiltered {
             .iter()
             .map(|&view| {
                 let mut added = RgbImage::new(w, h);
-                add_bright(&mut added, model, &self.bright, self.source_grid(), cutoff.as_ref().map(|c| (view, c)));
+                let lobe = match &cutoff {
+                    Some(cutoff) => Lobe::View(view, cutoff),
+                    None => Lobe::Radial(&self.kernel),
+                };
+                add_bright(&mut added, model, &self.bright, self.source_grid(), lobe);
                 let replaced = match (&cone, &cutoff) {
                     (Some(cone), Some(cutoff)) => {
                         view_axis::beyond(cone, model, cutoff, view, valid, LatLong::new(w, h))
@@ -384,33 +407,47 @@ fn has_negative(map: &RgbImage) -> bool {
     map.pixels.iter().flatten().any(|&v| v < 0.0)
 }
 
+/// The lobe the bright texels are filtered with.
+#[derive(Clone, Copy)]
+enum Lobe<'a> {
+    /// Radially symmetric, with its zonal kernel k_l (for [`add_bright_sh`]; may be empty).
+    Radial(&'a [[f64; 3]]),
+    /// View-dependent: the view and the cones per view angle.
+    View(DVec3, &'a CutoffTable),
+}
+
 /// Adds the bright texels' exact contribution Σ_j e_j ΔΩ_j ρ̂(ω_j; R, V) to every texel of a
-/// lat-long map of R (of N for Lambert). `view`: `None` for radially symmetric lobes. A texel
-/// visits only the bright texels within its lobe's cone (1 − 10⁻⁵ of the lobe; for
-/// view-dependent BRDFs per view angle, from `cutoff`): the bright texels are sorted by θ, and a
-/// row of texels at θ_R takes the range θ_R ± θ*. A radially symmetric lobe on a map as wide as
-/// the `source` grid the texels were split on is the zonal filter of their excess instead (FFT
-/// rows: its cost does not grow with the number of bright texels, which a wide lobe visits
-/// nearly all of per texel).
-fn add_bright(
-    map: &mut RgbImage,
-    model: &Model,
-    bright: &BrightSources,
-    source: Option<LatLong>,
-    view: Option<(DVec3, &CutoffTable)>,
-) {
+/// lat-long map of R (of N for Lambert). A texel visits only the bright texels within its lobe's
+/// cone (1 − 10⁻⁵ of the lobe; for view-dependent BRDFs per view angle, from the cutoff table):
+/// the bright texels are sorted by θ, and a row of texels at θ_R takes the range θ_R ± θ*. A
+/// radially symmetric lobe takes a cheaper exact path when it can: spherical harmonics for a lobe
+/// wide against the texels ([`add_bright_sh`]), else, on a map as wide as the `source` grid the
+/// texels were split on, the zonal filter of their excess ([`add_bright_zonal`]: FFT rows, whose
+/// cost does not grow with the number of bright texels, which a wide lobe visits nearly all of
+/// per texel).
+fn add_bright(map: &mut RgbImage, model: &Model, bright: &BrightSources, source: Option<LatLong>, lobe: Lobe<'_>) {
     if bright.is_empty() {
         return;
     }
-    let radial_star = match view {
-        None => radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON),
-        Some((_, cutoff)) => cutoff.max(),
+    let radial_star = match lobe {
+        Lobe::Radial(_) => radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON),
+        Lobe::View(_, cutoff) => cutoff.max(),
     };
-    if let (None, Some(source)) = (view, source) {
+    if let (Lobe::Radial(kernel), Some(source)) = (lobe, source) {
+        // The cone's truncation drops up to u(cos θ*) per unit of bright energy at a texel;
+        // the harmonics' may drop as much.
+        let dropped = model.lobe(radial_star.cos())[1];
+        if add_bright_sh(map, model, bright, source, kernel, dropped) {
+            return;
+        }
         if source.width == map.width && add_bright_zonal(map, model, bright, source, radial_star) {
             return;
         }
     }
+    let view = match lobe {
+        Lobe::View(v, cutoff) => Some((v, cutoff)),
+        Lobe::Radial(_) => None,
+    };
     let (w, h) = (map.width, map.height);
     let grid = LatLong::new(w, h);
     let mut sorted: Vec<(f64, usize)> =
@@ -452,6 +489,72 @@ fn add_bright(
             }
         }
     });
+}
+
+/// [`add_bright`] for a radially symmetric lobe through spherical harmonics, when the lobe spans
+/// at least [`SH_BRIGHT_TEXELS_PER_WIDTH`] texels of the `source` grid. The excess, constant
+/// e_j over each bright texel t_j of the grid, has coefficients E_lm = Σ_j e_j ∫_{t_j} Y_lm dω,
+/// and its reflection map is Σ_l k_l Σ_m E_lm Y_lm(R) (Funk–Hecke). The texel integrals are exact
+/// in φ (∫ cos or sin mφ over a column is the centre's value × Δφ · sinc(mΔφ/2)) and take
+/// [`SH_BRIGHT_Z_NODES`] Gauss–Legendre nodes in z, so a lobe a few texels wide sees the
+/// texels' extent, as the zonal filter's texel rule does. By the addition theorem
+/// |Σ_m Y_lm(ω) Y_lm(R)| ≤ (2l + 1)/4π, so cutting at band F changes a texel by at most
+/// Σ_j e_j ΔΩ_j · Σ_{l > F} |k_l| (2l + 1)/4π: F is the smallest band that keeps the second
+/// factor under `dropped`, what the cone's truncation may drop. The exact map is non-negative, so negative values of the cut series are set to zero
+/// (which only brings them closer). False, leaving `map` alone, for a narrower lobe, or when the
+/// kernel has not died out by its last band (k_l is known no further), or the map is too narrow
+/// for band F.
+fn add_bright_sh(
+    map: &mut RgbImage,
+    model: &Model,
+    bright: &BrightSources,
+    source: LatLong,
+    kernel: &[[f64; 3]],
+    dropped: f64,
+) -> bool {
+    let (Some(k0), Some(peak)) = (kernel.first(), Some(model.lobe(1.0)[1]).filter(|&p| p > 0.0)) else {
+        return false;
+    };
+    let width = (k0[1] / peak).max(0.0).sqrt();
+    if width < SH_BRIGHT_TEXELS_PER_WIDTH * PI / source.height as f64 {
+        return false;
+    }
+    let per_band: Vec<f64> = kernel
+        .iter()
+        .enumerate()
+        .map(|(l, k)| k.iter().fold(0.0f64, |m, v| m.max(v.abs())) * (2 * l + 1) as f64 / (4.0 * PI))
+        .collect();
+    if per_band[per_band.len() - 1] > 1e-3 * dropped {
+        return false;
+    }
+    let mut order = per_band.len() - 1;
+    let mut tail = 0.0;
+    while order > 0 && tail + per_band[order] <= dropped {
+        tail += per_band[order];
+        order -= 1;
+    }
+    if 2 * order > map.width.min(source.width) {
+        return false;
+    }
+    let mut excess = RgbImage::new(source.width, source.height);
+    bright.add_to_latlong(&mut excess);
+    let quadrature = TexelQuadrature::Integral { z_nodes: SH_BRIGHT_Z_NODES };
+    let mut coeffs = project_latlong(&excess, order, quadrature, &NoProgress);
+    for (i, c) in coeffs.rgb.iter_mut().enumerate() {
+        let k = kernel[lm(i).0];
+        for ch in 0..3 {
+            c[ch] *= k[ch];
+        }
+    }
+    let Ok(filtered) = crate::sh::synth::synthesize_latlong(&coeffs, map.width, map.height) else {
+        return false;
+    };
+    for (px, f) in map.pixels.iter_mut().zip(&filtered.pixels) {
+        for c in 0..3 {
+            px[c] += f[c].max(0.0);
+        }
+    }
+    true
 }
 
 /// [`add_bright`] for a radially symmetric lobe on a map as wide as the `source` grid the
@@ -600,11 +703,8 @@ mod tests {
     use crate::brdf::Brdf;
     use crate::envmap::bright::BrightRule;
 
-    #[test]
-    fn bright_texels_through_the_zonal_filter_are_their_texel_integrals() {
-        // A dim sky with a small sun on coarse texels (5.6°): the zonal path's excess, filtered
-        // with a measured texel rule, against the brute-force sum of every bright texel's
-        // integral of the lobe by an 32 × 32 midpoint rule in (z, φ), in the same cone.
+    /// A dim sky with a small sun on coarse texels (5.6°) and its bright texels.
+    fn sky_with_sun() -> (LatLong, BrightSources) {
         let grid = LatLong::new(64, 32);
         let sun = DVec3::new(0.6, 0.2, 0.5).normalize();
         let image = RgbImage::from_fn(64, 32, |x, y| {
@@ -614,50 +714,100 @@ mod tests {
         });
         let (_, bright) = split(&EnvMap::latlong(image).unwrap(), BrightRule::Auto);
         assert!(!bright.is_empty() && bright.texels.len() < 20, "{} bright texels", bright.texels.len());
+        (grid, bright)
+    }
+
+    /// Every bright texel's integral of the lobe by a 32 × 32 midpoint rule in (z, φ), summed
+    /// per texel of `grid` over the bright texels whose centres are within θ* (π: all).
+    fn brute_force(grid: LatLong, model: &Model, bright: &BrightSources, theta_star: f64) -> Vec<[f64; 3]> {
+        let (w, h, n) = (grid.width, grid.height, 32);
+        let cos_star = theta_star.cos();
+        (0..w * h)
+            .map(|i| {
+                let r = grid.texel_direction(i % w, i / w);
+                let mut acc = [0.0; 3];
+                for t in bright.texels.iter().filter(|t| theta_star >= PI || r.dot(t.dir) >= cos_star) {
+                    let (px, py) = grid.position(t.dir);
+                    let (x, y) = (px.floor(), py.floor());
+                    let (z0, z1) = ((PI * y / h as f64).cos(), (PI * (y + 1.0) / h as f64).cos());
+                    let mut integral = 0.0;
+                    for j in 0..n {
+                        for k in 0..n {
+                            let z = z0 + (z1 - z0) * (j as f64 + 0.5) / n as f64;
+                            let phi = 2.0 * PI * (x + (k as f64 + 0.5) / n as f64) / w as f64;
+                            let weight = (z0 - z1) / n as f64 * 2.0 * PI / w as f64 / n as f64;
+                            integral += weight * model.lobe(r.dot(crate::sphere::direction(z.acos(), phi)))[1];
+                        }
+                    }
+                    // The texel's excess radiance: t.excess·ΔΩ_t is its energy.
+                    let scale = t.solid_angle / grid.row_solid_angle(y as usize);
+                    for c in 0..3 {
+                        acc[c] += t.excess[c] * scale * integral;
+                    }
+                }
+                acc
+            })
+            .collect()
+    }
+
+    /// Within `relative` of `expected` plus `absolute` (per channel).
+    fn assert_close(spec: &str, got: &RgbImage, expected: &[[f64; 3]], relative: f64, absolute: [f64; 3]) {
+        assert!(expected.iter().any(|p| p[0] > 0.0));
+        for (i, (a, b)) in got.pixels.iter().zip(expected).enumerate() {
+            for c in 0..3 {
+                let a = a[c] as f64;
+                assert!(
+                    (a - b[c]).abs() <= relative * b[c].abs() + absolute[c],
+                    "{spec}, texel {i} channel {c}: {a} against {}",
+                    b[c]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bright_texels_through_the_zonal_filter_are_their_texel_integrals() {
+        // The zonal path's excess, filtered with a measured texel rule, against the brute-force
+        // texel integrals in the same cone (an empty kernel keeps the harmonics out).
+        let (grid, bright) = sky_with_sun();
         for spec in ["phong:s=8", "phong:s=128"] {
             let model = Model::new(Brdf::parse(spec).unwrap(), true).unwrap();
             let mut zonal = RgbImage::new(64, 32);
-            add_bright(&mut zonal, &model, &bright, Some(grid), None);
-            let n = 32;
-            // The same truncation: texels whose centre is within the cone θ*.
-            let cos_star = radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON).cos();
-            let brute: Vec<[f64; 3]> = (0..64 * 32)
-                .map(|i| {
-                    let r = grid.texel_direction(i % 64, i / 64);
-                    let mut acc = [0.0; 3];
-                    for t in bright.texels.iter().filter(|t| r.dot(t.dir) >= cos_star) {
-                        let (px, py) = grid.position(t.dir);
-                        let (x, y) = (px.floor(), py.floor());
-                        let (z0, z1) = ((PI * y / 32.0).cos(), (PI * (y + 1.0) / 32.0).cos());
-                        let mut integral = 0.0;
-                        for j in 0..n {
-                            for k in 0..n {
-                                let z = z0 + (z1 - z0) * (j as f64 + 0.5) / n as f64;
-                                let phi = 2.0 * PI * (x + (k as f64 + 0.5) / n as f64) / 64.0;
-                                let w = (z0 - z1) / n as f64 * 2.0 * PI / 64.0 / n as f64;
-                                integral += w * model.lobe(r.dot(crate::sphere::direction(z.acos(), phi)))[1];
-                            }
-                        }
-                        // The texel's excess radiance: t.excess·ΔΩ_t is its energy.
-                        let scale = t.solid_angle / grid.row_solid_angle(y as usize);
-                        for c in 0..3 {
-                            acc[c] += t.excess[c] * scale * integral;
-                        }
-                    }
-                    acc
-                })
-                .collect();
-            let peak = brute.iter().map(|p| p[0]).fold(0.0, f64::max);
-            assert!(peak > 0.0);
-            for (i, (a, b)) in zonal.pixels.iter().zip(&brute).enumerate() {
-                for c in 0..3 {
-                    let a = a[c] as f64;
-                    assert!(
-                        (a - b[c]).abs() <= 3e-3 * b[c].abs() + 1e-5 * peak,
-                        "{spec}, texel {i} channel {c}: {a} against {}",
-                        b[c]
-                    );
-                }
+            add_bright(&mut zonal, &model, &bright, Some(grid), Lobe::Radial(&[]));
+            let theta_star = radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON);
+            let expected = brute_force(grid, &model, &bright, theta_star);
+            let peak = expected.iter().map(|p| p[0]).fold(0.0, f64::max);
+            assert_close(spec, &zonal, &expected, 3e-3, [1e-5 * peak; 3]);
+        }
+    }
+
+    #[test]
+    fn bright_texels_through_harmonics_are_their_texel_integrals() {
+        // Lobes 8.5 and 4.3 texels wide (√(2π/(s+1)) against 5.6° texels): the harmonics take
+        // the first and leave the second to the zonal filter. Against the whole lobe's texel
+        // integrals (no cone): the cut at band F may differ from them by its bound, what the
+        // cone may drop per unit of bright energy times that energy.
+        let (grid, bright) = sky_with_sun();
+        for (spec, wide) in [("phong:s=8", true), ("phong:s=32", false)] {
+            let model = Model::new(Brdf::parse(spec).unwrap(), true).unwrap();
+            let coefficients = model.coefficients(31, 0);
+            let kernel: Vec<[f64; 3]> = (0..=31).map(|l| coefficients.radial_kernel(l)).collect();
+            let theta_star = radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON);
+            let dropped = model.lobe(theta_star.cos())[1];
+            let mut harmonics = RgbImage::new(64, 32);
+            assert_eq!(add_bright_sh(&mut harmonics, &model, &bright, grid, &kernel, dropped), wide, "{spec}");
+            if wide {
+                assert!(harmonics.pixels.iter().flatten().all(|&v| v >= 0.0));
+                let energy = [0, 1, 2].map(|c| bright.texels.iter().map(|t| t.excess[c] * t.solid_angle).sum::<f64>());
+                assert_close(
+                    spec,
+                    &harmonics,
+                    &brute_force(grid, &model, &bright, PI),
+                    1e-3,
+                    energy.map(|e| dropped * e),
+                );
+                // Cut before the kernel has died out, the path declines: k_l is not known further.
+                assert!(!add_bright_sh(&mut harmonics, &model, &bright, grid, &kernel[..8], dropped));
             }
         }
     }
