@@ -20,7 +20,8 @@
 //! only on (y_o, y, d = x − x_o mod W), and is even in d. For each pair of rows the sum over x is a
 //! circular convolution: B_{y_o} = Σ_y L_y ⊛ K_{y_o,y}, i.e. B̂_{y_o}(m) = Σ_y L̂_y(m) K̂_{y_o,y}(m)
 //! with real K̂ (K is even). The kernel K_{y_o,y} is built once per row pair (the d-window and the
-//! source rows outside the cone are skipped), transformed once, and the products are accumulated
+//! source rows outside the cone are skipped, and black source rows too with [`Rows::Lit`]),
+//! transformed once, and the products are accumulated
 //! per output row in the frequency domain: one inverse FFT per output row and channel. The cost is
 //! O(H_out·H_cone·(W log W + n²·W_cone)) instead of the direct O(H_out·W·N_cone·n²).
 //!

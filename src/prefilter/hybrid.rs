@@ -512,9 +512,11 @@ fn add_bright_sh(
     kernel: &[[f64; 3]],
     dropped: f64,
 ) -> bool {
-    let (Some(k0), Some(peak)) = (kernel.first(), Some(model.lobe(1.0)[1]).filter(|&p| p > 0.0)) else {
+    let peak = model.lobe(1.0)[1];
+    let Some(k0) = kernel.first().filter(|_| peak > 0.0) else {
         return false;
     };
+    // k_0 = ∫u dω (Funk–Hecke).
     let width = (k0[1] / peak).max(0.0).sqrt();
     if width < SH_BRIGHT_TEXELS_PER_WIDTH * PI / source.height as f64 {
         return false;
@@ -524,6 +526,8 @@ fn add_bright_sh(
         .enumerate()
         .map(|(l, k)| k.iter().fold(0.0f64, |m, v| m.max(v.abs())) * (2 * l + 1) as f64 / (4.0 * PI))
         .collect();
+    // Bands beyond the kernel's last are taken as nothing: only when that band itself is
+    // under a thousandth of the allowance.
     if per_band[per_band.len() - 1] > 1e-3 * dropped {
         return false;
     }
@@ -536,10 +540,8 @@ fn add_bright_sh(
     if 2 * order > map.width.min(source.width) {
         return false;
     }
-    let mut excess = RgbImage::new(source.width, source.height);
-    bright.add_to_latlong(&mut excess);
     let quadrature = TexelQuadrature::Integral { z_nodes: SH_BRIGHT_Z_NODES };
-    let mut coeffs = project_latlong(&excess, order, quadrature, &NoProgress);
+    let mut coeffs = project_latlong(&excess_image(bright, source), order, quadrature, &NoProgress);
     for (i, c) in coeffs.rgb.iter_mut().enumerate() {
         let k = kernel[lm(i).0];
         for ch in 0..3 {
@@ -557,14 +559,20 @@ fn add_bright_sh(
     true
 }
 
+/// The bright texels' excess as an image on the grid they were split on (black elsewhere).
+fn excess_image(bright: &BrightSources, source: LatLong) -> RgbImage {
+    let mut excess = RgbImage::new(source.width, source.height);
+    bright.add_to_latlong(&mut excess);
+    excess
+}
+
 /// [`add_bright`] for a radially symmetric lobe on a map as wide as the `source` grid the
 /// texels were split on: the zonal filter of their excess, truncated at `cone`. The texel rule
 /// integrates a lobe narrow against the texels over their extent (a sun's few texels under Phong
 /// s = 512), chosen by measurement as the references do. False, leaving `map` alone, beyond the
 /// filter's size bound.
 fn add_bright_zonal(map: &mut RgbImage, model: &Model, bright: &BrightSources, source: LatLong, cone: f64) -> bool {
-    let mut excess = RgbImage::new(source.width, source.height);
-    bright.add_to_latlong(&mut excess);
+    let excess = excess_image(bright, source);
     let kernel = |x: f64| model.lobe(x)[1];
     let rule = rule_for_kernel(source.width, source.height, &kernel, cone, map.height, BRIGHT_RULE_TOLERANCE).rule;
     let Ok(filtered) = zonal_filter(&excess, kernel, cone, &rule, map.height, Rows::Lit, &NoProgress) else {
