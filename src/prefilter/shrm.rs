@@ -13,7 +13,9 @@
 //!   a_{pq,m} = Σ_l ρ̂ d_{q,m} L_{l,m},  b_{pq,m} = Σ_l ρ̂ d_{q,m} L_{l,−m},
 //! and for q < 0
 //!   a_{pq,m} = Σ_l ρ̂ d_{q,−m} L_{l,−m}, b_{pq,m} = −Σ_l ρ̂ d_{q,−m} L_{l,m}.
-//! The first sum costs O(F²P²) per row of α, the β-synthesis one inverse FFT per (p, q, row):
+//! The first sum costs O(F²P²) per pair of rows α and π − α (their rotations differ by signs
+//! only, so the sum split by the parity of l serves both), the β-synthesis one inverse FFT per
+//! (p, q, row):
 //! O(F P² S²) in all, as in the paper. The Λ_l of eq. 5 is absorbed by the rotation matrices
 //! (D^l_{m0} = Λ_l Y_lm), exactly as the paper's App. A redefinition B_lmpq = L_lm ρ̂_lpq does.
 
@@ -120,16 +122,31 @@ pub fn local_shrm(
     let nlayers = count(p);
     progress.start("SHRM", height as u64);
     let plan = YRotationPlan::new(f, p);
-    // Each α row is independent: compute all layers' rows, then scatter.
-    let row_data: Vec<Vec<[f32; 3]>> = (0..height)
+    // Rows in mirrored pairs, α and π − α (rows y and H − 1 − y): the elements of
+    // D^l(R_y(α − π)) are those of D^l(R_y(−α)) times (−1)^{l+q+m} ε_q, ε_q = −1 for q < 0
+    // (`sh::wigner`'s `the_mirrored_angle_flips_signs_only`). So each sum over l, split by the
+    // parity of l into A_even and A_odd, serves both rows: a = A_even + A_odd at α, and
+    // (−1)^{q+m} ε_q (A_even − A_odd) at π − α (b alike). An odd middle row stands alone.
+    let pairs: Vec<(usize, Option<usize>)> = (0..height / 2)
+        .map(|y| (y, Some(height - 1 - y)))
+        .chain((height % 2 == 1).then_some((height / 2, None)))
+        .collect();
+    let parity = |k: isize| if k.rem_euclid(2) == 0 { 1.0 } else { -1.0 };
+    // A row's index and its layers' texels, layer-major.
+    type Row = (usize, Vec<[f32; 3]>);
+    let row_data: Vec<(Row, Option<Row>)> = pairs
         .into_par_iter()
-        .map(|y| {
+        .map(|(y, mirror)| {
             let alpha = PI * (y as f64 + 0.5) / height as f64;
             // Only the rows |q| ≤ P_B of D^l(R_y(−α)) are read: Wigner-d rows, O(P_B·F_B²).
             let d = plan.rows(-alpha);
             let mut out = vec![[0.0f32; 3]; nlayers * width];
+            let mut out_mirror = mirror.map(|_| vec![[0.0f32; 3]; nlayers * width]);
             let mut buffers = rows.buffers();
             let (mut a, mut b) = (vec![0.0; f + 1], vec![0.0; f + 1]);
+            // [even l, odd l] partial sums of a and b.
+            let mut a_parts = [vec![0.0; f + 1], vec![0.0; f + 1]];
+            let mut b_parts = [vec![0.0; f + 1], vec![0.0; f + 1]];
             // Per q and channel, the products D^l_{q,±m} L_{l,±m} that every p ≥ |q| sums with
             // its own ρ̂_lpq: triangular in (l, m ≤ l), so each (p, l) term is one contiguous
             // multiply-add over m.
@@ -160,40 +177,58 @@ pub fn local_shrm(
                         }
                     }
                 }
+                let mirror_sign = parity(q) * if q < 0 { -1.0 } else { 1.0 };
                 for pp in q.unsigned_abs()..=p {
+                    let layer = index(pp, q);
                     for (ch, (da, db)) in dl.iter().enumerate() {
-                        a.fill(0.0);
-                        b.fill(0.0);
+                        a_parts.iter_mut().chain(b_parts.iter_mut()).for_each(|v| v.fill(0.0));
                         for l in q.unsigned_abs()..=f {
                             let r = brdf.get(l, pp, q)[ch];
                             if r == 0.0 {
                                 continue;
                             }
                             let span = tri(l)..=tri(l) + l;
+                            let (a_l, b_l) = (&mut a_parts[l % 2], &mut b_parts[l % 2]);
                             for ((av, bv), (x, y)) in
-                                a.iter_mut().zip(b.iter_mut()).zip(da[span.clone()].iter().zip(&db[span]))
+                                a_l.iter_mut().zip(b_l.iter_mut()).zip(da[span.clone()].iter().zip(&db[span]))
                             {
                                 *av += r * x;
                                 *bv += r * y;
                             }
                         }
+                        let [a_even, a_odd] = &a_parts;
+                        let [b_even, b_odd] = &b_parts;
+                        for m in 0..=f {
+                            (a[m], b[m]) = (a_even[m] + a_odd[m], b_even[m] + b_odd[m]);
+                        }
                         rows.synth(&a, &b, &mut buffers);
-                        let layer = index(pp, q);
                         for (x, v) in buffers.1.iter().enumerate() {
                             out[layer * width + x][ch] = *v as f32;
+                        }
+                        if let Some(out_mirror) = &mut out_mirror {
+                            for m in 0..=f {
+                                let sign = mirror_sign * parity(m as isize);
+                                (a[m], b[m]) = (sign * (a_even[m] - a_odd[m]), sign * (b_even[m] - b_odd[m]));
+                            }
+                            rows.synth(&a, &b, &mut buffers);
+                            for (x, v) in buffers.1.iter().enumerate() {
+                                out_mirror[layer * width + x][ch] = *v as f32;
+                            }
                         }
                     }
                 }
             }
-            progress.advance(1);
-            out
+            progress.advance(1 + mirror.is_some() as u64);
+            ((y, out), mirror.zip(out_mirror))
         })
         .collect();
     progress.finish();
     let mut layers: Vec<RgbImage> = (0..nlayers).map(|_| RgbImage::new(width, height)).collect();
-    for (y, data) in row_data.iter().enumerate() {
-        for (k, layer) in layers.iter_mut().enumerate() {
-            layer.pixels[y * width..(y + 1) * width].copy_from_slice(&data[k * width..(k + 1) * width]);
+    for (top, bottom) in &row_data {
+        for (y, data) in std::iter::once(top).chain(bottom) {
+            for (k, layer) in layers.iter_mut().enumerate() {
+                layer.pixels[y * width..(y + 1) * width].copy_from_slice(&data[k * width..(k + 1) * width]);
+            }
         }
     }
     Ok(Shrm { f_b: f, p_b: p, global: false, layers })

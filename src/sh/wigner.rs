@@ -195,6 +195,29 @@ mod tests {
     use std::f64::consts::PI;
 
     #[test]
+    fn the_mirrored_angle_flips_signs_only() {
+        // D^l(R_y(α − π)) = D^l(R_y(α)) D^l(R_y(π)), D^l(R_y(π)) = diag((−1)^l ε_m) (x, z → −x, −z:
+        // the inversion times the mirror y → −y, ε_m = −1 for the sines m < 0), and
+        // D^l(R_y(α)) = T D^l(R_y(−α)) T with T = diag((−1)^m ε_m) (the mirror x → −x turns
+        // R_y(α) into R_y(−α)): element (q, m) at −(π − α) is (−1)^{l+q+m} ε_q times that at −α.
+        let (order, p) = (30, 6);
+        let parity = |k: isize| if k.rem_euclid(2) == 0 { 1.0 } else { -1.0 };
+        for alpha in [0.1, 0.37, 1.3, 1.5] {
+            let (rows, mirrored) = (YRotationRows::new(-alpha, order, p), YRotationRows::new(alpha - PI, order, p));
+            for l in 0..=order {
+                for q in -(p.min(l) as isize)..=p.min(l) as isize {
+                    for m in -(l as isize)..=l as isize {
+                        let epsilon = if q < 0 { -1.0 } else { 1.0 };
+                        let expected = parity(l as isize + q + m) * epsilon * rows.element(l, q, m);
+                        let got = mirrored.element(l, q, m);
+                        assert!((got - expected).abs() < 1e-9, "α {alpha}, ({l}, {q}, {m}): {got} vs {expected}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn rows_equal_the_ivanic_ruedenberg_matrix() {
         let (order, p) = (40, 6);
         for alpha in [0.0, 0.37, 1.3, 2.2, 3.1] {
