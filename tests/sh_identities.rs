@@ -261,7 +261,7 @@ fn the_texel_integral_projection_integrates_each_texel() {
     for &(x, y, v) in &lit {
         img.pixels[y * w + x] = [v, 0.5 * v, 2.0 * v];
     }
-    let got = project_latlong(&img, order, TexelQuadrature::Integral { z_nodes: 4 }, &NoProgress);
+    let got = project_latlong(&img, order, TexelQuadrature::Integral { z_nodes: 4 }, &NoProgress).unwrap();
     let table = LegendreTable::new(order);
     let mut y_lm = vec![0.0; count(order)];
     let mut expected = vec![[0.0; 3]; count(order)];
@@ -290,7 +290,9 @@ fn the_texel_integral_projection_integrates_each_texel() {
         }
     }
     // The midpoint rule is not the integral at this texel size.
-    let midpoint = project_latlong(&img, order, TexelQuadrature::Midpoint, &NoProgress);
+    let midpoint = project_latlong(&img, order, TexelQuadrature::Midpoint, &NoProgress).unwrap();
+    // Beyond the rows' Nyquist frequency: an error, not a panic.
+    assert!(project_latlong(&img, w / 2 + 1, TexelQuadrature::Midpoint, &NoProgress).is_err());
     let off = midpoint.rgb.iter().zip(&expected).map(|(a, b)| (a[0] - b[0]).abs()).fold(0.0, f64::max);
     assert!(off > 1e-2 * scale, "midpoint off by {off:e} of {scale:e}");
 }

@@ -541,7 +541,9 @@ fn add_bright_sh(
         return false;
     }
     let quadrature = TexelQuadrature::Integral { z_nodes: SH_BRIGHT_Z_NODES };
-    let mut coeffs = project_latlong(&excess_image(bright, source), order, quadrature, &NoProgress);
+    let Ok(mut coeffs) = project_latlong(&excess_image(bright, source), order, quadrature, &NoProgress) else {
+        return false;
+    };
     for (i, c) in coeffs.rgb.iter_mut().enumerate() {
         let k = kernel[lm(i).0];
         for ch in 0..3 {

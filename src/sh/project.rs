@@ -57,7 +57,7 @@ pub fn project(map: &EnvMap, order: usize, progress: &dyn Progress) -> Result<Sh
         });
     }
     Ok(match map.layout() {
-        Layout::LatLong => project_latlong(img, order, TexelQuadrature::Midpoint, progress),
+        Layout::LatLong => project_latlong(img, order, TexelQuadrature::Midpoint, progress)?,
         _ => project_texels(map, order, progress),
     })
 }
@@ -94,9 +94,23 @@ pub enum TexelQuadrature {
 /// difference where it is odd. A pair of black rows is skipped (it adds exactly nothing), so a
 /// sparse image costs what its lit rows cost. The θ sum runs over contiguous m per band and
 /// channel (the sums and the accumulator are stored per channel, m ≥ 0, cosine and sine apart),
-/// so it vectorizes.
-pub fn project_latlong(img: &RgbImage, order: usize, quadrature: TexelQuadrature, progress: &dyn Progress) -> ShCoeffs {
+/// so it vectorizes. An order above W/2 (the rows' Nyquist frequency) is an error.
+pub fn project_latlong(
+    img: &RgbImage,
+    order: usize,
+    quadrature: TexelQuadrature,
+    progress: &dyn Progress,
+) -> Result<ShCoeffs, ProjectError> {
     let (w, h) = (img.width, img.height);
+    if w == 0 || order > w / 2 {
+        return Err(ProjectError::OrderTooHigh {
+            order,
+            max: w / 2,
+            layout: Layout::LatLong.name(),
+            width: w,
+            height: h,
+        });
+    }
     // z nodes of a row as (offset from the row's middle in units of its half-height, share of
     // its solid angle); the midpoint is the row's centre in θ.
     let z_rule: Vec<(f64, f64)> = match quadrature {
@@ -226,7 +240,7 @@ pub fn project_latlong(img: &RgbImage, order: usize, quadrature: TexelQuadrature
             }
         }
     }
-    ShCoeffs { order, rgb: total }
+    Ok(ShCoeffs { order, rgb: total })
 }
 
 /// Texel-by-texel projection for layouts without a separable structure.
