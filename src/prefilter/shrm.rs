@@ -433,6 +433,45 @@ mod tests {
     use super::*;
 
     #[test]
+    fn local_layers_are_the_lighting_seen_from_each_texels_frame() {
+        // Eq. 6 texel by texel, independently of the per-row Wigner-d rows and of the mirrored
+        // row pairs: B_pq = Σ_l ρ̂_{lp|q|} [M(R_{α,β}⁻¹) L]_lq with the whole Ivanic–Ruedenberg
+        // rotation of the lighting into the texel's frame. An odd height puts a row on the
+        // equator, alone; a lighting with every coefficient non-zero exercises every sign.
+        let (f, p, w, h) = (7, 3, 16, 9);
+        let light = ShCoeffs {
+            order: f,
+            rgb: (0..count(f))
+                .map(|i| [(1.3 * i as f64).sin(), (0.7 * i as f64 + 0.2).cos(), 1.0 / (1.0 + i as f64)])
+                .collect(),
+        };
+        let model =
+            super::super::model::Model::new(crate::brdf::Brdf::parse("torrance-sparrow:sigma=0.3").unwrap(), false)
+                .unwrap();
+        let brdf = model.coefficients(f, p);
+        let shrm = local_shrm(&light, &brdf, w, h, &crate::progress::NoProgress).unwrap();
+        let scale = shrm.layers.iter().flat_map(|l| l.pixels.iter().flatten()).fold(0.0f32, |m, v| m.max(v.abs()));
+        for y in 0..h {
+            for x in 0..w {
+                let seen = ShRotation::new(texel_frame(w, h, x, y).transpose(), f).apply(&light);
+                for pp in 0..=p {
+                    for q in -(pp as isize)..=pp as isize {
+                        for c in 0..3 {
+                            let expected: f64 =
+                                (q.unsigned_abs()..=f).map(|l| brdf.get(l, pp, q)[c] * seen.rgb[index(l, q)][c]).sum();
+                            let got = shrm.layer(pp, q).get(x, y)[c] as f64;
+                            assert!(
+                                (got - expected).abs() < 2e-6 * scale as f64,
+                                "texel ({x}, {y}), layer ({pp}, {q}), channel {c}: {got} against {expected}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn a_view_window_scales_each_view_band_by_its_factor() {
         let layer = |v: f32| RgbImage::from_fn(4, 2, |_, _| [v, 2.0 * v, 3.0 * v]);
         let shrm = Shrm { f_b: 2, p_b: 1, global: false, layers: (0..4).map(|i| layer(1.0 + i as f32)).collect() };
