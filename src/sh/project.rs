@@ -95,6 +95,21 @@ pub enum TexelQuadrature {
 /// sparse image costs what its lit rows cost. The θ sum runs over contiguous m per band and
 /// channel (the sums and the accumulator are stored per channel, m ≥ 0, cosine and sine apart),
 /// so it vectorizes. An order above W/2 (the rows' Nyquist frequency) is an error.
+///
+/// ```
+/// use prtkit::io::RgbImage;
+/// use prtkit::progress::NoProgress;
+/// use prtkit::sh::project::{project_latlong, TexelQuadrature};
+/// // One lit texel of a coarse map: the midpoint puts its energy at the centre, the integral
+/// // spreads it over the texel. Band 0 (Y_00 constant) is the same; higher bands differ.
+/// let mut map = RgbImage::new(16, 8);
+/// map.pixels[2 * 16 + 5] = [1.0; 3];
+/// let midpoint = project_latlong(&map, 6, TexelQuadrature::Midpoint, &NoProgress).unwrap();
+/// let integral = project_latlong(&map, 6, TexelQuadrature::Integral { z_nodes: 3 }, &NoProgress).unwrap();
+/// assert!((midpoint.rgb[0][0] - integral.rgb[0][0]).abs() < 1e-12);
+/// assert!((midpoint.rgb[40][0] - integral.rgb[40][0]).abs() > 1e-4);
+/// assert!(project_latlong(&map, 9, TexelQuadrature::Midpoint, &NoProgress).is_err());
+/// ```
 pub fn project_latlong(
     img: &RgbImage,
     order: usize,
