@@ -99,7 +99,7 @@ fn install_interrupt_handler() {
     ONCE.call_once(|| {
         // A second handler cannot be set (a test running stages in-process); the first stays.
         let _ = ctrlc::set_handler(|| {
-            crate::io::atomic::remove_pending();
+            crate::io::atomic::remove_pending_and_hold();
             std::process::exit(exit::INTERRUPTED as i32);
         });
     });

@@ -76,7 +76,7 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-/// Temporary files written but not yet renamed into place, removed by [`remove_pending`] when
+/// Temporary files written but not yet renamed into place, removed by [`remove_pending_and_hold`] when
 /// the process is interrupted. Held locked while a set of outputs is renamed, so an interruption
 /// waits until all of them are in place: outputs appear all together or not at all.
 static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -85,13 +85,20 @@ fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
     PENDING.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// Removes every temporary output file not yet renamed into place (for a signal handler, just
-/// before the process exits): an interrupted run leaves no partial or temporary file.
-pub fn remove_pending() {
+/// Removes every temporary output file not yet renamed into place and keeps the list locked for
+/// the rest of the process: for a signal handler, just before the process exits. An interrupted
+/// run leaves no partial or temporary file.
+///
+/// Every temporary file is created under this lock, so holding it until the exit is what makes
+/// the cleanup final: released, it would let a thread waiting to stage its next output create a
+/// temporary file that the exit then leaves behind (this happened, about once in 20 runs, to
+/// `encode-normals` interrupted between its outputs).
+pub fn remove_pending_and_hold() {
     let mut list = pending();
     for path in list.drain(..) {
         let _ = std::fs::remove_file(path);
     }
+    std::mem::forget(list);
 }
 
 fn temp_file_in(dir: &Path) -> std::io::Result<tempfile::NamedTempFile> {
