@@ -49,16 +49,25 @@ fn run(root: &Path, args: &[&str]) -> Output {
     out
 }
 
-/// Every file of `out/`: name → (bytes, modification time).
+/// Every file of `out/`: name → (bytes, modification time). Polled while a bake runs, a file
+/// listed may be gone when it is read (a stage's temporary file, renamed into place): skipped.
 fn outputs(root: &Path) -> BTreeMap<String, (Vec<u8>, SystemTime)> {
     let dir = root.join("examples/bake/out");
     let Ok(entries) = std::fs::read_dir(&dir) else { return BTreeMap::new() };
     entries
-        .map(|e| {
+        .filter_map(|e| {
             let e = e.unwrap();
             let path: PathBuf = e.path();
-            let modified = e.metadata().unwrap().modified().unwrap();
-            (e.file_name().to_string_lossy().into_owned(), (std::fs::read(&path).unwrap(), modified))
+            let gone = |e: &std::io::Error| e.kind() == std::io::ErrorKind::NotFound;
+            let modified = match e.metadata() {
+                Err(err) if gone(&err) => return None,
+                m => m.unwrap().modified().unwrap(),
+            };
+            let bytes = match std::fs::read(&path) {
+                Err(err) if gone(&err) => return None,
+                b => b.unwrap(),
+            };
+            Some((e.file_name().to_string_lossy().into_owned(), (bytes, modified)))
         })
         .collect()
 }

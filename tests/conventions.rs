@@ -709,8 +709,13 @@ fn signals_exit_130_leaving_outputs_untouched_and_no_temporary_file() {
                 "--reconstruct",
                 "new2.exr",
             ]),
-            run("prefilter", &[&big_sky, "--brdf", "torrance-sparrow:sigma=0.25", "-o", "old.json"])
-                .with(&["--reflection-map", "new.exr"]),
+            // The SHRM file too: a single map alone is integrated in angle in well under a second.
+            run("prefilter", &[&big_sky, "--brdf", "torrance-sparrow:sigma=0.25", "-o", "old.json"]).with(&[
+                "--reflection-map",
+                "new.exr",
+                "--shrm",
+                "new2.exr",
+            ]),
             run("factor-brdf", &["kajiya-kay:s=8", "--resolution", "60", "--method", "dense", "-o", "old.exr"])
                 .with(&["--factors", "new.exr", "--terms", "8"]),
             run("count-terms", &["--brdf", "kajiya-kay:s=8", "--resolution", "60", "--method", "dense"])
