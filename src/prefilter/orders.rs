@@ -154,8 +154,11 @@ pub fn texel_orders(
     let samples = ViewSamples::new(model, VIEW_ANGLES);
     let limit = VIEW_RESIDUAL_FACTOR * epsilon;
     let valid_angle = |r: &[f64]| VIEW_ANGLES.iter().zip(r).take_while(|(_, &e)| e <= limit).last().map(|(&a, _)| a);
-    let by_p: Vec<Vec<f64>> = (0..=max_p).map(|p| samples.residuals(brdf, l_max, p)).collect();
-    let p_b = (0..=max_p).find(|&p| valid_angle(&by_p[p]).is_some_and(|a| a >= 90.0)).unwrap_or(max_p);
+    // Each P's residuals cost a pass over the sample grid: measured in increasing P until one
+    // is valid to 90°, not for every P up front.
+    let p_b = (0..=max_p)
+        .find(|&p| valid_angle(&samples.residuals(brdf, l_max, p)).is_some_and(|a| a >= 90.0))
+        .unwrap_or(max_p);
     // F: the bound (2) over the view angles up to 90°; the valid range is then what
     // (F_B, P_B) represents within ε.
     let tails: Vec<Vec<[f64; 3]>> = VIEW_ANGLES
