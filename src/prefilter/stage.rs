@@ -267,28 +267,60 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
                 window: config.window,
                 size: config.size,
             };
-            let t = Instant::now();
-            let mut pre = hybrid::prefilter(&model, lighting, &settings, progress).map_err(fail)?;
-            timings.shrm_seconds = t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            let wanted = if config.irradiance && views.is_empty() { vec![DVec3::Z] } else { views.clone() };
-            let maps = pre.reflection_maps(&model, &wanted, progress).map_err(fail)?;
-            timings.maps_seconds = t.elapsed().as_secs_f64();
-            let (f_b, p_b) = (pre.brdf.f, pre.brdf.p);
-            // BRDF energy missed by (F_B, P_B): against the total ∫∫ ρ̂² the coefficients' own
-            // quadrature measured (not their sum), so no larger expansion is needed. A second one
-            // at (2F_B, P_B + 3) agreed within 0.07 % on Phong and Torrance-Sparrow and cost up to
-            // a third of the bake (`tests/prefilter_cli.rs` holds the agreement).
-            let epsilon_achieved = pre.brdf.residual(f_b, p_b);
-            let bound = config.bound.then(|| app_b_bound(&pre.brdf, &pre.lighting, &pre.bright, lighting));
-            let shrm = if config.shrm_file.is_some() || config.kautz_mccool_slices > 0 {
-                Some(pre.shrm(&model, config.global, progress).map_err(fail)?)
-            } else {
-                None
+            // A few views' maps of a view-dependent BRDF are integrated in angle (`hybrid`),
+            // unless --bound asks about their expansion; the SHRM is then made only for its file.
+            let in_angle = match lighting {
+                Lighting::Map(env) if !config.bound && hybrid::maps_in_angle(&model, &settings, views.len()) => {
+                    Some(env)
+                }
+                _ => None,
             };
-            bake = Some(pre.report.clone());
-            let size = (pre.remainder_shrm.width(), pre.remainder_shrm.height());
-            (maps, shrm, f_b, p_b, epsilon_achieved, pre.lighting.order, bound, size)
+            let shrm_wanted = config.shrm_file.is_some() || config.kautz_mccool_slices > 0;
+            match in_angle {
+                Some(env) if !shrm_wanted => {
+                    let t = Instant::now();
+                    let done =
+                        hybrid::view_frame_maps(&model, env, &views, config.bright, config.size).map_err(fail)?;
+                    timings.maps_seconds = t.elapsed().as_secs_f64();
+                    bake = Some(done.report);
+                    // No expansion: F_B = P_B = 0; ε achieved is the lobe weight outside the cones.
+                    (done.maps, None, 0, 0, hybrid::IN_ANGLE_EPSILON, 0, None, done.size)
+                }
+                _ => {
+                    let t = Instant::now();
+                    let mut pre = hybrid::prefilter(&model, lighting, &settings, progress).map_err(fail)?;
+                    timings.shrm_seconds = t.elapsed().as_secs_f64();
+                    let size = (pre.remainder_shrm.width(), pre.remainder_shrm.height());
+                    let t = Instant::now();
+                    let maps = match in_angle {
+                        // On the SHRM's grid, so the document's size holds for both.
+                        Some(env) => {
+                            let done = hybrid::view_frame_maps(&model, env, &views, config.bright, Some(size))
+                                .map_err(fail)?;
+                            pre.report.maps = done.report.maps;
+                            done.maps
+                        }
+                        None => {
+                            let wanted =
+                                if config.irradiance && views.is_empty() { vec![DVec3::Z] } else { views.clone() };
+                            pre.reflection_maps(&model, &wanted, progress).map_err(fail)?
+                        }
+                    };
+                    timings.maps_seconds = t.elapsed().as_secs_f64();
+                    let (f_b, p_b) = (pre.brdf.f, pre.brdf.p);
+                    // BRDF energy missed by (F_B, P_B): against the total ∫∫ ρ̂² the coefficients'
+                    // own quadrature measured (not their sum), so no larger expansion is needed. A
+                    // second one at (2F_B, P_B + 3) agreed within 0.07 % on Phong and
+                    // Torrance-Sparrow and cost up to a third of the bake (`tests/prefilter_cli.rs`
+                    // holds the agreement).
+                    let epsilon_achieved = pre.brdf.residual(f_b, p_b);
+                    let bound = config.bound.then(|| app_b_bound(&pre.brdf, &pre.lighting, &pre.bright, lighting));
+                    let shrm =
+                        if shrm_wanted { Some(pre.shrm(&model, config.global, progress).map_err(fail)?) } else { None };
+                    bake = Some(pre.report.clone());
+                    (maps, shrm, f_b, p_b, epsilon_achieved, pre.lighting.order, bound, size)
+                }
+            }
         }
         Method::Angular => {
             if config.shrm_file.is_some() || config.kautz_mccool_slices > 0 {

@@ -28,6 +28,7 @@
 
 use super::angular::{ConePyramid, CutoffTable};
 use super::model::Model;
+use crate::envmap::bright::BrightSources;
 use crate::envmap::zonal::{inverse_row, row_spectra, SubRow, TexelRule, MAX_TEXELS};
 use crate::io::RgbImage;
 use crate::sphere::latlong::bilinear_taps;
@@ -60,8 +61,10 @@ const REFINE: usize = 2;
 const TEXELS_PER_WIDTH: f64 = 8.0;
 
 /// The angular integral B(R) = Σ_t L_t ΔΩ_t ρ̂(ω_t; R, V) over the texels in the cone θ*(θ_o)
-/// of R, for every texel of `out` whose view angle θ_o = ∠(R, V) exceeds `min_theta_o`:
-/// (row-major index, value). R = −V has no normal and gets zero.
+/// of R, for every texel of `out` whose view angle θ_o = ∠(R, V) is at least `min_theta_o`
+/// (0: the whole map): (row-major index, value). R = −V has no normal and gets zero. `bright`,
+/// the bright texels split off the `source` grid the pyramid was built from, is added to the
+/// lighting in the view's frame by [`splat`].
 pub fn beyond(
     pyramid: &ConePyramid,
     model: &Model,
@@ -69,6 +72,7 @@ pub fn beyond(
     view: DVec3,
     min_theta_o: f64,
     out: LatLong,
+    bright: Option<(&BrightSources, LatLong)>,
 ) -> Vec<(usize, [f32; 3])> {
     // Over the range of view angles: the narrowest cone and the thinnest lobe.
     let (narrowest, thinnest) = (0..=CONE_SAMPLES)
@@ -79,17 +83,20 @@ pub fn beyond(
     let refine = if PI / level.height as f64 <= thinnest / TEXELS_PER_WIDTH { 1 } else { REFINE };
     let grid = LatLong::new(level.width * refine, level.height * refine);
     let to_world = DQuat::from_rotation_arc(DVec3::Z, view.normalize());
-    let source = rotated(level, to_world, grid);
+    let to_frame = to_world.inverse();
+    let mut source = rotated(level, to_world, grid);
+    if let Some((bright, on)) = bright {
+        splat(&mut source, grid, bright, on, to_frame);
+    }
     // Output rows from the last one at or before min_theta_o: every texel beyond it is bilinear
     // between computed rows.
     let first = (0..grid.height).rev().find(|&y| grid.row_theta(y) <= min_theta_o).unwrap_or(0);
     let rows = filter_rows(&source, model, cutoff, first);
-    let to_frame = to_world.inverse();
     (0..out.width * out.height)
         .into_par_iter()
         .filter_map(|i| {
             let r = out.texel_direction(i % out.width, i / out.width);
-            if r.dot(view).clamp(-1.0, 1.0).acos() <= min_theta_o {
+            if r.dot(view).clamp(-1.0, 1.0).acos() < min_theta_o {
                 return None;
             }
             let (px, py) = grid.position(to_frame * r);
@@ -142,6 +149,44 @@ fn rotated(map: &RgbImage, to_world: DQuat, grid: LatLong) -> RgbImage {
         }
     });
     out
+}
+
+/// Adds the bright texels' excess to `frame`, the lighting on `grid` in the frame `to_frame`
+/// takes world directions to, as energy. Each texel of the `source` grid it was split on is cut
+/// into k × k parts of equal solid angle (uniform in φ and in z), k keeping two parts per texel
+/// of `grid`; each part, rotated into the frame, is spread over the four texel centres around
+/// it with bilinear weights. That keeps both its energy and its centre, so moving it onto the
+/// grid errs only at second order in the grid's spacing against the lobe's width; a point
+/// lookup (as [`rotated`] does for the smooth remainder) would catch a sun smaller than its
+/// sample spacing by chance.
+fn splat(frame: &mut RgbImage, grid: LatLong, bright: &BrightSources, source: LatLong, to_frame: DQuat) {
+    let k = (2 * grid.height).div_ceil(source.height).max(1);
+    let parts = (k * k) as f64;
+    for t in &bright.texels {
+        let (fx, fy) = source.position(t.dir);
+        let (x, y) = (
+            (fx.floor().max(0.0) as usize).min(source.width - 1),
+            (fy.floor().max(0.0) as usize).min(source.height - 1),
+        );
+        let (z0, z1) =
+            ((PI * y as f64 / source.height as f64).cos(), (PI * (y + 1) as f64 / source.height as f64).cos());
+        for j in 0..k {
+            let z = z0 + (z1 - z0) * (j as f64 + 0.5) / k as f64;
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            for i in 0..k {
+                let phi = TAU * (x as f64 + (i as f64 + 0.5) / k as f64) / source.width as f64;
+                let d = to_frame * DVec3::new(s * phi.cos(), s * phi.sin(), z);
+                let (px, py) = grid.position(d);
+                for (texel, w) in bilinear_taps(grid.width, grid.height, px - 0.5, py - 0.5, true) {
+                    let per_area = w * t.solid_angle / parts / grid.row_solid_angle(texel / grid.width);
+                    let p = &mut frame.pixels[texel];
+                    for c in 0..3 {
+                        p[c] += (t.excess[c] * per_area) as f32;
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// Rows `first..H` of the angular integral on `source`'s grid, the view at its pole.
@@ -290,10 +335,10 @@ mod tests {
         let pyramid = ConePyramid::new(&env).unwrap();
         let out = LatLong::new(64, 32);
         let min_theta_o = 1.2;
-        let fast = beyond(&pyramid, &model, &cutoff, DVec3::Z, min_theta_o, out);
+        let fast = beyond(&pyramid, &model, &cutoff, DVec3::Z, min_theta_o, out, None);
         let fine = EnvMap::latlong(rotated(env.image(), DQuat::IDENTITY, out)).unwrap();
         let direct = texel_by_texel(&fine, TexelRule::midpoint(), &model, &cutoff, DVec3::Z, out);
-        let expected = (0..out.height).filter(|&y| out.row_theta(y) > min_theta_o).count() * out.width;
+        let expected = (0..out.height).filter(|&y| out.row_theta(y) >= min_theta_o).count() * out.width;
         assert_eq!(fast.len(), expected);
         for &(i, v) in &fast {
             for c in 0..3 {
@@ -316,10 +361,10 @@ mod tests {
         let out = LatLong::new(48, 24);
         let view = DVec3::new(0.5, -0.3, 0.4).normalize();
         let min_theta_o = 1.5;
-        let fast = beyond(&pyramid, &model, &cutoff, view, min_theta_o, out);
+        let fast = beyond(&pyramid, &model, &cutoff, view, min_theta_o, out, None);
         let direct = texel_by_texel(&env, TexelRule::new(4).unwrap(), &model, &cutoff, view, out);
         let expected = (0..out.width * out.height)
-            .filter(|&i| out.texel_direction(i % out.width, i / out.width).dot(view).acos() > min_theta_o)
+            .filter(|&i| out.texel_direction(i % out.width, i / out.width).dot(view).acos() >= min_theta_o)
             .count();
         assert_eq!(fast.len(), expected);
         let mut worst = 0.0f64;
