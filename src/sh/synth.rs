@@ -90,6 +90,12 @@ impl RowSynth {
 }
 
 /// Renders the coefficients into a `width`×`height` lat-long image (texel centres).
+///
+/// Rows are taken in mirrored pairs, θ and π − θ: P̄_l^m(−z) = (−1)^{l+m} P̄_l^m(z), so one
+/// Legendre evaluation serves both. With E_m and O_m the parts of a_m(θ) = Σ_l L_lm √2 P̄_l^m
+/// over the bands with l + m even and odd, a_m(θ) = E_m + O_m and a_m(π − θ) = E_m − O_m (b_m
+/// likewise). The sum over l runs over contiguous m (the coefficients rearranged band by band),
+/// for all three channels at once.
 pub fn synthesize_latlong(coeffs: &ShCoeffs, width: usize, height: usize) -> Result<RgbImage, SynthError> {
     let order = coeffs.order;
     if 2 * order > width {
@@ -97,35 +103,77 @@ pub fn synthesize_latlong(coeffs: &ShCoeffs, width: usize, height: usize) -> Res
     }
     let table = LegendreTable::new(order);
     let rows = RowSynth::new(width);
-    let mut image = RgbImage::new(width, height);
-    image.pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        let theta = PI * (y as f64 + 0.5) / height as f64;
-        let (st, ct) = theta.sin_cos();
-        let mut plm = vec![0.0; count(order)];
-        table.eval(ct, st, &mut plm);
-        let mut buffers = rows.buffers();
-        let (mut a, mut b) = (vec![0.0; order + 1], vec![0.0; order + 1]);
-        for c in 0..3 {
-            for m in 0..=order {
-                // a_m(θ) = Σ_l L_lm √2 P̄_l^m(cos θ), b_m likewise with L_l,−m (m = 0: no √2).
-                let (mut am, mut bm) = (0.0, 0.0);
-                let scale = if m == 0 { 1.0 } else { SQRT_2 };
-                for l in m..=order {
-                    let p = plm[index(l, m as isize)] * scale;
-                    am += coeffs.rgb[index(l, m as isize)][c] * p;
-                    if m > 0 {
-                        bm += coeffs.rgb[index(l, -(m as isize))][c] * p;
-                    }
-                }
-                a[m] = am;
-                b[m] = bm;
-            }
-            rows.synth(&a, &b, &mut buffers);
-            for (px, v) in row.iter_mut().zip(&buffers.1) {
-                px[c] = *v as f32;
+    // Band l, order m ≥ 0: [cos or sin][at(l, m)][channel] (the coefficients of m and of −m).
+    let at = |l: usize, m: usize| l * (l + 1) / 2 + m;
+    let len = at(order, order) + 1;
+    let mut by_band = [vec![[0.0; 3]; len], vec![[0.0; 3]; len]];
+    for l in 0..=order {
+        for m in 0..=l {
+            by_band[0][at(l, m)] = coeffs.rgb[index(l, m as isize)];
+            if m > 0 {
+                by_band[1][at(l, m)] = coeffs.rgb[index(l, -(m as isize))];
             }
         }
-    });
+    }
+    let pairs: Vec<(usize, Option<usize>)> = (0..height / 2)
+        .map(|y| (y, Some(height - 1 - y)))
+        .chain((height % 2 == 1).then_some((height / 2, None)))
+        .collect();
+    let synthesized: Vec<[Vec<[f32; 3]>; 2]> = pairs
+        .par_iter()
+        .map(|&(y, mirror)| {
+            let theta = PI * (y as f64 + 0.5) / height as f64;
+            let (st, ct) = theta.sin_cos();
+            let mut plm = vec![0.0; count(order)];
+            table.eval(ct, st, &mut plm);
+            // [parity of l][cos or sin][m][channel].
+            let mut parts = [
+                [vec![[0.0; 3]; order + 1], vec![[0.0; 3]; order + 1]],
+                [vec![[0.0; 3]; order + 1], vec![[0.0; 3]; order + 1]],
+            ];
+            for l in 0..=order {
+                // P̄_l^m for m = 0..=l sits at l² + l + m.
+                let p_l = &plm[l * l + l..=l * l + 2 * l];
+                for k in 0..2 {
+                    let band = &by_band[k][at(l, 0)..=at(l, l)];
+                    for ((acc, p), v) in parts[l % 2][k][..=l].iter_mut().zip(p_l).zip(band) {
+                        for c in 0..3 {
+                            acc[c] += p * v[c];
+                        }
+                    }
+                }
+            }
+            let mut buffers = rows.buffers();
+            let (mut a, mut b) = (vec![0.0; order + 1], vec![0.0; order + 1]);
+            let mut out = [vec![[0.0f32; 3]; width], vec![[0.0f32; 3]; if mirror.is_some() { width } else { 0 }]];
+            for (half, sign) in [(0, 1.0), (1, -1.0)] {
+                if half == 1 && mirror.is_none() {
+                    break;
+                }
+                for c in 0..3 {
+                    for m in 0..=order {
+                        // The part with l + m even is the even part in z.
+                        let (even, odd) = (&parts[m % 2], &parts[1 - m % 2]);
+                        let scale = if m == 0 { 1.0 } else { SQRT_2 };
+                        a[m] = scale * (even[0][m][c] + sign * odd[0][m][c]);
+                        b[m] = scale * (even[1][m][c] + sign * odd[1][m][c]);
+                    }
+                    rows.synth(&a, &b, &mut buffers);
+                    for (px, v) in out[half].iter_mut().zip(&buffers.1) {
+                        px[c] = *v as f32;
+                    }
+                }
+            }
+            out
+        })
+        .collect();
+    let mut image = RgbImage::new(width, height);
+    for (&(y, mirror), [top, bottom]) in pairs.iter().zip(synthesized) {
+        image.pixels[y * width..(y + 1) * width].copy_from_slice(&top);
+        if let Some(y) = mirror {
+            image.pixels[y * width..(y + 1) * width].copy_from_slice(&bottom);
+        }
+    }
     Ok(image)
 }
 
@@ -147,5 +195,45 @@ pub fn synthesize_map(coeffs: &ShCoeffs, map: &mut crate::envmap::EnvMap) {
                 };
             }
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_latlong_synthesis_is_the_direct_sum_at_every_texel_centre() {
+        // Mirrored row pairs (and a lone middle row at odd heights), bands of both parities,
+        // m = ±order at the Nyquist limit of the narrower width.
+        let order = 11;
+        let mut coeffs = ShCoeffs::zeros(order);
+        let mut state = 0x9e3779b97f4a7c15u64;
+        for v in &mut coeffs.rgb {
+            for c in v.iter_mut() {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                *c = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            }
+        }
+        let table = LegendreTable::new(order);
+        for (w, h) in [(24, 12), (22, 11), (30, 17)] {
+            let image = synthesize_latlong(&coeffs, w, h).unwrap();
+            let grid = crate::sphere::LatLong::new(w, h);
+            let mut scratch = Vec::new();
+            for y in 0..h {
+                for x in 0..w {
+                    let direct = eval(&coeffs, &table, grid.texel_direction(x, y), &mut scratch);
+                    let got = image.pixels[y * w + x];
+                    for c in 0..3 {
+                        assert!(
+                            (got[c] as f64 - direct[c]).abs() < 1e-5,
+                            "{w}x{h} texel ({x}, {y}) channel {c}: {} against {}",
+                            got[c],
+                            direct[c]
+                        );
+                    }
+                }
+            }
+        }
     }
 }
