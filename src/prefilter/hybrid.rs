@@ -140,10 +140,11 @@ pub struct InAngle {
 /// Lobe energy left outside the cones of [`view_frame_maps`] (the document's ε achieved).
 pub const IN_ANGLE_EPSILON: f64 = ANGULAR_EPSILON;
 
-/// Reflection maps of a view-dependent BRDF with every texel in angle: the bright texels
-/// exactly (as in the SHRM path), the remainder by the view-frame integral of
-/// [`view_axis::beyond`] over the whole map. No spherical harmonics, so nothing rings and no
-/// window is needed; the grid is the lighting's own lat-long grid unless `size` is given (there
+/// Reflection maps of a view-dependent BRDF with every texel in angle: the view-frame integral
+/// of [`view_axis::beyond`] over the whole map, of the remainder and of the bright texels'
+/// excess added to it as energy (its splat keeps each part's energy and centre, so it errs at
+/// second order in the frame's texel against the lobe's width). No spherical harmonics, so
+/// nothing rings and no window is needed; the grid is the lighting's own lat-long grid unless `size` is given (there
 /// is no F_B to size it by, as for `--method angular`).
 pub fn view_frame_maps(
     model: &Model,
