@@ -113,8 +113,8 @@ fn main() -> anyhow::Result<()> {
          last line). Per-texel errors over texels ≥ 1 % of the mean (`src/metrics.rs`). Times are \
          wall-clock seconds of the library call, the fastest of 3 alternating runs of each in one process, the paper-order bake (`--order-rule \
          energy --bright off --window none`) beside the default. The default integrates a \
-         view-dependent BRDF's map for one view in angle, with no orders (F_B reads `angle`; \
-         docs/prefilter.md, \"Few views in angle\").\n"
+         view-dependent BRDF's maps in angle, with no orders (F_B reads `angle`; \
+         docs/prefilter.md, \"Maps in angle\").\n"
     )?;
     writeln!(
         doc,
@@ -156,7 +156,7 @@ fn row(
     default_s: f64,
     paper_s: f64,
 ) -> String {
-    // No orders: the maps were integrated in angle (docs/prefilter.md, "Few views in angle").
+    // No orders: the maps were integrated in angle (docs/prefilter.md, "Maps in angle").
     let (f_b, p_b) =
         if f_b == 0 { ("angle".to_string(), "–".to_string()) } else { (f_b.to_string(), p_b.to_string()) };
     format!(

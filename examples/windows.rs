@@ -21,7 +21,6 @@ use prtkit::envmap::bright::BrightRule;
 use prtkit::envmap::EnvMap;
 use prtkit::io::RgbImage;
 use prtkit::metrics::{compare, Metrics};
-use prtkit::prefilter::hybrid::FEW_VIEWS;
 use prtkit::prefilter::stage::Config;
 use prtkit::progress::NoProgress;
 use prtkit::sh::project::OrderChoice;
@@ -75,10 +74,8 @@ fn main() -> anyhow::Result<()> {
             )?;
             for window in WINDOWS {
                 // A view-dependent BRDF's maps go through the SHRM, where the window acts, only
-                // from `FEW_VIEWS` views on (fewer are integrated in angle): the view repeated.
-                let views = if brdf.is_radially_symmetric() { 1 } else { FEW_VIEWS };
-                let (mut out, _) =
-                    bake(&map, &brdf, DVec3::Z, |c| Config { window, maps: vec![c.maps[0].clone(); views], ..c })?;
+                // when --bound asks about the expansion (else they are integrated in angle).
+                let (mut out, _) = bake(&map, &brdf, DVec3::Z, |c| Config { window, bound: true, ..c })?;
                 let t = out.document.body.bake.as_ref().and_then(|b| b.window.t);
                 let (image, f_b) = (out.maps.remove(0), out.summary.f_b);
                 let (m, _) = compare(&image, &reference_map, &[])?;

@@ -35,7 +35,7 @@ say "2. sh-project: SH coefficients for ε = 1 %, reconstruction and irradiance"
 say "3. prefilter: Phong s=32 reflection map; microfacet (σ = 0.2) SHRM and two views"
 # Defaults throughout: orders from the per-texel rule for this lighting, the sun filtered in
 # angle apart from the SH remainder, the nonneg window (docs/prefilter.md, "Ring-free bakes").
-# The microfacet's two views are integrated in angle beside its SHRM ("Few views in angle").
+# The microfacet's two views are integrated in angle beside its SHRM ("Maps in angle").
 "$bin/prefilter" "$out/sky.exr" --brdf phong:s=32 --reflection-map "$out/phong32.exr" \
     --reflection-map "$out/phong32.png" --exposure -2 -o "$out/phong32.shrm.json" -q
 "$bin/prefilter" "$out/sky.exr" --brdf torrance-sparrow:sigma=0.2 --size 256x128 \

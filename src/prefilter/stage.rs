@@ -267,10 +267,12 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
                 window: config.window,
                 size: config.size,
             };
-            // A few views' maps of a view-dependent BRDF are integrated in angle (`hybrid`),
-            // unless --bound asks about their expansion; the SHRM is then made only for its file.
+            // A view-dependent BRDF's maps are integrated in angle (`hybrid`), unless --bound
+            // asks about their expansion; the SHRM is then made only for its file.
             let in_angle = match lighting {
-                Lighting::Map(env) if !config.bound && hybrid::maps_in_angle(&model, &settings, views.len()) => {
+                Lighting::Map(env)
+                    if !views.is_empty() && !config.bound && hybrid::maps_in_angle(&model, &settings) =>
+                {
                     Some(env)
                 }
                 _ => None,

@@ -72,7 +72,7 @@ pub struct Args {
 
     /// How F_B, P_B are chosen from ε: texel (bounds the error of every texel under this
     /// lighting; texels of grazing views the SHRM does not represent are integrated in angle,
-    /// and a view-dependent BRDF's maps for fewer than 8 views are integrated in angle whole) or
+    /// and a view-dependent BRDF's reflection maps are integrated in angle whole) or
     /// energy (the paper's rule, §5.1; it ignores the lighting and rings under HDR suns).
     #[arg(long, value_enum, default_value_t = OrderRule::Texel)]
     pub order_rule: OrderRule,
