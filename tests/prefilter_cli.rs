@@ -127,3 +127,33 @@ fn refused_options_exit_2_and_leave_no_output() {
         assert!(!out.exists() && !map.exists(), "{args:?} left an output");
     }
 }
+
+#[test]
+fn a_window_on_maps_integrated_in_angle_is_said_to_have_no_effect() {
+    // A view-dependent BRDF's maps are integrated in angle: no SH synthesis for a window to act
+    // on. The stage says so on stderr (not with --quiet) and records the window as none.
+    let dir = tempfile::tempdir().unwrap();
+    let env = sky_pfm(dir.path(), 32, 16);
+    let (doc, map) = (dir.path().join("m.json"), dir.path().join("v.exr"));
+    let run = |window: &str| {
+        cmd("prefilter")
+            .arg(&env)
+            .args(["--brdf", "torrance-sparrow:sigma=0.3", "--window", window, "--reflection-map"])
+            .arg(&map)
+            .arg("-o")
+            .arg(&doc)
+            .assert()
+            .success()
+            .get_output()
+            .stderr
+            .clone()
+    };
+    let said = String::from_utf8(run("hann")).unwrap();
+    assert!(said.contains("--window hann has no effect"), "{said}");
+    let d: Document<ShrmBody> = read(&doc);
+    let bake = d.body.bake.expect("a bake report");
+    assert_eq!(bake.maps, prtkit::prefilter::hybrid::MapsFrom::Angle);
+    assert_eq!(bake.window.kind, prtkit::sh::window::Window::None);
+    let quiet = String::from_utf8(run("nonneg")).unwrap();
+    assert!(!quiet.contains("no effect"), "the default window is not worth a note: {quiet}");
+}

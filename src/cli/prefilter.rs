@@ -7,9 +7,11 @@ use super::options::Execution;
 use super::options::{check_json_output, read_sh_document, EnvArgs};
 use super::outputs::{check_writable, Outputs};
 use crate::io::Output;
+use crate::prefilter::hybrid::MapsFrom;
 use crate::prefilter::pipeline::Lighting;
 use crate::prefilter::stage::{self, Config, MapRequest};
 use crate::prefilter::verify::Verification;
+use crate::sh::window::Window;
 use anyhow::{bail, Result};
 pub use args::*;
 
@@ -84,6 +86,14 @@ impl Stage for Args {
             (None, None) => bail!("give an environment map or --sh FILE"),
         };
         let out = stage::run(&config, lighting, ctx.progress())?;
+        let in_angle = out.document.body.bake.as_ref().is_some_and(|b| b.maps == MapsFrom::Angle);
+        if in_angle && self.window != Window::Nonneg && self.shrm.is_none() && self.kautz_mccool.is_none() {
+            ctx.note(format_args!(
+                "--window {} has no effect: the reflection maps were integrated in angle, with no spherical \
+                 harmonics to window (docs/prefilter.md, \"Maps in angle\")",
+                self.window.name()
+            ));
+        }
         if let Some(v) = &out.summary.verification {
             ctx.note(verification_note(v));
         }
