@@ -47,8 +47,9 @@ use std::f64::consts::PI;
 /// coefficients grows with it; a 512×256 map resolves up to 255).
 pub const MAX_TEXEL_ORDER: usize = 255;
 
-/// Lobe energy left outside the cone of the exact angular passes (bright texels, fallbacks).
-const ANGULAR_EPSILON: f64 = 1e-5;
+/// Lobe energy left outside the cone of the exact angular passes (bright texels, fallbacks,
+/// [`view_frame_maps`], whose documents give it as ε achieved).
+pub const ANGULAR_EPSILON: f64 = 1e-5;
 
 /// The share of a radially symmetric lobe's weight the bright texels' rule may misplace
 /// ([`rule_for_kernel`]).
@@ -130,9 +131,6 @@ pub struct InAngle {
     /// What was done.
     pub report: Report,
 }
-
-/// Lobe energy left outside the cones of [`view_frame_maps`] (the document's ε achieved).
-pub const IN_ANGLE_EPSILON: f64 = ANGULAR_EPSILON;
 
 /// Reflection maps of a view-dependent BRDF with every texel in angle: the view-frame integral
 /// of [`view_axis::beyond`] over the whole map, of the remainder and of the bright texels'

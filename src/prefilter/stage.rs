@@ -286,7 +286,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
                     timings.maps_seconds = t.elapsed().as_secs_f64();
                     bake = Some(done.report);
                     // No expansion: F_B = P_B = 0; ε achieved is the lobe weight outside the cones.
-                    (done.maps, None, 0, 0, hybrid::IN_ANGLE_EPSILON, 0, None, done.size)
+                    (done.maps, None, 0, 0, hybrid::ANGULAR_EPSILON, 0, None, done.size)
                 }
                 _ => {
                     let t = Instant::now();
