@@ -145,11 +145,10 @@ pub fn view_frame_maps(
     bright_rule: BrightRule,
     size: Option<(usize, usize)>,
 ) -> Result<InAngle, PrefilterError> {
-    let latlong = as_latlong(map).map_err(|e| PrefilterError::Resample(e.to_string()))?;
-    let (remainder, bright) = split(&latlong, bright_rule);
-    let (w, h) = size.unwrap_or((latlong.image().width, latlong.image().height));
+    let (remainder, bright) = split_latlong(map, bright_rule)?;
+    let source = LatLong::new(remainder.image().width, remainder.image().height);
+    let (w, h) = size.unwrap_or((source.width, source.height));
     let grid = LatLong::new(w, h);
-    let source = LatLong::new(latlong.image().width, latlong.image().height);
     let cone = ConePyramid::new(&remainder)?;
     let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), ANGULAR_EPSILON, 65);
     let maps = views
@@ -220,8 +219,7 @@ pub fn prefilter(
     let max_p = if radial { 0 } else { settings.max_p };
     let (remainder, bright) = match lighting {
         Lighting::Map(map) => {
-            let latlong = as_latlong(map).map_err(|e| PrefilterError::Resample(e.to_string()))?;
-            let (rest, bright) = split(&latlong, settings.bright);
+            let (rest, bright) = split_latlong(map, settings.bright)?;
             (Some(rest), bright)
         }
         Lighting::Coefficients(_) => (None, BrightSources { threshold: f64::INFINITY, ..Default::default() }),
@@ -777,6 +775,12 @@ impl ViewProjection {
             }
         }
     }
+}
+
+/// The map as lat-long ([`as_latlong`]) split into its clipped remainder and bright texels.
+fn split_latlong(map: &EnvMap, rule: BrightRule) -> Result<(EnvMap, BrightSources), PrefilterError> {
+    let latlong = as_latlong(map).map_err(|e| PrefilterError::Resample(e.to_string()))?;
+    Ok(split(&latlong, rule))
 }
 
 /// The angular passes integrate lat-long maps: other layouts are resampled at a resolution that
