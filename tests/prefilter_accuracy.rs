@@ -75,7 +75,7 @@ fn microfacet_shrm_matches_the_angular_reference() {
     let achieved = coeffs.residual(fb, 2);
     let light = project(&env, fb, &NoProgress).unwrap();
     let local = shrm::local_shrm(&light, &coeffs, 128, 64, &NoProgress).unwrap();
-    let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), 1e-3, 33);
+    let cutoff = CutoffTable::of_model(&model, 1e-3, 33);
     for view in [DVec3::Z, DVec3::new(0.5, -0.3, 0.8).normalize()] {
         let freq = shrm::reflection_map(&local, view);
         let reference = angular::view_map(&cone, &model, &cutoff, view, 128, 64, &NoProgress);
@@ -145,7 +145,7 @@ fn kajiya_kay_by_the_tangent_matches_the_angular_reference() {
     let achieved = coeffs.residual(coeffs.f, coeffs.p);
     let light = project(&env, coeffs.f, &NoProgress).unwrap();
     let local = shrm::local_shrm(&light, &coeffs, 128, 64, &NoProgress).unwrap();
-    let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), 1e-3, 33);
+    let cutoff = CutoffTable::of_model(&model, 1e-3, 33);
     let view = DVec3::new(0.3, -0.2, 0.9).normalize();
     let freq = shrm::reflection_map(&local, view);
     let reference = angular::view_map(&cone, &model, &cutoff, view, 128, 64, &NoProgress);

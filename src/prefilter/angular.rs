@@ -30,6 +30,7 @@
 //! **Determinism.** Output rows run in parallel; each texel is one sequential sum in a fixed
 //! order (source rows, columns, sub-samples), so the result is the same for any thread count.
 
+use super::model::Model;
 use crate::envmap::zonal::{self, choose_rule, Rows, RuleChoice, SubRow, TexelRule, ZonalError};
 use crate::envmap::{EnvMap, Layout};
 use crate::io::RgbImage;
@@ -331,7 +332,7 @@ impl ConeIntegrator {
     /// The texel rule for a 3-D ρ̂ (view-dependent lobes): [`choose_rule`] over the texel
     /// integrals seen from probe reflection vectors at the equator and at 45° (where the texels
     /// are largest and mid-sized), each with views at θ_o = 0, 60° and 81°.
-    pub fn rule_for_view(&self, model: &super::model::Model, cutoff: &CutoffTable, tolerance: f64) -> RuleChoice {
+    pub fn rule_for_view(&self, model: &Model, cutoff: &CutoffTable, tolerance: f64) -> RuleChoice {
         let mut probes = Vec::new();
         for theta_r in [0.5 * PI, 0.25 * PI] {
             let r = sphere::direction(theta_r, 0.5 * TAU / self.source.grid.width as f64);
@@ -465,10 +466,25 @@ pub struct CutoffTable {
 }
 
 impl CutoffTable {
-    /// Tabulates θ* and the width for ρ̂(ω_i, ω_o) (reflection frame, luminance), which must be
-    /// even in φ_i (ω_o lies at φ = 0: the mirror y → −y leaves an isotropic ρ̂ unchanged), so
-    /// only φ_i ∈ [0, π] is sampled.
-    pub fn new(rho_hat: impl Fn(DVec3, DVec3) -> f64 + Sync, epsilon: f64, bins: usize) -> Self {
+    /// [`CutoffTable::new`] for `model`'s ρ̂ (luminance), its normal and frame prepared once per
+    /// bin ([`Model::prepare_view`] with R = +Z is the reflection frame itself).
+    pub fn of_model(model: &Model, epsilon: f64, bins: usize) -> Self {
+        let lobe = |wo: DVec3| {
+            let view = model.prepare_view(DVec3::Z, wo);
+            move |wi: DVec3| {
+                view.as_ref().map_or(0.0, |v| {
+                    let r = model.rho_hat_prepared(v, wi);
+                    (r[0] + r[1] + r[2]) / 3.0
+                })
+            }
+        };
+        Self::new(lobe, epsilon, bins)
+    }
+
+    /// Tabulates θ* and the width for ρ̂(ω_i, ω_o) (reflection frame, luminance), given as
+    /// `rho_hat(ω_o)(ω_i)`, which must be even in φ_i (ω_o lies at φ = 0: the mirror y → −y
+    /// leaves an isotropic ρ̂ unchanged), so only φ_i ∈ [0, π] is sampled.
+    pub fn new<L: Fn(DVec3) -> f64>(rho_hat: impl Fn(DVec3) -> L + Sync, epsilon: f64, bins: usize) -> Self {
         let n_theta = 512;
         let n_phi = 24;
         // The sample directions, shared by every bin.
@@ -483,6 +499,7 @@ impl CutoffTable {
             .map(|b| {
                 let theta_o = PI * b as f64 / (bins - 1).max(1) as f64;
                 let wo = sphere::direction(theta_o.min(PI - 1e-6), 0.0);
+                let rho_hat = rho_hat(wo);
                 // Mass per θ_i band (midpoint rule in θ_i, uniform φ_i), and the largest sample.
                 let mut peak = 0.0f64;
                 let mass: Vec<f64> = directions
@@ -490,7 +507,7 @@ impl CutoffTable {
                     .enumerate()
                     .map(|(i, row)| {
                         let theta_i = PI * (i as f64 + 0.5) / n_theta as f64;
-                        let s: f64 = row.iter().map(|&wi| rho_hat(wi, wo)).inspect(|&v| peak = peak.max(v)).sum();
+                        let s: f64 = row.iter().map(|&wi| rho_hat(wi)).inspect(|&v| peak = peak.max(v)).sum();
                         s * theta_i.sin()
                     })
                     .collect();
@@ -796,7 +813,7 @@ mod tests {
         // A normalized Phong lobe about R, whatever the view: ∫ u dω = 1 and max u = (s + 1)/2π,
         // so the width is √(2π/(s + 1)) exactly.
         for s in [8, 64, 512] {
-            let u = move |wi: DVec3, _wo: DVec3| (s as f64 + 1.0) / TAU * wi.z.max(0.0).powi(s);
+            let u = move |_wo: DVec3| move |wi: DVec3| (s as f64 + 1.0) / TAU * wi.z.max(0.0).powi(s);
             let table = CutoffTable::new(u, 1e-3, 5);
             let exact = (TAU / (s as f64 + 1.0)).sqrt();
             for theta_o in [0.0, 1.0, 2.5] {
@@ -810,7 +827,7 @@ mod tests {
     fn view_maps_are_the_same_for_any_thread_count() {
         let env = ConeIntegrator::new(&sky(32, 16)).unwrap().with_rule(TexelRule::new(2).unwrap());
         let model = Model::new(Brdf::parse("torrance-sparrow:sigma=0.2").unwrap(), false).unwrap();
-        let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), 1e-2, 17);
+        let cutoff = CutoffTable::of_model(&model, 1e-2, 17);
         let view = DVec3::new(0.3, -0.5, 0.4).normalize();
         let run = |threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -827,7 +844,7 @@ mod tests {
         // σ = 0.05 on 48 × 24 texels (7.5°): far narrower than a texel, so the midpoint is off.
         let env = ConeIntegrator::new(&sky(48, 24)).unwrap();
         let model = Model::new(Brdf::parse("torrance-sparrow:sigma=0.05").unwrap(), true).unwrap();
-        let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), 1e-3, 17);
+        let cutoff = CutoffTable::of_model(&model, 1e-3, 17);
         let choice = env.rule_for_view(&model, &cutoff, 1e-4);
         assert!(choice.rule.subsamples() > 1 && choice.estimated_error <= 1e-4, "{choice:?}");
     }

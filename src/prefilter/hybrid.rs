@@ -150,7 +150,7 @@ pub fn view_frame_maps(
     let (w, h) = size.unwrap_or((source.width, source.height));
     let grid = LatLong::new(w, h);
     let cone = ConePyramid::new(&remainder)?;
-    let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), ANGULAR_EPSILON, 65);
+    let cutoff = CutoffTable::of_model(model, ANGULAR_EPSILON, 33);
     let maps = views
         .iter()
         .map(|&view| {
@@ -428,7 +428,7 @@ impl Prefiltered {
         let cone = self.remainder_map.as_ref().filter(|_| fallback).map(ConePyramid::new).transpose()?;
         // The view-dependent cones, when anything is summed in angle.
         let cutoff = (model.centre().is_none() && (!self.bright.is_empty() || fallback))
-            .then(|| CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), ANGULAR_EPSILON, 65));
+            .then(|| CutoffTable::of_model(model, ANGULAR_EPSILON, 33));
         Ok(views
             .iter()
             .map(|&view| {
@@ -927,7 +927,7 @@ mod tests {
         let model = Model::new(Brdf::parse("torrance-sparrow:sigma=0.3").unwrap(), true).unwrap();
         let black = EnvMap::latlong(RgbImage::new(grid.width, grid.height)).unwrap();
         let pyramid = ConePyramid::new(&black).unwrap();
-        let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), ANGULAR_EPSILON, 65);
+        let cutoff = CutoffTable::of_model(&model, ANGULAR_EPSILON, 65);
         for view in [DVec3::Z, DVec3::new(0.3, -0.5, 0.8).normalize()] {
             let got = view_axis::beyond(&pyramid, &model, &cutoff, view, 0.0, grid, Some((&bright, grid)));
             assert_eq!(got.len(), grid.width * grid.height);

@@ -252,7 +252,7 @@ impl Cone {
     fn new(model: &Model, epsilon: f64) -> Self {
         match model.centre() {
             Some(_) => Cone::Radial(angular::radial_truncation(|x| model.lobe(x)[0], epsilon)),
-            None => Cone::View(CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), epsilon, 65)),
+            None => Cone::View(CutoffTable::of_model(model, epsilon, 65)),
         }
     }
 

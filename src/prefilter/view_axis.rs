@@ -330,7 +330,7 @@ mod tests {
         // way (the frame's grid halves every texel of the map, which copies it exactly), so the
         // FFT correlations must reproduce the direct sum on that grid to rounding.
         let model = model();
-        let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), 1e-4, 33);
+        let cutoff = CutoffTable::of_model(&model, 1e-4, 33);
         let env = smooth_map(32, 16);
         let pyramid = ConePyramid::new(&env).unwrap();
         let out = LatLong::new(64, 32);
@@ -355,7 +355,7 @@ mod tests {
         // The lighting rotated into the view's frame and the output read back bilinearly: on a
         // smooth map both resamplings are within a fraction of a per cent of the direct sum.
         let model = model();
-        let cutoff = CutoffTable::new(|wi, wo| model.rho_hat_grey(wi, wo), 1e-4, 33);
+        let cutoff = CutoffTable::of_model(&model, 1e-4, 33);
         let env = smooth_map(64, 32);
         let pyramid = ConePyramid::new(&env).unwrap();
         let out = LatLong::new(48, 24);
