@@ -25,7 +25,7 @@
 use super::angular::{radial_cutoff, ConePyramid, CutoffTable};
 use super::brdf_sh::BrdfSh;
 use super::model::Model;
-use super::orders::{texel_orders, OrderRule, TexelOrders};
+use super::orders::{first_projection, texel_orders, LightEnergy, OrderRule, TexelOrders};
 use super::pipeline::{brdf_coefficients, Lighting, Orders, PrefilterError};
 use super::shrm::{self, texel_frame, Shrm, ShrmError};
 use super::view_axis;
@@ -34,7 +34,7 @@ use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows};
 use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::{NoProgress, Progress};
-use crate::sh::project::{project, project_latlong, TexelQuadrature};
+use crate::sh::project::{map_energy_rgb, project, project_latlong, TexelQuadrature};
 use crate::sh::window::{self, Window, WindowReport};
 use crate::sh::{lm, ShCoeffs};
 use crate::sphere::LatLong;
@@ -224,36 +224,55 @@ pub fn prefilter(
         }
         Lighting::Coefficients(_) => (None, BrightSources { threshold: f64::INFINITY, ..Default::default() }),
     };
-    // The lighting to the highest band any rule may ask for.
-    let full_light = match (&remainder, lighting) {
-        (Some(rest), _) => {
-            let order = match (settings.orders, settings.rule) {
-                (Some((f, _)), _) => f,
-                // The output grid holds bands up to (W − 2)/2 (synthesis needs W ≥ 2F + 2).
-                (None, OrderRule::Texel) => {
-                    resolvable_order(rest).min(settings.size.map_or(usize::MAX, |(w, _)| w.saturating_sub(2) / 2))
-                }
-                (None, OrderRule::Energy) => 0,
-            };
-            Some(project(rest, order, progress)?)
-        }
-        (None, Lighting::Coefficients(c)) => Some(c.clone()),
+    // The lighting as far as the rule asked for it (the texel rule projects it itself).
+    let mut full_light = match (&remainder, lighting, settings.orders) {
+        (Some(rest), _, Some((f, _))) => Some(project(rest, f, progress)?),
+        (None, Lighting::Coefficients(c), _) => Some(c.clone()),
         _ => None,
     };
     let mut kernel = Vec::new();
-    let (brdf, texel) = match (settings.orders, settings.rule, &full_light) {
-        (Some((f, p)), _, _) => (brdf_coefficients(model, Orders::Fixed { f, p })?, None),
-        (None, OrderRule::Energy, _) => {
+    let (brdf, texel) = match (settings.orders, settings.rule) {
+        (Some((f, p)), _) => (brdf_coefficients(model, Orders::Fixed { f, p })?, None),
+        (None, OrderRule::Energy) => {
             (brdf_coefficients(model, Orders::Epsilon { epsilon: settings.epsilon, max_p })?, None)
         }
-        (None, OrderRule::Texel, Some(light)) => {
-            let l_max = light.order;
+        (None, OrderRule::Texel) => {
+            let l_max = match (&remainder, &full_light) {
+                // The output grid holds bands up to (W − 2)/2 (synthesis needs W ≥ 2F + 2).
+                (Some(rest), _) => {
+                    resolvable_order(rest).min(settings.size.map_or(usize::MAX, |(w, _)| w.saturating_sub(2) / 2))
+                }
+                (None, Some(c)) => c.order,
+                (None, None) => unreachable!("coefficients are given when there is no map"),
+            };
             let full = model.coefficients(l_max, max_p);
             if radial {
                 kernel = (0..=l_max).map(|l| full.radial_kernel(l)).collect();
             }
-            let mean = mean_reflected(&full, light, &bright);
-            let orders = texel_orders(model, &full, &light.band_energy_rgb(), mean, settings.epsilon, max_p);
+            let rule = |light: &ShCoeffs, energy: &LightEnergy| {
+                texel_orders(model, &full, energy, mean_reflected(&full, light, &bright), settings.epsilon, max_p)
+            };
+            let orders = match (&remainder, &full_light) {
+                (Some(rest), _) => {
+                    // Projected as far as the rule needs: bands beyond the first projection are
+                    // bounded by the map's energy, and only when that bound decides F_B is the
+                    // projection taken further (`orders`: the same F_B as projecting to l_max).
+                    let energy = map_energy_rgb(rest);
+                    let mut order = first_projection(model, &full, max_p, l_max);
+                    loop {
+                        let light = project(rest, order, progress)?;
+                        if let Some(orders) = rule(&light, &LightEnergy::projected(&light, energy, l_max)) {
+                            full_light = Some(light);
+                            break orders;
+                        }
+                        order = (2 * order).max(1).min(l_max);
+                    }
+                }
+                (None, Some(c)) => {
+                    rule(c, &LightEnergy::exact(c.band_energy_rgb())).expect("every band known decides the orders")
+                }
+                (None, None) => unreachable!("coefficients are given when there is no map"),
+            };
             if let Lighting::Coefficients(c) = lighting {
                 // A map is cut at its own resolution, but given coefficients were cut by the
                 // caller: they must at least hold what the BRDF's energy rule needs.
@@ -264,7 +283,6 @@ pub fn prefilter(
             }
             (full.truncated(orders.f_b, orders.p_b), Some(orders))
         }
-        (None, OrderRule::Texel, None) => unreachable!("the texel rule always has the lighting"),
     };
     let f_b = brdf.f;
     if radial && kernel.is_empty() {

@@ -16,6 +16,14 @@
 //!   highest band the map resolves: beyond it the map holds no information, and F_B is capped
 //!   there (the document says so).
 //!
+//!   The lighting need not be projected to l_max to apply (1): bands above the projected order L
+//!   hold at most the map's whole energy ∫ L² dω (Bessel's inequality), so by Cauchy–Schwarz
+//!   they add at most √(∫ L² dω) · √(Σ_{l > L} w_l²) to e(F), w_l being band l's factor in (1).
+//!   The rule projects to a first L where the BRDF's factors have fallen away
+//!   ([`first_projection`]) and projects further only when that term decides F_B: the F_B it
+//!   returns is the one a projection to l_max gives, at the cost of a projection to L (Phong
+//!   s = 8 on a 256×128 map: L = 22 against l_max = 127).
+//!
 //!   For view-dependent BRDFs a tighter form per view angle θ_o (cos θ_o = R·V): at a fixed ω_o,
 //!   band l of ρ̂ as a function of ω_i has norm n_l(θ_o), and by Cauchy–Schwarz per band
 //!
@@ -32,7 +40,7 @@ use super::model::Model;
 use crate::metrics::TEXEL_FLOOR;
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use crate::sh::legendre::LegendreTable;
-use crate::sh::{count, index};
+use crate::sh::{count, index, ShCoeffs};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -93,28 +101,89 @@ fn view_weights(p: usize, theta_o: Option<f64>) -> Vec<f64> {
     out
 }
 
-/// The bound (1) per channel for every F ≤ l_max: `tail[F][c]` = e(F) (0 at F = l_max), with
-/// |Y_pq| bounded by `weights` (index p(p+1)+q).
-fn tail_bounds(brdf: &BrdfSh, p: usize, band_energy: &[[f64; 3]], weights: &[f64]) -> Vec<[f64; 3]> {
-    let l_max = band_energy.len() - 1;
-    let mut per_band = vec![[0.0; 3]; l_max + 1];
-    for (l, e) in band_energy.iter().enumerate() {
-        for pp in 0..=p {
-            for q in -(l.min(pp) as isize)..=(l.min(pp) as isize) {
-                let r = brdf.get(l, pp, q);
-                for c in 0..3 {
-                    per_band[l][c] += e[c].max(0.0).sqrt() * r[c].abs() * weights[index(pp, q)];
+/// Band l's factor in (1) per channel for l ≤ l_max: w_l = Σ_{p ≤ P, |q| ≤ min(l,p)} |ρ̂_lpq| ·
+/// `weights` (the bound on |Y_pq|, index p(p+1)+q).
+fn band_weights(brdf: &BrdfSh, p: usize, l_max: usize, weights: &[f64]) -> Vec<[f64; 3]> {
+    (0..=l_max)
+        .map(|l| {
+            let mut w = [0.0; 3];
+            for pp in 0..=p {
+                for q in -(l.min(pp) as isize)..=(l.min(pp) as isize) {
+                    let r = brdf.get(l, pp, q);
+                    for c in 0..3 {
+                        w[c] += r[c].abs() * weights[index(pp, q)];
+                    }
                 }
+            }
+            w
+        })
+        .collect()
+}
+
+/// The lighting as the texel rule sees it: band energies E_l = Σ_m L_lm² per channel as far as
+/// the lighting was projected (l ≤ L), and a bound on all the bands above L up to l_max.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightEnergy {
+    /// E_l for l ≤ L.
+    pub bands: Vec<[f64; 3]>,
+    /// At least Σ_{L < l ≤ l_max} E_l per channel.
+    pub above: [f64; 3],
+    /// The highest band the map resolves (at least L).
+    pub l_max: usize,
+}
+
+impl LightEnergy {
+    /// The bands of `light` (projected to L ≤ `l_max`) with `map_energy` = ∫ L² dω of the map it
+    /// was projected from bounding those above (Bessel's inequality; nothing is above when
+    /// L = l_max).
+    pub fn projected(light: &ShCoeffs, map_energy: [f64; 3], l_max: usize) -> Self {
+        let above = if light.order >= l_max { [0.0; 3] } else { map_energy };
+        LightEnergy { bands: light.band_energy_rgb().into_iter().take(l_max + 1).collect(), above, l_max }
+    }
+
+    /// Every band known: l_max is the last one.
+    pub fn exact(bands: Vec<[f64; 3]>) -> Self {
+        let l_max = bands.len().saturating_sub(1);
+        LightEnergy { bands, above: [0.0; 3], l_max }
+    }
+}
+
+/// e(F) of (1) or (2) per channel for every F ≤ l_max (0 at l_max), given band l's factor
+/// `weights[l]`: the projected bands' Σ_{F < l ≤ L} √E_l w_l plus the bands above L by
+/// Cauchy–Schwarz, √above · √(Σ_{max(F,L) < l ≤ l_max} w_l²). Second, the projected bands' part
+/// alone: no more than e(F) with every band projected, so an F it rejects, a projection to
+/// l_max rejects too.
+fn tails(weights: &[[f64; 3]], light: &LightEnergy) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let (l_max, projected) = (light.l_max, light.bands.len() - 1);
+    let (mut known, mut above) = (vec![[0.0; 3]; l_max + 1], vec![[0.0; 3]; l_max + 1]);
+    for f in (0..l_max).rev() {
+        let l = f + 1;
+        for c in 0..3 {
+            if l <= projected {
+                known[f][c] = known[f + 1][c] + light.bands[l][c].max(0.0).sqrt() * weights[l][c];
+                above[f][c] = above[f + 1][c];
+            } else {
+                above[f][c] = above[f + 1][c] + weights[l][c] * weights[l][c];
             }
         }
     }
-    let mut tail = vec![[0.0; 3]; l_max + 1];
-    for f in (0..l_max).rev() {
-        for c in 0..3 {
-            tail[f][c] = tail[f + 1][c] + per_band[f + 1][c];
-        }
-    }
-    tail
+    let tail = known.iter().zip(&above).map(|(k, a)| std::array::from_fn(|c| k[c] + (light.above[c] * a[c]).sqrt()));
+    (tail.collect(), known)
+}
+
+/// The band [`texel_orders`] is given the lighting to first: twice the band where the BRDF's
+/// factors w_l of (1) (every view angle, P = `max_p`) have fallen to 10⁻³ of their largest,
+/// within `l_max`. Beyond it a Gaussian-like kernel (Phong's falls like exp(−l²/2s)) is below
+/// 10⁻¹² of its peak, so bounding those bands by the map's whole energy decides nothing.
+pub fn first_projection(model: &Model, brdf: &BrdfSh, max_p: usize, l_max: usize) -> usize {
+    let p = if model.centre().is_some() { 0 } else { max_p.min(brdf.p) };
+    let w: Vec<f64> = band_weights(brdf, p, l_max.min(brdf.f), &view_weights(p, None))
+        .iter()
+        .map(|w| w[0].max(w[1]).max(w[2]))
+        .collect();
+    let peak = w.iter().cloned().fold(0.0, f64::max);
+    let fallen = (0..w.len()).rev().find(|&l| w[l] > 1e-3 * peak).map_or(0, |l| l + 1);
+    (2 * fallen).min(l_max)
 }
 
 /// The view residual r(θ_o) a texel's view angle may have and still be taken from the SHRM,
@@ -122,9 +191,10 @@ fn tail_bounds(brdf: &BrdfSh, p: usize, band_energy: &[[f64; 3]], weights: &[f64
 /// r (`docs/prefilter.md`).
 pub const VIEW_RESIDUAL_FACTOR: f64 = 1.0;
 
-/// The texel rule. `brdf` holds ρ̂_lpq to at least (l_max, max_p) where l_max + 1 is the length
-/// of `band_energy` (the lighting's per-band, per-channel energy); `mean_reflected` is the mean
-/// radiance of the reflection map (per channel) the floor is a fraction of.
+/// The texel rule. `brdf` holds ρ̂_lpq to at least (l_max, max_p), l_max being `light`'s;
+/// `mean_reflected` is the mean radiance of the reflection map (per channel) the floor is a
+/// fraction of. `None` when the bound on the bands above the projected ones decides F_B: the
+/// lighting must then be projected further.
 ///
 /// For view-dependent BRDFs P_B comes first: the smallest P whose expansion (with every band the
 /// map resolves) represents ρ̂ within ε for all view angles up to 90° (normals within 45° of the
@@ -134,22 +204,31 @@ pub const VIEW_RESIDUAL_FACTOR: f64 = 1.0;
 pub fn texel_orders(
     model: &Model,
     brdf: &BrdfSh,
-    band_energy: &[[f64; 3]],
+    light: &LightEnergy,
     mean_reflected: [f64; 3],
     epsilon: f64,
     max_p: usize,
-) -> TexelOrders {
-    let l_max = band_energy.len().saturating_sub(1).min(brdf.f);
-    let band_energy = &band_energy[..=l_max];
+) -> Option<TexelOrders> {
+    let l_max = light.l_max.min(brdf.f);
+    let light = &LightEnergy { bands: light.bands.iter().take(l_max + 1).copied().collect(), l_max, ..*light };
     let floor = mean_reflected.map(|m| TEXEL_FLOOR * m.abs());
     let relative = |t: [f64; 3]| (0..3).map(|c| if floor[c] > 0.0 { t[c] / floor[c] } else { 0.0 }).fold(0.0, f64::max);
     let max_p = if model.centre().is_some() { 0 } else { max_p.min(brdf.p) };
-    let first_under = |tail: &[[f64; 3]]| (0..=l_max).find(|&f| relative(tail[f]) <= epsilon).unwrap_or(l_max);
+    let first_under = |worst: &dyn Fn(usize) -> f64| (0..=l_max).find(|&f| worst(f) <= epsilon).unwrap_or(l_max);
+    // F_B is the one a projection to l_max gives when the projected bands alone reject F_B − 1.
+    let decided = |f_b: usize, known: &dyn Fn(usize) -> f64| f_b == 0 || known(f_b - 1) > epsilon;
     if max_p == 0 {
-        let tail = tail_bounds(brdf, 0, band_energy, &view_weights(0, None));
-        let f_b = first_under(&tail);
+        let (tail, known) = tails(&band_weights(brdf, 0, l_max, &view_weights(0, None)), light);
+        let f_b = first_under(&|f| relative(tail[f]));
         let bound = relative(tail[f_b]);
-        return TexelOrders { f_b, p_b: 0, bound, l_max, capped: bound > epsilon, valid_view_angle: 180.0 };
+        return decided(f_b, &|f| relative(known[f])).then_some(TexelOrders {
+            f_b,
+            p_b: 0,
+            bound,
+            l_max,
+            capped: bound > epsilon,
+            valid_view_angle: 180.0,
+        });
     }
     let samples = ViewSamples::new(model, VIEW_ANGLES);
     let limit = VIEW_RESIDUAL_FACTOR * epsilon;
@@ -161,25 +240,19 @@ pub fn texel_orders(
         .unwrap_or(max_p);
     // F: the bound (2) over the view angles up to 90°; the valid range is then what
     // (F_B, P_B) represents within ε.
-    let tails: Vec<Vec<[f64; 3]>> = VIEW_ANGLES
+    let per_angle: Vec<_> = VIEW_ANGLES
         .iter()
         .filter(|&&a| a <= 90.0)
-        .map(|&a| {
-            let norms = band_norms(brdf, p_b, a.to_radians());
-            let mut tail = vec![[0.0; 3]; l_max + 1];
-            for f in (0..l_max).rev() {
-                for c in 0..3 {
-                    tail[f][c] = tail[f + 1][c] + band_energy[f + 1][c].max(0.0).sqrt() * norms[f + 1][c];
-                }
-            }
-            tail
-        })
+        .map(|&a| tails(&band_norms(brdf, p_b, a.to_radians())[..=l_max], light))
         .collect();
-    let worst = |f: usize| tails.iter().map(|t| relative(t[f])).fold(0.0, f64::max);
-    let f_b = (0..=l_max).find(|&f| worst(f) <= epsilon).unwrap_or(l_max);
+    let worst = |f: usize| per_angle.iter().map(|(t, _)| relative(t[f])).fold(0.0, f64::max);
+    let f_b = first_under(&worst);
+    if !decided(f_b, &|f| per_angle.iter().map(|(_, k)| relative(k[f])).fold(0.0, f64::max)) {
+        return None;
+    }
     let valid = valid_angle(&samples.residuals(brdf, f_b, p_b)).unwrap_or(0.0);
     let bound = worst(f_b);
-    TexelOrders { f_b, p_b, bound, l_max, capped: bound > epsilon, valid_view_angle: valid }
+    Some(TexelOrders { f_b, p_b, bound, l_max, capped: bound > epsilon, valid_view_angle: valid })
 }
 
 /// n_l(θ_o) per channel: the norm of band l of ρ̂(·, ω_o) as a function of ω_i, for ω_o at
@@ -395,7 +468,7 @@ mod tests {
         let brdf = model.coefficients(40, 0);
         let mut energy = vec![[0.0; 3]; 41];
         energy[0] = [4.0 * PI; 3];
-        let o = texel_orders(&model, &brdf, &energy, [1.0; 3], 0.01, 0);
+        let o = texel_orders(&model, &brdf, &LightEnergy::exact(energy), [1.0; 3], 0.01, 0).unwrap();
         assert_eq!((o.f_b, o.p_b, o.capped), (0, 0, false));
     }
 
@@ -406,11 +479,57 @@ mod tests {
         let brdf = model.coefficients(60, 0);
         // A white-noise-like lighting: equal energy in every band.
         let energy = vec![[1.0; 3]; 61];
-        let o = texel_orders(&model, &brdf, &energy, [1.0; 3], 0.01, 0);
-        let tail = tail_bounds(&brdf, 0, &energy, &view_weights(0, None));
+        let o = texel_orders(&model, &brdf, &LightEnergy::exact(energy.clone()), [1.0; 3], 0.01, 0).unwrap();
+        let (tail, _) = tails(&band_weights(&brdf, 0, 60, &view_weights(0, None)), &LightEnergy::exact(energy));
         assert!(tail.windows(2).all(|t| t[1][0] <= t[0][0]));
         assert!(tail[o.f_b][0] / TEXEL_FLOOR <= 0.01 && tail[o.f_b - 1][0] / TEXEL_FLOOR > 0.01, "{o:?}");
         // Phong's kernel falls like exp(−l²/2s): F ≈ √(2s ln(1/tolerance)) plus a few.
         assert!((20..60).contains(&o.f_b), "{o:?}");
+    }
+
+    /// A lighting with energy in every band up to l_max, projected only part of the way: the
+    /// rule either returns the F_B of the whole projection or asks for more, and always decides
+    /// once every band is in. A Gaussian-like kernel (Phong) is decided long before l_max; a
+    /// kernel with a slowly converging horizon (Torrance-Sparrow) may need every band.
+    #[test]
+    fn a_partial_projection_gives_the_whole_projections_orders_or_asks_for_more() {
+        for (spec, max_p) in [("phong:s=64", 0), ("torrance-sparrow:sigma=0.3", 3)] {
+            let model = Model::new(Brdf::parse(spec).unwrap(), true).unwrap();
+            let l_max = 60;
+            let brdf = model.coefficients(l_max, max_p);
+            // A falling spectrum (E_l ∝ 1/(l + 1)²), per channel different.
+            let energy: Vec<[f64; 3]> =
+                (0..=l_max).map(|l| [1.0, 0.5, 2.0].map(|s| s / ((l + 1) * (l + 1)) as f64)).collect();
+            let total: [f64; 3] = std::array::from_fn(|c| energy.iter().map(|e| e[c]).sum());
+            let whole = texel_orders(&model, &brdf, &LightEnergy::exact(energy.clone()), [0.05; 3], 0.01, max_p)
+                .expect("every band known decides");
+            assert!(whole.f_b > 0 && !whole.capped, "{spec}: {whole:?}");
+            let mut first_decided = None;
+            for projected in 0..=l_max {
+                let above = if projected == l_max { [0.0; 3] } else { total };
+                let light = LightEnergy { bands: energy[..=projected].to_vec(), above, l_max };
+                if let Some(o) = texel_orders(&model, &brdf, &light, [0.05; 3], 0.01, max_p) {
+                    assert_eq!((o.f_b, o.p_b), (whole.f_b, whole.p_b), "{spec}, projected to {projected}");
+                    assert!(o.bound >= whole.bound * (1.0 - 1e-12), "{spec}: the bound only grows");
+                    first_decided.get_or_insert(projected);
+                }
+            }
+            let first = first_decided.expect("decided with every band");
+            if spec.starts_with("phong") {
+                // F_B ≈ 36 here; a projection a few bands past it decides.
+                assert!(first < whole.f_b + 15, "{spec}: F_B {} first decided at {first}", whole.f_b);
+            }
+        }
+    }
+
+    /// The first projection holds Phong's F_B: twice the band where the kernel falls to 10⁻³.
+    #[test]
+    fn the_first_projection_covers_a_gaussian_kernel() {
+        let model = Model::new(Brdf::parse("phong:s=8").unwrap(), true).unwrap();
+        let brdf = model.coefficients(127, 0);
+        // Phong's kernel ≈ exp(−l²/2s): 10⁻³ at l ≈ √(2s ln 10³) ≈ 10.5.
+        let l = first_projection(&model, &brdf, 0, 127);
+        assert!((20..=24).contains(&l), "{l}");
+        assert_eq!(first_projection(&model, &brdf, 0, 15), 15);
     }
 }

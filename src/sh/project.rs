@@ -304,25 +304,34 @@ pub fn project_naive(map: &EnvMap, order: usize) -> ShCoeffs {
 /// ∫ |L|² dΩ summed over channels by the same quadrature (Parseval's right-hand side): the total
 /// energy that ε in `--epsilon` is relative to.
 pub fn map_energy(map: &EnvMap) -> f64 {
+    map_energy_rgb(map).iter().sum()
+}
+
+/// ∫ L² dΩ per channel by the same quadrature: by Bessel's inequality, at least the energy of
+/// any set of bands of the map.
+pub fn map_energy_rgb(map: &EnvMap) -> [f64; 3] {
     let rows = map.rows();
-    let blocks: Vec<f64> = rows
+    let blocks: Vec<[f64; 3]> = rows
         .par_chunks(BLOCK_ROWS)
         .map(|chunk| {
-            let mut e = 0.0;
+            let mut e = [0.0; 3];
             for &(face, y) in chunk {
                 let img = &map.images()[face];
+                // A lat-long row's texels share one solid angle.
+                let row = (map.layout() == Layout::LatLong).then(|| map.texel_solid_angle(face, 0, y)).flatten();
                 for x in 0..img.width {
-                    if let Some((_, omega)) = map.texel_geometry(face, x, y) {
+                    if let Some(omega) = row.or_else(|| map.texel_solid_angle(face, x, y)) {
                         let v = img.get(x, y);
-                        e +=
-                            omega * (v[0] as f64 * v[0] as f64 + v[1] as f64 * v[1] as f64 + v[2] as f64 * v[2] as f64);
+                        for c in 0..3 {
+                            e[c] += omega * v[c] as f64 * v[c] as f64;
+                        }
                     }
                 }
             }
             e
         })
         .collect();
-    blocks.iter().sum()
+    blocks.iter().fold([0.0; 3], |a, b| std::array::from_fn(|c| a[c] + b[c]))
 }
 
 /// How to choose the order of a projection.
