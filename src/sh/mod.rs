@@ -31,6 +31,14 @@ pub const fn index(l: usize, m: isize) -> usize {
     ((l * (l + 1)) as isize + m) as usize
 }
 
+/// Index of band l, order m ≥ 0 among the non-negative orders only, band by band:
+/// l(l+1)/2 + m. Sums over l at fixed m read the coefficients of m and of −m stored apart in
+/// this order, contiguous per band (the separable projection and synthesis).
+#[inline]
+pub const fn index_nonneg(l: usize, m: usize) -> usize {
+    l * (l + 1) / 2 + m
+}
+
 /// Number of coefficients up to and including band `order`: (order+1)².
 #[inline]
 pub const fn count(order: usize) -> usize {

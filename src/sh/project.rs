@@ -13,7 +13,7 @@
 //! result does not depend on the number of threads.
 
 use super::legendre::LegendreTable;
-use super::{count, index, ShCoeffs};
+use super::{count, index, index_nonneg, ShCoeffs};
 use crate::envmap::{EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::Progress;
@@ -149,20 +149,17 @@ pub fn project_latlong(
     // Phase that moves the FFT's sample points from φ = 2πx/W to the texel centres
     // φ = 2π(x + ½)/W: Σ_x f_x e^{−imφ_x} = e^{−iπm/W} X_m.
     let phase: Vec<(f64, f64)> = (0..=order).map(|m| (PI * m as f64 / w as f64).sin_cos()).collect();
-    // Pairs (y, its mirror) for the top half; an odd middle row stands alone.
-    let pairs: Vec<(usize, Option<usize>)> = (0..h / 2)
-        .map(|y| (y, Some(h - 1 - y)))
-        .chain((h % 2 == 1).then_some((h / 2, None)))
+    let pairs: Vec<(usize, Option<usize>)> = LatLong::new(w, h)
+        .mirrored_row_pairs()
         .filter(|&(y, mirror)| !(row_is_black(y) && mirror.is_none_or(row_is_black)))
         .collect();
     // Band l, order m ≥ 0 of the per-channel accumulators.
-    let at = |l: usize, m: usize| l * (l + 1) / 2 + m;
-    let len = at(order, order) + 1;
+    let len = index_nonneg(order, order) + 1;
     progress.start("projecting", pairs.iter().map(|p| 1 + p.1.is_some() as u64).sum());
     let blocks: Vec<[[Vec<f64>; 3]; 2]> = pairs
         .par_chunks(BLOCK_ROWS / 2)
         .map(|block| {
-            // [cos or sin][channel][at(l, m)]: the coefficients of m and of −m.
+            // [cos or sin][channel][index_nonneg(l, m)]: the coefficients of m and of −m.
             let mut acc: [[Vec<f64>; 3]; 2] = std::array::from_fn(|_| std::array::from_fn(|_| vec![0.0; len]));
             let mut input = fft.make_input_vec();
             let mut spectrum = fft.make_output_vec();
@@ -225,7 +222,7 @@ pub fn project_latlong(
                     for l in 0..=order {
                         // P̄_l^m for m = 0..=l sits at l² + l + m.
                         let p_l = &plm[l * l + l..=l * l + 2 * l];
-                        let band = at(l, 0)..=at(l, l);
+                        let band = index_nonneg(l, 0)..=index_nonneg(l, l);
                         for k in 0..2 {
                             for c in 0..3 {
                                 let part = &by_parity[l % 2][k][c][..=l];
@@ -247,9 +244,9 @@ pub fn project_latlong(
         for l in 0..=order {
             for m in 0..=l {
                 for c in 0..3 {
-                    total[index(l, m as isize)][c] += b[0][c][at(l, m)];
+                    total[index(l, m as isize)][c] += b[0][c][index_nonneg(l, m)];
                     if m > 0 {
-                        total[index(l, -(m as isize))][c] += b[1][c][at(l, m)];
+                        total[index(l, -(m as isize))][c] += b[1][c][index_nonneg(l, m)];
                     }
                 }
             }

@@ -5,7 +5,7 @@
 //! φ gives all W pixels in O(W log W).
 
 use super::legendre::LegendreTable;
-use super::{basis, count, index, ShCoeffs};
+use super::{basis, count, index, index_nonneg, ShCoeffs};
 use crate::io::RgbImage;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -103,22 +103,18 @@ pub fn synthesize_latlong(coeffs: &ShCoeffs, width: usize, height: usize) -> Res
     }
     let table = LegendreTable::new(order);
     let rows = RowSynth::new(width);
-    // Band l, order m ≥ 0: [cos or sin][at(l, m)][channel] (the coefficients of m and of −m).
-    let at = |l: usize, m: usize| l * (l + 1) / 2 + m;
-    let len = at(order, order) + 1;
+    // [cos or sin][index_nonneg(l, m)][channel]: the coefficients of m and of −m.
+    let len = index_nonneg(order, order) + 1;
     let mut by_band = [vec![[0.0; 3]; len], vec![[0.0; 3]; len]];
     for l in 0..=order {
         for m in 0..=l {
-            by_band[0][at(l, m)] = coeffs.rgb[index(l, m as isize)];
+            by_band[0][index_nonneg(l, m)] = coeffs.rgb[index(l, m as isize)];
             if m > 0 {
-                by_band[1][at(l, m)] = coeffs.rgb[index(l, -(m as isize))];
+                by_band[1][index_nonneg(l, m)] = coeffs.rgb[index(l, -(m as isize))];
             }
         }
     }
-    let pairs: Vec<(usize, Option<usize>)> = (0..height / 2)
-        .map(|y| (y, Some(height - 1 - y)))
-        .chain((height % 2 == 1).then_some((height / 2, None)))
-        .collect();
+    let pairs: Vec<(usize, Option<usize>)> = crate::sphere::LatLong::new(width, height).mirrored_row_pairs().collect();
     let synthesized: Vec<[Vec<[f32; 3]>; 2]> = pairs
         .par_iter()
         .map(|&(y, mirror)| {
@@ -135,7 +131,7 @@ pub fn synthesize_latlong(coeffs: &ShCoeffs, width: usize, height: usize) -> Res
                 // P̄_l^m for m = 0..=l sits at l² + l + m.
                 let p_l = &plm[l * l + l..=l * l + 2 * l];
                 for k in 0..2 {
-                    let band = &by_band[k][at(l, 0)..=at(l, l)];
+                    let band = &by_band[k][index_nonneg(l, 0)..=index_nonneg(l, l)];
                     for ((acc, p), v) in parts[l % 2][k][..=l].iter_mut().zip(p_l).zip(band) {
                         for c in 0..3 {
                             acc[c] += p * v[c];
@@ -208,11 +204,10 @@ mod tests {
         // m = ±order at the Nyquist limit of the narrower width.
         let order = 11;
         let mut coeffs = ShCoeffs::zeros(order);
-        let mut state = 0x9e3779b97f4a7c15u64;
+        let mut rng = crate::rng::SplitMix64::new(5);
         for v in &mut coeffs.rgb {
             for c in v.iter_mut() {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                *c = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+                *c = rng.next_f64() - 0.5;
             }
         }
         let table = LegendreTable::new(order);

@@ -44,6 +44,14 @@ impl LatLong {
         direction(self.row_theta(y), self.column_phi(x))
     }
 
+    /// The rows in mirrored pairs (y, H − 1 − y) over the top half, and an odd middle row alone.
+    /// A pair's rows have opposite z = cos θ, and P̄_l^m(−z) = (−1)^{l+m} P̄_l^m(z), so one
+    /// Legendre evaluation serves both rows of a pair (the separable projection and synthesis).
+    pub fn mirrored_row_pairs(&self) -> impl Iterator<Item = (usize, Option<usize>)> {
+        let h = self.height;
+        (0..h / 2).map(move |y| (y, Some(h - 1 - y))).chain((h % 2 == 1).then_some((h / 2, None)))
+    }
+
     /// Exact solid angle of every texel of row `y`: (2π/W)(cos θ_top − cos θ_bottom).
     #[inline]
     pub fn row_solid_angle(&self, y: usize) -> f64 {
