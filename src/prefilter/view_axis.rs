@@ -116,8 +116,9 @@ pub fn beyond(
 
 /// `map` seen from the frame `to_world` takes to world space, on `grid`: texel (x, y) of the
 /// result is the mean of n² point lookups of the piecewise-constant `map` at points spread over
-/// its footprint, rotated (its parent texel when nothing moves and the grid splits the map's texels); n keeps [`SUPERSAMPLE`] lookups per axis
-/// of a texel of `map` (3 on a grid twice as fine).
+/// its footprint, rotated (its parent texel when nothing moves and the grid splits the map's
+/// texels); n keeps [`SUPERSAMPLE`] lookups per axis of a texel of `map` (3 on a grid twice as
+/// fine).
 fn rotated(map: &RgbImage, to_world: DQuat, grid: LatLong) -> RgbImage {
     let src = LatLong::new(map.width, map.height);
     let k = grid.width / src.width;
@@ -348,7 +349,12 @@ mod tests {
         let out = LatLong::new(64, 32);
         let min_theta_o = 1.2;
         let fast = beyond(&pyramid, &model, &cutoff, DVec3::Z, min_theta_o, out, None);
-        let fine = EnvMap::latlong(rotated(env.image(), DQuat::IDENTITY, out)).unwrap();
+        // The map with each texel split 2 × 2, made here rather than by `rotated`, whose copy of
+        // it is under test too.
+        let fine = EnvMap::latlong(RgbImage::from_fn(out.width, out.height, |x, y| {
+            env.image().pixels[(y / 2) * env.image().width + x / 2]
+        }))
+        .unwrap();
         let direct = texel_by_texel(&fine, TexelRule::midpoint(), &model, &cutoff, DVec3::Z, out);
         let expected = (0..out.height).filter(|&y| out.row_theta(y) >= min_theta_o).count() * out.width;
         assert_eq!(fast.len(), expected);
