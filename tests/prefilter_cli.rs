@@ -131,7 +131,7 @@ fn refused_options_exit_2_and_leave_no_output() {
 #[test]
 fn a_window_on_maps_integrated_in_angle_is_said_to_have_no_effect() {
     // A view-dependent BRDF's maps are integrated in angle: no SH synthesis for a window to act
-    // on. The stage says so on stderr (not with --quiet) and records the window as none.
+    // on. The stage says so on stderr and records the window as none.
     let dir = tempfile::tempdir().unwrap();
     let env = sky_pfm(dir.path(), 32, 16);
     let (doc, map) = (dir.path().join("m.json"), dir.path().join("v.exr"));
