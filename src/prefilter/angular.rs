@@ -473,14 +473,20 @@ pub struct CutoffTable {
 
 impl CutoffTable {
     /// [`CutoffTable::new`] for `model`'s ρ̂ (luminance), its normal and frame prepared once per
-    /// bin ([`Model::prepare_view`] with R = +Z is the reflection frame itself).
+    /// bin ([`Model::prepare_view`] with R = +Z is the reflection frame itself), a half-angle
+    /// BRDF's read from its table ([`Model::half_angle_lobe`]: within 10⁻⁵ of the peak, far
+    /// below what moves a cone by one of the table's θ_i steps).
     pub fn of_model(model: &Model, epsilon: f64, bins: usize) -> Self {
+        let half_angle = model.half_angle_lobe();
         let lobe = |wo: DVec3| {
             let view = model.prepare_view(DVec3::Z, wo);
             move |wi: DVec3| {
-                view.as_ref().map_or(0.0, |v| {
-                    let r = model.rho_hat_prepared(v, wi);
-                    (r[0] + r[1] + r[2]) / 3.0
+                view.as_ref().map_or(0.0, |v| match half_angle {
+                    Some(lobe) => lobe.rho_hat(v, wi),
+                    None => {
+                        let r = model.rho_hat_prepared(v, wi);
+                        (r[0] + r[1] + r[2]) / 3.0
+                    }
                 })
             }
         };

@@ -19,6 +19,7 @@ use crate::brdf::Brdf;
 use crate::ibl::ggx::SplitSumLobe;
 use glam::DVec3;
 use std::f64::consts::PI;
+use std::sync::OnceLock;
 
 /// Errors of building a prefilter model.
 #[derive(Debug, thiserror::Error)]
@@ -52,6 +53,8 @@ pub struct PreparedView {
     t: DVec3,
     b: DVec3,
     wo_n: DVec3,
+    /// The view, in the frame of the directions ρ̂ is evaluated for.
+    v: DVec3,
 }
 
 /// Which direction a radially symmetric lobe is centred on.
@@ -71,6 +74,8 @@ pub struct Model {
     tangent: bool,
     /// GGX's split-sum kernel about R.
     split_sum: Option<SplitSumLobe>,
+    /// The half-angle table, built on first use (the paper-order bake never asks for it).
+    half_angle: OnceLock<Option<HalfAngleLobe>>,
 }
 
 impl Model {
@@ -87,7 +92,7 @@ impl Model {
             Brdf::Ggx(m) => Some(SplitSumLobe::new(m.roughness()).map_err(|e| ModelError::Brdf(e.to_string()))?),
             _ => None,
         };
-        Ok(Model { brdf, cosine, tangent, split_sum })
+        Ok(Model { brdf, cosine, tangent, split_sum, half_angle: OnceLock::new() })
     }
 
     /// True for a BRDF reparameterized by the fibre tangent (Kajiya–Kay): texels are indexed by
@@ -160,7 +165,7 @@ impl Model {
     pub fn prepare_view(&self, r: DVec3, v: DVec3) -> Option<PreparedView> {
         if self.tangent {
             let (t, b) = r.any_orthonormal_pair();
-            return Some(PreparedView { n: r, t, b, wo_n: DVec3::new(v.dot(t), v.dot(b), v.dot(r)) });
+            return Some(PreparedView { n: r, t, b, wo_n: DVec3::new(v.dot(t), v.dot(b), v.dot(r)), v });
         }
         let n = r + v;
         let len = n.length();
@@ -169,7 +174,7 @@ impl Model {
         }
         let n = n / len;
         let (t, b) = n.any_orthonormal_pair();
-        Some(PreparedView { n, t, b, wo_n: DVec3::new(v.dot(t), v.dot(b), v.dot(n)) })
+        Some(PreparedView { n, t, b, wo_n: DVec3::new(v.dot(t), v.dot(b), v.dot(n)), v })
     }
 
     /// ρ̂ for light from world direction `l`, given [`Model::prepare_view`]; equal to
@@ -186,6 +191,21 @@ impl Model {
         let v = self.brdf.eval(DVec3::new(l.dot(view.t), l.dot(view.b), cos_i), view.wo_n);
         let k = if self.cosine { cos_i } else { 1.0 };
         [v[0] * k, v[1] * k, v[2] * k]
+    }
+
+    /// ρ̂ of a half-angle BRDF (Torrance-Sparrow, Blinn-Phong) through its table in cos θ_h,
+    /// built on first use; `None` for every other BRDF, or when no table within
+    /// [`MAX_HALF_ANGLE_ENTRIES`] meets the tolerance.
+    pub fn half_angle_lobe(&self) -> Option<&HalfAngleLobe> {
+        self.half_angle
+            .get_or_init(|| {
+                let brdf = &self.brdf;
+                brdf.half_angle_curve(0.0)?;
+                (!self.tangent)
+                    .then(|| HalfAngleLobe::new(|t| brdf.half_angle_curve(t).unwrap_or(0.0), self.cosine))
+                    .flatten()
+            })
+            .as_ref()
     }
 
     /// Luminance-like grey value of ρ̂ (mean of RGB), for cut-offs.
@@ -241,6 +261,129 @@ impl Model {
                 });
             }
             f *= 2;
+        }
+    }
+}
+
+/// Largest interpolation error of a [`HalfAngleLobe`] at any interval's midpoint, as a share of
+/// the curve's peak. A texel's weight then errs by at most this much of the peak, so a cone
+/// sum by at most this share of the peak times the lighting over the cone: about 10⁻⁴ of the
+/// sum for a cone ten times the lobe's effective solid angle, 100 times below the ε = 10⁻³
+/// reference's own truncation.
+const HALF_ANGLE_TOLERANCE: f64 = 1e-5;
+
+/// The most entries a [`HalfAngleLobe`] may take (0.5 MB). Torrance-Sparrow takes 4 097 for
+/// any σ: its support in cos θ_h, where ρ is above 10⁻¹² of the peak, is about 14σ², and linear
+/// interpolation within the tolerance needs a spacing of about σ²√(2·10⁻⁵), both σ². Curves
+/// with a kink of unbounded curvature, such as Blinn-Phong's cos^s θ_h for s < 1 at θ_h = 90°,
+/// exceed it and are evaluated exactly.
+pub const MAX_HALF_ANGLE_ENTRIES: usize = 1 << 16;
+
+/// ρ̂ of a BRDF that is a function ρ(θ_h) of the half angle alone (Torrance-Sparrow eq. 14,
+/// Blinn-Phong), read from a table of ρ over cos θ_h: cos θ_h = (N·ω_i + N·ω_o)/|ω_i + ω_o|
+/// takes one square root where the model's own evaluation takes the half vector, an acos and
+/// (Torrance-Sparrow) an exp, about half the time of the view-frame convolution's kernels
+/// ([`super::view_axis`]).
+///
+/// Both curves are even in θ_h, so ρ is a smooth function of θ_h² = 2(1 − cos θ_h) + O((1 −
+/// cos θ_h)²), that is of cos θ_h, even at θ_h = 0: linear interpolation in cos θ_h converges at
+/// second order. The table is halved in spacing until every interval's midpoint is within
+/// [`HALF_ANGLE_TOLERANCE`] of the peak, and starts where ρ has fallen below 10⁻¹² of it
+/// (zero beyond).
+#[derive(Clone, Debug)]
+pub struct HalfAngleLobe {
+    /// cos θ_h of the first entry.
+    c0: f64,
+    /// Entries per unit of cos θ_h.
+    per_unit: f64,
+    /// ρ at c0 + k / per_unit, k = 0..=n.
+    values: Vec<f64>,
+    /// Whether ρ̂ = ρ·max(N·ω_i, 0).
+    cosine: bool,
+}
+
+impl HalfAngleLobe {
+    /// Tabulates `curve(θ_h)`; `None` when [`MAX_HALF_ANGLE_ENTRIES`] do not meet the tolerance.
+    fn new(curve: impl Fn(f64) -> f64, cosine: bool) -> Option<Self> {
+        const STEPS: usize = 4096;
+        let samples: Vec<f64> = (0..=STEPS).map(|i| curve(PI * i as f64 / STEPS as f64)).collect();
+        let peak = samples.iter().cloned().fold(0.0, f64::max);
+        if !(peak > 0.0 && peak.is_finite()) {
+            return None;
+        }
+        let last = samples.iter().rposition(|&v| v > 1e-12 * peak).unwrap_or(0);
+        let c0 = (PI * (last + 1).min(STEPS) as f64 / STEPS as f64).cos();
+        let at = |c: f64| curve(c.clamp(-1.0, 1.0).acos());
+        let mut n = 256;
+        let mut values: Vec<f64> = (0..=n).map(|k| at(c0 + (1.0 - c0) * k as f64 / n as f64)).collect();
+        loop {
+            // The midpoints are the next table's odd entries: each doubling evaluates only them.
+            let h = (1.0 - c0) / n as f64;
+            let mids: Vec<f64> = (0..n).map(|k| at(c0 + h * (k as f64 + 0.5))).collect();
+            let worst = values.windows(2).zip(&mids).map(|(v, m)| ((v[0] + v[1]) / 2.0 - m).abs()).fold(0.0, f64::max);
+            if worst <= HALF_ANGLE_TOLERANCE * peak {
+                return Some(HalfAngleLobe { c0, per_unit: n as f64 / (1.0 - c0), values, cosine });
+            }
+            if 2 * n > MAX_HALF_ANGLE_ENTRIES {
+                return None;
+            }
+            values = values
+                .iter()
+                .zip(mids.iter().map(Some).chain([None]))
+                .flat_map(|(&v, m)| [Some(v), m.copied()])
+                .flatten()
+                .collect();
+            n *= 2;
+        }
+    }
+
+    /// ρ̂ for light from world direction `l`, as [`Model::rho_hat_prepared`] (grey).
+    #[inline]
+    pub fn rho_hat(&self, view: &PreparedView, l: DVec3) -> f64 {
+        let cos_i = view.n.dot(l);
+        if cos_i <= 0.0 {
+            return 0.0;
+        }
+        // |ω_i + ω_o|² = 2 + 2 ω_i·ω_o; opposite directions have θ_h = 0 (brdf::models::theta_h).
+        let sum_sq = 2.0 + 2.0 * l.dot(view.v);
+        let cos_h = if sum_sq > 0.0 { (cos_i + view.wo_n.z) / sum_sq.sqrt() } else { 1.0 };
+        self.at(cos_i, cos_h)
+    }
+
+    /// ρ̂ for light on the circle ω_i = (s cos φ, s sin φ, z) about a view along +Z (`view`
+    /// prepared with V = +Z), as a function of (cos φ, sin φ): ω_i·V = z is the same all round,
+    /// so |ω_i + V| is one square root for the whole circle, and N·ω_i is linear in cos φ and
+    /// sin φ. The rows of the view-frame convolution ([`super::view_axis`]) are such circles.
+    pub fn on_view_circle(&self, view: &PreparedView, z: f64, s: f64) -> impl Fn(f64, f64) -> f64 + '_ {
+        debug_assert!(view.v == DVec3::Z, "the view of a view circle is +Z");
+        let sum_sq = 2.0 + 2.0 * z;
+        let inverse_length = if sum_sq > 0.0 { 1.0 / sum_sq.sqrt() } else { 0.0 };
+        let (a, b, c) = (view.n.x * s, view.n.y * s, view.n.z * z);
+        let n_v = view.wo_n.z;
+        move |cos_phi, sin_phi| {
+            let cos_i = a * cos_phi + b * sin_phi + c;
+            if cos_i <= 0.0 {
+                return 0.0;
+            }
+            let cos_h = if sum_sq > 0.0 { (cos_i + n_v) * inverse_length } else { 1.0 };
+            self.at(cos_i, cos_h)
+        }
+    }
+
+    /// ρ̂ from N·ω_i > 0 and cos θ_h.
+    #[inline]
+    fn at(&self, cos_i: f64, cos_h: f64) -> f64 {
+        let x = (cos_h - self.c0) * self.per_unit;
+        if x.is_nan() || x < 0.0 {
+            return 0.0;
+        }
+        let k = (x as usize).min(self.values.len() - 2);
+        let t = (x - k as f64).min(1.0);
+        let rho = self.values[k] + (self.values[k + 1] - self.values[k]) * t;
+        if self.cosine {
+            rho * cos_i
+        } else {
+            rho
         }
     }
 }
@@ -308,6 +451,56 @@ mod tests {
             let b = model.rho_hat(to_local(l), to_local(v));
             assert!((a[0] - b[0]).abs() < 1e-12 * (1.0 + b[0].abs()), "{a:?} vs {b:?}");
         }
+    }
+
+    #[test]
+    fn the_half_angle_table_is_the_model_within_its_tolerance() {
+        // Directions from a fixed sequence over the sphere, pairs (R, V) and lights.
+        let dir = |k: usize| {
+            let z = 1.0 - 2.0 * ((k as f64 * 0.618_034) % 1.0);
+            let phi = k as f64 * 2.399_963;
+            let s = (1.0 - z * z).sqrt();
+            DVec3::new(s * phi.cos(), s * phi.sin(), z)
+        };
+        for (spec, cosine) in [
+            ("torrance-sparrow:sigma=0.1", false),
+            ("torrance-sparrow:sigma=0.3", true),
+            ("blinn-phong:s=20", true),
+            ("blinn-phong:s=1.5", false),
+            ("torrance-sparrow:sigma=0.005", false),
+        ] {
+            let model = Model::new(Brdf::parse(spec).unwrap(), cosine).unwrap();
+            let lobe = model.half_angle_lobe().expect("a half-angle BRDF has a table");
+            let peak = model.rho_hat(DVec3::Z, DVec3::Z)[0].max(1e-300);
+            let mut near_peak = 0;
+            for k in 0..400 {
+                let (r, v) = (dir(3 * k + 1), dir(3 * k + 2));
+                let Some(prepared) = model.prepare_view(r, v) else { continue };
+                // Lights near R, where the lobe is, and anywhere.
+                for l in [(r + 0.15 * dir(3 * k + 3)).normalize(), (r + 0.01 * dir(5 * k)).normalize(), dir(7 * k + 5)]
+                {
+                    let (want, got) = (model.rho_hat_prepared(&prepared, l)[0], lobe.rho_hat(&prepared, l));
+                    assert!((got - want).abs() <= 1.1e-5 * peak, "{spec}: {got} vs {want} (peak {peak})");
+                    near_peak += usize::from(want > 0.1 * peak);
+                }
+            }
+            assert!(near_peak > 10, "{spec}: only {near_peak} samples in the lobe");
+            // Around a view along +Z, the circle form is the same function.
+            let view = model.prepare_view(dir(11), DVec3::Z).unwrap();
+            for (theta, phi) in [(0.3f64, 0.2f64), (1.2, -2.0), (2.9, 1.0)] {
+                let (s, z) = theta.sin_cos();
+                let l = DVec3::new(s * phi.cos(), s * phi.sin(), z);
+                let circle = lobe.on_view_circle(&view, z, s)(phi.cos(), phi.sin());
+                assert!((circle - lobe.rho_hat(&view, l)).abs() <= 1e-12 * peak, "{spec}");
+            }
+        }
+        // A curve no table within the bound interpolates, and a BRDF that is not half-angle, have none.
+        let kinked = Model::new(Brdf::parse("blinn-phong:s=0.1").unwrap(), false).unwrap();
+        assert!(kinked.half_angle_lobe().is_none());
+        assert!(Model::new(Brdf::parse("lafortune:kd=0.1,lobe=-0.8/0.9/8").unwrap(), true)
+            .unwrap()
+            .half_angle_lobe()
+            .is_none());
     }
 
     #[test]
