@@ -357,6 +357,7 @@ pub fn zonal_filter(
     let mut planner = RealFftPlanner::<f64>::new();
     let forward = planner.plan_fft_forward(width);
     let inverse = planner.plan_fft_inverse(width);
+    let even = EvenSpectrum::new(&mut planner, width);
 
     let spectra = row_spectra(latlong, &*forward);
 
@@ -382,7 +383,7 @@ pub fn zonal_filter(
         jobs.push((half, middle, None));
     }
     jobs.into_par_iter().for_each_init(
-        || RowScratch::new(&*forward, &*inverse, width),
+        || RowScratch::new(&even, &*inverse, width),
         |s, (y_out, (row, weight), mirror)| {
             let theta_r = out_grid.row_theta(y_out);
             let (s_r, z_r) = theta_r.sin_cos();
@@ -393,22 +394,16 @@ pub fn zonal_filter(
                 if !(visit[y] || mirrored) || !plan.pair_kernel((z_r, s_r), theta_r, y, &mut s.half) {
                     continue;
                 }
-                // The even kernel over all W offsets, and its (real) spectrum.
-                s.full[0] = s.half[0];
-                for d in 1..width {
-                    s.full[d] = s.half[d.min(width - d)];
-                }
-                forward
-                    .process_with_scratch(&mut s.full, &mut s.kernel_spectrum, &mut s.forward_scratch)
-                    .expect("sizes from the plan");
-                total += s.kernel_spectrum[0].re;
+                // The even kernel's (real) spectrum.
+                s.even.transform(&s.half, &mut s.kernel_spectrum);
+                total += s.kernel_spectrum[0];
                 let sources = [(y, &mut s.acc), (height - 1 - y, &mut s.acc_mirror)];
                 for (source_row, acc) in sources.into_iter().take(if mirror.is_some() { 2 } else { 1 }) {
                     let source = &spectra[source_row * 3 * bins..(source_row + 1) * 3 * bins];
                     for c in 0..3 {
                         let src = &source[c * bins..(c + 1) * bins];
                         for ((a, l), k) in acc[c].iter_mut().zip(src).zip(&s.kernel_spectrum) {
-                            *a += l * k.re;
+                            *a += l * k;
                         }
                     }
                 }
@@ -460,6 +455,92 @@ pub(crate) fn row_spectra(latlong: &RgbImage, forward: &dyn RealToComplex<f64>) 
         .collect()
 }
 
+/// The spectrum of an even kernel over the W offsets of a row (k_d = k_{W−d}) from its half
+/// k_0..=k_{⌊W/2⌋}: K_m = Σ_d k_d e^{−2πimd/W}, m = 0..=⌊W/2⌋, which is real. A circular
+/// correlation with the kernel scales bin m of a row's spectrum by K_m.
+///
+/// For even W = 2N, K is the DCT-I of the half, K_m = k_0 + (−1)^m k_N + 2 Σ_{d=1}^{N−1} k_d
+/// cos(πmd/N), taken with a real FFT of length N rather than W (Numerical Recipes' `cosft1`):
+/// x_j = ½(k_j + k_{N−j}) − sin(πj/N)(k_j − k_{N−j}) has X = FFT(x) with K_{2m} = 2 Re X_m, since
+/// the sine-weighted antisymmetric part sums to zero against cos(2πjm/N); and
+/// K_{2m+1} = K_{2m−1} − 2 Im X_m, since 2 sin(πj/N) sin(2πjm/N) = cos(πj(2m−1)/N) −
+/// cos(πj(2m+1)/N); K_1 is summed directly. Odd W transforms the whole sequence. A clone
+/// shares the plan and has its own buffers (one per thread).
+#[derive(Clone)]
+pub(crate) struct EvenSpectrum {
+    width: usize,
+    fft: Arc<dyn RealToComplex<f64>>,
+    /// sin(πj/N) and cos(πj/N), j = 0..N (even W).
+    sin: Vec<f64>,
+    cos: Vec<f64>,
+    input: Vec<f64>,
+    output: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+}
+
+impl EvenSpectrum {
+    /// Buffers and plan for kernels over `width` offsets.
+    pub(crate) fn new(planner: &mut RealFftPlanner<f64>, width: usize) -> Self {
+        let even = width % 2 == 0;
+        let n = if even { width / 2 } else { width };
+        let fft = planner.plan_fft_forward(n.max(1));
+        let (sin, cos) =
+            if even { (0..n).map(|j| (PI * j as f64 / n as f64).sin_cos()).unzip() } else { (vec![], vec![]) };
+        EvenSpectrum {
+            width,
+            input: fft.make_input_vec(),
+            output: fft.make_output_vec(),
+            scratch: fft.make_scratch_vec(),
+            fft,
+            sin,
+            cos,
+        }
+    }
+
+    /// K_0..=K_{⌊W/2⌋} of the kernel whose half is `half` (⌊W/2⌋ + 1 values), into `spectrum`.
+    pub(crate) fn transform(&mut self, half: &[f64], spectrum: &mut [f64]) {
+        let w = self.width;
+        if w % 2 == 1 {
+            for (d, x) in self.input.iter_mut().enumerate() {
+                *x = half[d.min(w - d)];
+            }
+            self.fft
+                .process_with_scratch(&mut self.input, &mut self.output, &mut self.scratch)
+                .expect("sizes from the plan");
+            for (k, c) in spectrum.iter_mut().zip(&self.output) {
+                *k = c.re;
+            }
+            return;
+        }
+        let n = w / 2;
+        // (k_j, k_{N−j}) for j = 0..N.
+        let pairs = half[..n].iter().zip(half[1..=n].iter().rev());
+        for ((x, (&a, &b)), s) in self.input.iter_mut().zip(pairs).zip(&self.sin) {
+            *x = 0.5 * (a + b) - s * (a - b);
+        }
+        self.fft
+            .process_with_scratch(&mut self.input, &mut self.output, &mut self.scratch)
+            .expect("sizes from the plan");
+        for (m, c) in self.output.iter().enumerate().take(n / 2 + 1) {
+            spectrum[2 * m] = 2.0 * c.re;
+        }
+        // Four partial sums, so that the products are summed four at a time.
+        let mut lanes = [0.0f64; 4];
+        let (terms, weights) = (&half[1..n], &self.cos[1..n]);
+        for (t, w) in terms.chunks(4).zip(weights.chunks(4)) {
+            for ((lane, t), w) in lanes.iter_mut().zip(t).zip(w) {
+                *lane += t * w;
+            }
+        }
+        let mut odd = half[0] - half[n] + 2.0 * ((lanes[0] + lanes[1]) + (lanes[2] + lanes[3]));
+        spectrum[1] = odd;
+        for m in 1..=(n - 1) / 2 {
+            odd -= 2.0 * self.output[m].im;
+            spectrum[2 * m + 1] = odd;
+        }
+    }
+}
+
 /// The row whose (unnormalized) spectrum `acc` holds, into `out` (1/W applied). `acc` is used
 /// as scratch.
 pub(crate) fn inverse_row(
@@ -482,26 +563,24 @@ pub(crate) fn inverse_row(
 /// Per-thread buffers of [`zonal_filter`].
 struct RowScratch {
     half: Vec<f64>,
-    full: Vec<f64>,
-    kernel_spectrum: Vec<Complex<f64>>,
+    even: EvenSpectrum,
+    kernel_spectrum: Vec<f64>,
     acc: [Vec<Complex<f64>>; 3],
     /// The accumulators of the mirrored output row.
     acc_mirror: [Vec<Complex<f64>>; 3],
     out: Vec<f64>,
-    forward_scratch: Vec<Complex<f64>>,
     inverse_scratch: Vec<Complex<f64>>,
 }
 
 impl RowScratch {
-    fn new(forward: &dyn RealToComplex<f64>, inverse: &dyn ComplexToReal<f64>, width: usize) -> Self {
+    fn new(even: &EvenSpectrum, inverse: &dyn ComplexToReal<f64>, width: usize) -> Self {
         RowScratch {
             half: vec![0.0; width / 2 + 1],
-            full: forward.make_input_vec(),
-            kernel_spectrum: forward.make_output_vec(),
+            even: even.clone(),
+            kernel_spectrum: vec![0.0; width / 2 + 1],
             acc: [inverse.make_input_vec(), inverse.make_input_vec(), inverse.make_input_vec()],
             acc_mirror: [inverse.make_input_vec(), inverse.make_input_vec(), inverse.make_input_vec()],
             out: inverse.make_output_vec(),
-            forward_scratch: forward.make_scratch_vec(),
             inverse_scratch: inverse.make_scratch_vec(),
         }
     }
@@ -623,6 +702,30 @@ mod tests {
             .zip(b.pixels.iter().flatten())
             .map(|(p, q)| (p - q).abs() / q.abs().max(1e-6 * scale))
             .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn the_even_spectrum_is_the_transform_of_the_whole_kernel() {
+        let mut planner = RealFftPlanner::<f64>::new();
+        for width in [2, 3, 4, 6, 8, 9, 10, 12, 15, 64, 100, 512] {
+            let n = width / 2;
+            // A kernel with a support shorter than the half, as the filters' are, and a full one.
+            for support in [n / 3, n] {
+                let half: Vec<f64> =
+                    (0..=n).map(|d| if d <= support { 1.0 + (d as f64 * 1.3).sin() * 0.7 } else { 0.0 }).collect();
+                let mut full: Vec<f64> = (0..width).map(|d| half[d.min(width - d)]).collect();
+                let fft = planner.plan_fft_forward(width);
+                let mut want = fft.make_output_vec();
+                fft.process(&mut full, &mut want).unwrap();
+                let mut got = vec![f64::NAN; n + 1];
+                EvenSpectrum::new(&mut planner, width).transform(&half, &mut got);
+                let scale: f64 = half.iter().map(|v| v.abs()).sum();
+                for (m, (g, w)) in got.iter().zip(&want).enumerate() {
+                    assert!((g - w.re).abs() < 1e-12 * scale, "W = {width}, m = {m}: {g} vs {}", w.re);
+                    assert!(w.im.abs() < 1e-12 * scale, "an even kernel's spectrum is real");
+                }
+            }
+        }
     }
 
     #[test]
