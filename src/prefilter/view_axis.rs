@@ -22,18 +22,21 @@
 //!
 //! **Cost.** O(H_cone·(W log W + W)) per output row, against O(W·N_cone) lobe evaluations for the
 //! same row texel by texel; the lobe is evaluated once per (output row, source texel in its
-//! cone) rather than once per (output texel, source texel).
+//! cone) rather than once per (output texel, source texel), a half-angle lobe from its table
+//! along each source row ([`super::model::HalfAngleLobe::on_view_circle`]). The kernel is even in d, so its
+//! spectrum is real: the DCT-I of its half ([`EvenSpectrum`]), which scales each bin of the
+//! source row's spectrum.
 //!
 //! **Determinism.** Each output row is one thread's fixed-order sum over its source rows.
 
 use super::angular::{ConePyramid, CutoffTable};
-use super::model::Model;
+use super::model::{Model, PreparedView};
 use crate::envmap::bright::BrightSources;
-use crate::envmap::zonal::{inverse_row, row_spectra, SubRow, TexelRule, MAX_TEXELS};
+use crate::envmap::zonal::{inverse_row, row_spectra, EvenSpectrum, SubRow, TexelRule, MAX_TEXELS};
 use crate::io::RgbImage;
 use crate::sphere::latlong::bilinear_taps;
 use crate::sphere::LatLong;
-use glam::{DMat3, DQuat, DVec3};
+use glam::{DMat3, DQuat, DVec3, Vec3};
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
 use std::f64::consts::{PI, TAU};
@@ -131,37 +134,118 @@ fn rotated(map: &RgbImage, to_world: DQuat, grid: LatLong) -> RgbImage {
     let mut out = RgbImage::new(grid.width, grid.height);
     let n = (SUPERSAMPLE * src.height).div_ceil(grid.height).max(1);
     let k = n as f64;
-    // The lookups' directions are separable: (sin, cos) of φ per sub-column, of θ per sub-row.
+    // The lookups lie on a grid n times finer than `grid`: (sin, cos) of φ per sub-column, of θ
+    // per sub-row, so a lookup's direction in the map's frame is sin θ·a(φ) + cos θ·M ẑ with
+    // a(φ) = cos φ·M x̂ + sin φ·M ŷ per sub-column.
     let sub = |t: usize, i: usize| t as f64 + (i as f64 + 0.5) / k;
-    // A lookup needs only the texel a point falls in, so its angles are taken in single
-    // precision: an index differs only for a point within ~10⁻⁶ rad of a texel edge, which moves
-    // it by that much (Grace into a 512×256 frame: 24–32 ms with f64 angles, 17–20 ms).
-    let to_world = DMat3::from_quat(to_world);
-    let (columns_per_radian, rows_per_radian) = ((src.width as f64 / TAU) as f32, (src.height as f64 / PI) as f32);
-    let texel = |d: DVec3| {
-        let d = (to_world * d).as_vec3();
-        let x = (d.y.atan2(d.x) * columns_per_radian).floor() as isize;
-        let y = (d.z.clamp(-1.0, 1.0).acos() * rows_per_radian) as usize;
-        y.min(src.height - 1) * src.width + x.rem_euclid(src.width as isize) as usize
-    };
-    let columns: Vec<(f64, f64)> =
-        (0..grid.width * n).map(|c| (TAU * sub(c / n, c % n) / grid.width as f64).sin_cos()).collect();
+    let m = DMat3::from_quat(to_world);
+    let columns: Vec<Vec3> = (0..grid.width * n)
+        .map(|c| {
+            let (sp, cp) = (TAU * sub(c / n, c % n) / grid.width as f64).sin_cos();
+            (cp * m.x_axis + sp * m.y_axis).as_vec3()
+        })
+        .collect();
+    let cells = TexelLocator::new(src);
     out.pixels.par_chunks_mut(grid.width).enumerate().for_each(|(y, row)| {
-        let rows: Vec<(f64, f64)> = (0..n).map(|j| (PI * sub(y, j) / grid.height as f64).sin_cos()).collect();
-        for (x, px) in row.iter_mut().enumerate() {
-            let mut sum = [0.0f64; 3];
-            for &(st, ct) in &rows {
-                for &(sp, cp) in &columns[x * n..(x + 1) * n] {
-                    let p = map.pixels[texel(DVec3::new(st * cp, st * sp, ct))];
-                    for c in 0..3 {
-                        sum[c] += p[c] as f64;
-                    }
+        let mut sums = vec![[0.0f64; 3]; grid.width];
+        for j in 0..n {
+            let (st, ct) = (PI * sub(y, j) / grid.height as f64).sin_cos();
+            let (st, pole) = (st as f32, (ct * m.z_axis).as_vec3());
+            // Neighbouring lookups along a sub-row fall in the same texel or the next one: each
+            // starts from the last one's texel.
+            let mut at = None;
+            for (c, a) in columns.iter().enumerate() {
+                let texel = cells.locate(st * *a + pole, at);
+                at = Some(texel);
+                let p = map.pixels[texel.1 * src.width + texel.0];
+                let s = &mut sums[c / n];
+                for ch in 0..3 {
+                    s[ch] += p[ch] as f64;
                 }
             }
-            *px = sum.map(|s| (s / (k * k)) as f32);
+        }
+        for (px, s) in row.iter_mut().zip(&sums) {
+            *px = s.map(|v| (v / (k * k)) as f32);
         }
     });
     out
+}
+
+/// Which texel of a lat-long grid a direction falls in, exactly against the texels' edges:
+/// row y holds cos((y + 1)Δθ) < z ≤ cos(yΔθ), column x the azimuths [xΔφ, (x + 1)Δφ), tested by
+/// the sign of the cross product with each edge's direction. From a nearby texel it walks to
+/// the right one by comparisons alone; far away (or by a pole, where columns are thin) it
+/// takes the angles. The rotation into a view's frame makes millions of lookups a map
+/// (Grace into a 256×128 frame: 36 a texel), and atan2 and acos were most of their time.
+struct TexelLocator {
+    grid: LatLong,
+    /// cos(yΔθ), y = 0..=H.
+    row_edges: Vec<f32>,
+    /// (cos, sin) of xΔφ, x = 0..=W.
+    column_edges: Vec<(f32, f32)>,
+}
+
+impl TexelLocator {
+    /// Steps a walk may take before the angles are computed instead.
+    const MAX_STEPS: usize = 2;
+
+    fn new(grid: LatLong) -> Self {
+        let row_edges = (0..=grid.height).map(|y| (PI * y as f64 / grid.height as f64).cos() as f32).collect();
+        let column_edges = (0..=grid.width)
+            .map(|x| {
+                let (s, c) = (TAU * x as f64 / grid.width as f64).sin_cos();
+                (c as f32, s as f32)
+            })
+            .collect();
+        TexelLocator { grid, row_edges, column_edges }
+    }
+
+    /// The texel (x, y) of direction `d`, walking from `near` when given.
+    #[inline]
+    fn locate(&self, d: Vec3, near: Option<(usize, usize)>) -> (usize, usize) {
+        let (w, h) = (self.grid.width, self.grid.height);
+        let Some((mut x, mut y)) = near else { return self.by_angles(d) };
+        let mut steps = 0;
+        while y > 0 && d.z > self.row_edges[y] {
+            y -= 1;
+            steps += 1;
+        }
+        while y + 1 < h && d.z <= self.row_edges[y + 1] {
+            y += 1;
+            steps += 1;
+        }
+        // cross(e, d) = e.x d.y − e.y d.x ≥ 0 when d lies at or after edge e (within π of it).
+        let after = |x: usize| {
+            let (c, s) = self.column_edges[x];
+            c * d.y - s * d.x >= 0.0
+        };
+        while !after(x) {
+            x = (x + w - 1) % w;
+            steps += 1;
+            if steps > Self::MAX_STEPS {
+                return self.by_angles(d);
+            }
+        }
+        while after(x + 1) {
+            x = (x + 1) % w;
+            steps += 1;
+            if steps > Self::MAX_STEPS {
+                return self.by_angles(d);
+            }
+        }
+        if steps > Self::MAX_STEPS {
+            return self.by_angles(d);
+        }
+        (x, y)
+    }
+
+    /// The texel from the direction's angles.
+    fn by_angles(&self, d: Vec3) -> (usize, usize) {
+        let (w, h) = (self.grid.width, self.grid.height);
+        let x = (d.y.atan2(d.x) * (w as f64 / TAU) as f32).floor() as isize;
+        let y = (d.z.clamp(-1.0, 1.0).acos() * (h as f64 / PI) as f32) as usize;
+        (x.rem_euclid(w as isize) as usize, y.min(h - 1))
+    }
 }
 
 /// Adds the bright texels' excess to `frame`, the lighting on `grid` in the frame `to_frame`
@@ -202,6 +286,22 @@ fn splat(frame: &mut RgbImage, grid: LatLong, bright: &BrightSources, source: La
     }
 }
 
+/// Output rows per block of [`filter_rows`]: a block takes each source row's spectrum once for
+/// all its rows. One output row's cone reads about 1.4 MB of spectra (Torrance-Sparrow σ = 0.1
+/// on a 512×256 frame: 110 rows × 3 channels × 257 complex bins), more than a core's L2 cache,
+/// so row by row the spectra streamed from memory for every output row.
+const ROW_BLOCK: usize = 8;
+
+/// One output row of [`filter_rows`]: its cone and the view prepared at its reflection vector.
+struct OutputRow {
+    theta: f64,
+    /// (sin θ, cos θ).
+    sin_cos: (f64, f64),
+    theta_star: f64,
+    cos_star: f64,
+    prepared: PreparedView,
+}
+
 /// Rows `first..H` of the angular integral on `source`'s grid, the view at its pole.
 fn filter_rows(source: &RgbImage, model: &Model, cutoff: &CutoffTable, first: usize) -> Vec<[f64; 3]> {
     let (width, height) = (source.width, source.height);
@@ -213,77 +313,103 @@ fn filter_rows(source: &RgbImage, model: &Model, cutoff: &CutoffTable, first: us
     let spectra = row_spectra(source, &*forward);
     // Each source row's node: the midpoint rule of the cone sums (z-midpoint, exact solid angle).
     let nodes: Vec<SubRow> = (0..height).map(|y| TexelRule::midpoint().sub_rows(grid, y)[0]).collect();
+    let half_angle = model.half_angle_lobe();
+    // Analytic models are grey: one kernel and one transform per pair of rows.
+    let channels = if model.brdf().is_rgb() { 3 } else { 1 };
     let (sin_d, cos_d): (Vec<f64>, Vec<f64>) = (0..width).map(|d| (d as f64 * TAU / width as f64).sin_cos()).unzip();
-    (first..height)
-        .into_par_iter()
-        .flat_map_iter(|y_out| {
-            let theta_r = grid.row_theta(y_out);
-            let (s_r, z_r) = theta_r.sin_cos();
-            let mut row = vec![[0.0; 3]; width];
-            let Some(prepared) = model.prepare_view(DVec3::new(s_r, 0.0, z_r), DVec3::Z) else {
-                return row;
-            };
-            let theta_star = cutoff.at(theta_r);
-            let cos_star = if theta_star >= PI { f64::NEG_INFINITY } else { theta_star.cos() };
-            let mut kernel = [forward.make_input_vec(), forward.make_input_vec(), forward.make_input_vec()];
-            let mut spectrum = [forward.make_output_vec(), forward.make_output_vec(), forward.make_output_vec()];
-            let mut scratch = forward.make_scratch_vec();
-            let mut acc = [inverse.make_input_vec(), inverse.make_input_vec(), inverse.make_input_vec()];
-            for y in 0..height {
-                let theta = grid.row_theta(y);
-                if (theta - theta_r).abs() > theta_star {
-                    continue;
+    let even = EvenSpectrum::new(&mut planner, width);
+    let output_rows: Vec<usize> = (first..height).collect();
+    output_rows
+        .par_chunks(ROW_BLOCK)
+        .map_init(
+            || even.clone(),
+            |even, block| {
+                // R = −V (the last rows' pole) has no normal: its row stays zero.
+                let rows: Vec<Option<OutputRow>> = block
+                    .iter()
+                    .map(|&y| {
+                        let theta = grid.row_theta(y);
+                        let (s, c) = theta.sin_cos();
+                        let theta_star = cutoff.at(theta);
+                        let cos_star = if theta_star >= PI { f64::NEG_INFINITY } else { theta_star.cos() };
+                        let prepared = model.prepare_view(DVec3::new(s, 0.0, c), DVec3::Z)?;
+                        Some(OutputRow { theta, sin_cos: (s, c), theta_star, cos_star, prepared })
+                    })
+                    .collect();
+                let mut kernel = vec![vec![0.0; bins]; channels];
+                let mut spectrum = vec![vec![0.0; bins]; channels];
+                let mut acc = vec![[(); 3].map(|_| inverse.make_input_vec()); block.len()];
+                // Each output row sums its source rows in order, whatever the blocks.
+                for (y, node) in nodes.iter().enumerate() {
+                    let theta = grid.row_theta(y);
+                    let (st, ct) = theta.sin_cos();
+                    let solid_angle = grid.row_solid_angle(y);
+                    let src = &spectra[y * 3 * bins..(y + 1) * 3 * bins];
+                    for (row, acc) in rows.iter().zip(acc.iter_mut()) {
+                        let Some(row) = row else { continue };
+                        if (theta - row.theta).abs() > row.theta_star {
+                            continue;
+                        }
+                        let (s_r, z_r) = row.sin_cos;
+                        kernel.iter_mut().for_each(|k| k.fill(0.0));
+                        // R and V lie in the xz-plane, and ρ̂ is even under the mirror y → −y
+                        // (isotropy with bilateral symmetry; Kajiya–Kay through T·ω and T·V), so
+                        // the kernel is even in d: its half d = 0..=W/2 is evaluated, and its
+                        // spectrum is real.
+                        let on_circle =
+                            half_angle.map(|lobe| lobe.on_view_circle(&row.prepared, node.z, node.sin_theta));
+                        let mut any = false;
+                        for d in 0..bins {
+                            // The cone test on the texel's centre, as the cone sums do. cos d falls
+                            // with d: past the cone's edge, the rest of the row is outside.
+                            if ct * z_r + st * s_r * cos_d[d] < row.cos_star {
+                                break;
+                            }
+                            let v = match &on_circle {
+                                Some(rho_hat) => [rho_hat(cos_d[d], sin_d[d]); 3],
+                                None => {
+                                    let l = DVec3::new(node.sin_theta * cos_d[d], node.sin_theta * sin_d[d], node.z);
+                                    model.rho_hat_prepared(&row.prepared, l)
+                                }
+                            };
+                            any = true;
+                            for (k, v) in kernel.iter_mut().zip(v) {
+                                k[d] = solid_angle * v;
+                            }
+                        }
+                        if !any {
+                            continue;
+                        }
+                        for (k, out) in kernel.iter().zip(spectrum.iter_mut()) {
+                            even.transform(k, out);
+                        }
+                        for (c, acc) in acc.iter_mut().enumerate() {
+                            let k = &spectrum[c.min(channels - 1)];
+                            // Σ_x L(x) k(x − x_o) is the inverse transform of L̂·conj(k̂), k̂ real.
+                            for ((a, l), k) in acc.iter_mut().zip(&src[c * bins..(c + 1) * bins]).zip(k) {
+                                *a += l * k;
+                            }
+                        }
+                    }
                 }
-                let (st, ct) = theta.sin_cos();
-                let SubRow { z, sin_theta: s, .. } = nodes[y];
-                let solid_angle = grid.row_solid_angle(y);
-                let mut grey = true;
-                let mut any = false;
-                kernel.iter_mut().for_each(|k| k.fill(0.0));
-                // R and V lie in the xz-plane, and ρ̂ is even under the mirror y → −y (isotropy
-                // with bilateral symmetry; Kajiya–Kay through T·ω and T·V), so the kernel is even
-                // in d: half the columns are evaluated.
-                for d in 0..=width / 2 {
-                    // The cone test on the texel's centre, as the cone sums do.
-                    if ct * z_r + st * s_r * cos_d[d] < cos_star {
+                let mut out = inverse.make_output_vec();
+                let mut scratch = inverse.make_scratch_vec();
+                let mut values = vec![[0.0; 3]; block.len() * width];
+                for ((row, acc), values) in rows.iter().zip(acc.iter_mut()).zip(values.chunks_mut(width)) {
+                    if row.is_none() {
                         continue;
                     }
-                    let v = model.rho_hat_prepared(&prepared, DVec3::new(s * cos_d[d], s * sin_d[d], z));
-                    grey &= v[0] == v[1] && v[1] == v[2];
-                    any = true;
-                    for c in 0..3 {
-                        kernel[c][d] = solid_angle * v[c];
-                        kernel[c][(width - d) % width] = solid_angle * v[c];
+                    for (c, acc) in acc.iter_mut().enumerate() {
+                        inverse_row(&*inverse, acc, &mut out, &mut scratch);
+                        for (p, v) in values.iter_mut().zip(&out) {
+                            p[c] = *v;
+                        }
                     }
                 }
-                if !any {
-                    continue;
-                }
-                let channels = if grey { 1 } else { 3 };
-                for c in 0..channels {
-                    forward
-                        .process_with_scratch(&mut kernel[c], &mut spectrum[c], &mut scratch)
-                        .expect("sizes from the plan");
-                }
-                let src = &spectra[y * 3 * bins..(y + 1) * 3 * bins];
-                for c in 0..3 {
-                    let k = &spectrum[if grey { 0 } else { c }];
-                    // Σ_x L(x) k(x − x_o) is the inverse transform of L̂·conj(k̂).
-                    for ((a, l), k) in acc[c].iter_mut().zip(&src[c * bins..(c + 1) * bins]).zip(k) {
-                        *a += l * k.conj();
-                    }
-                }
-            }
-            let mut out = inverse.make_output_vec();
-            let mut scratch = inverse.make_scratch_vec();
-            for c in 0..3 {
-                inverse_row(&*inverse, &mut acc[c], &mut out, &mut scratch);
-                for (p, v) in row.iter_mut().zip(&out) {
-                    p[c] = *v;
-                }
-            }
-            row
-        })
+                values
+            },
+        )
+        .flatten_iter()
         .collect()
 }
 
@@ -335,6 +461,47 @@ mod tests {
                 }
             })
             .collect()
+    }
+
+    #[test]
+    fn the_texel_locator_walks_to_the_texel_the_angles_give() {
+        let grid = LatLong::new(64, 32);
+        let cells = TexelLocator::new(grid);
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let (mut walked, mut checked) = (0, 0);
+        for _ in 0..20_000 {
+            let z = 2.0 * rng.next_f64() - 1.0;
+            let phi = TAU * rng.next_f64();
+            let s = (1.0 - z * z).sqrt();
+            let d = DVec3::new(s * phi.cos(), s * phi.sin(), z);
+            // Away from the edges, where single-precision angles and edges may disagree.
+            let (fx, fy) = grid.position(d);
+            let margin = 1e-3;
+            if (fx - fx.round()).abs() < margin || (fy - fy.round()).abs() < margin {
+                continue;
+            }
+            let want = (fx.floor() as usize % grid.width, (fy.floor() as usize).min(grid.height - 1));
+            let d = d.as_vec3();
+            assert_eq!(cells.by_angles(d), want);
+            // From the texel itself, its neighbours, one two columns away, and a far one.
+            let (x, y) = want;
+            let (w, h) = (grid.width, grid.height);
+            for near in [
+                (x, y),
+                ((x + 1) % w, y),
+                ((x + w - 1) % w, y.saturating_sub(1)),
+                ((x + 2) % w, (y + 1).min(h - 1)),
+                ((x + w / 2) % w, h - 1 - y),
+            ] {
+                assert_eq!(cells.locate(d, Some(near)), want, "from {near:?}");
+                walked += usize::from(near != want);
+            }
+            checked += 1;
+        }
+        assert!(checked > 10_000 && walked > 40_000, "{checked} directions, {walked} walks");
+        // At a pole every column's edge test is zero: the walk gives up and takes the angles.
+        assert_eq!(cells.locate(Vec3::Z, Some((5, 0))).1, 0);
+        assert_eq!(cells.locate(-Vec3::Z, Some((5, 31))).1, 31);
     }
 
     #[test]
