@@ -351,34 +351,39 @@ fn filter_rows(source: &RgbImage, model: &Model, cutoff: &CutoffTable, first: us
                             continue;
                         }
                         let (s_r, z_r) = row.sin_cos;
-                        kernel.iter_mut().for_each(|k| k.fill(0.0));
+                        // The cone test on the texel's centre, as the cone sums do. cos d falls
+                        // with d: the row's texels in the cone are d < end.
+                        let end =
+                            cos_d[..bins].iter().position(|&c| ct * z_r + st * s_r * c < row.cos_star).unwrap_or(bins);
+                        if end == 0 {
+                            continue;
+                        }
                         // R and V lie in the xz-plane, and ρ̂ is even under the mirror y → −y
                         // (isotropy with bilateral symmetry; Kajiya–Kay through T·ω and T·V), so
-                        // the kernel is even in d: its half d = 0..=W/2 is evaluated, and its
-                        // spectrum is real.
-                        let on_circle =
-                            half_angle.map(|lobe| lobe.on_view_circle(&row.prepared, node.z, node.sin_theta));
-                        let mut any = false;
-                        for d in 0..bins {
-                            // The cone test on the texel's centre, as the cone sums do. cos d falls
-                            // with d: past the cone's edge, the rest of the row is outside.
-                            if ct * z_r + st * s_r * cos_d[d] < row.cos_star {
-                                break;
-                            }
-                            let v = match &on_circle {
-                                Some(rho_hat) => [rho_hat(cos_d[d], sin_d[d]); 3],
-                                None => {
-                                    let l = DVec3::new(node.sin_theta * cos_d[d], node.sin_theta * sin_d[d], node.z);
-                                    model.rho_hat_prepared(&row.prepared, l)
+                        // the kernel is even in d: its half d = 0..=W/2 is evaluated (zero past
+                        // the cone), and its spectrum is real.
+                        kernel.iter_mut().for_each(|k| k.fill(0.0));
+                        match half_angle {
+                            Some(lobe) => {
+                                // Grey: one channel computed, copied to any other.
+                                let rho_hat = lobe.on_view_circle(&row.prepared, node.z, node.sin_theta);
+                                let (first, rest) = kernel.split_at_mut(1);
+                                for ((k, &c), &s) in first[0][..end].iter_mut().zip(&cos_d).zip(&sin_d) {
+                                    *k = solid_angle * rho_hat(c, s);
                                 }
-                            };
-                            any = true;
-                            for (k, v) in kernel.iter_mut().zip(v) {
-                                k[d] = solid_angle * v;
+                                for k in rest {
+                                    k[..end].copy_from_slice(&first[0][..end]);
+                                }
                             }
-                        }
-                        if !any {
-                            continue;
+                            None => {
+                                for d in 0..end {
+                                    let l = DVec3::new(node.sin_theta * cos_d[d], node.sin_theta * sin_d[d], node.z);
+                                    let v = model.rho_hat_prepared(&row.prepared, l);
+                                    for (k, v) in kernel.iter_mut().zip(v) {
+                                        k[d] = solid_angle * v;
+                                    }
+                                }
+                            }
                         }
                         for (k, out) in kernel.iter().zip(spectrum.iter_mut()) {
                             even.transform(k, out);
