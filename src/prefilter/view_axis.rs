@@ -30,7 +30,7 @@
 //! **Determinism.** Each output row is one thread's fixed-order sum over its source rows.
 
 use super::angular::{ConePyramid, CutoffTable};
-use super::model::{Model, PreparedView};
+use super::model::Model;
 use crate::envmap::bright::BrightSources;
 use crate::envmap::zonal::{inverse_row, row_spectra, EvenSpectrum, SubRow, TexelRule, MAX_TEXELS};
 use crate::io::RgbImage;
@@ -286,22 +286,6 @@ fn splat(frame: &mut RgbImage, grid: LatLong, bright: &BrightSources, source: La
     }
 }
 
-/// Output rows per block of [`filter_rows`]: a block takes each source row's spectrum once for
-/// all its rows. One output row's cone reads about 1.4 MB of spectra (Torrance-Sparrow σ = 0.1
-/// on a 512×256 frame: 110 rows × 3 channels × 257 complex bins), more than a core's L2 cache,
-/// so row by row the spectra streamed from memory for every output row.
-const ROW_BLOCK: usize = 8;
-
-/// One output row of [`filter_rows`]: its cone and the view prepared at its reflection vector.
-struct OutputRow {
-    theta: f64,
-    /// (sin θ, cos θ).
-    sin_cos: (f64, f64),
-    theta_star: f64,
-    cos_star: f64,
-    prepared: PreparedView,
-}
-
 /// Rows `first..H` of the angular integral on `source`'s grid, the view at its pole.
 fn filter_rows(source: &RgbImage, model: &Model, cutoff: &CutoffTable, first: usize) -> Vec<[f64; 3]> {
     let (width, height) = (source.width, source.height);
@@ -318,100 +302,91 @@ fn filter_rows(source: &RgbImage, model: &Model, cutoff: &CutoffTable, first: us
     let channels = if model.brdf().is_rgb() { 3 } else { 1 };
     let (sin_d, cos_d): (Vec<f64>, Vec<f64>) = (0..width).map(|d| (d as f64 * TAU / width as f64).sin_cos()).unzip();
     let even = EvenSpectrum::new(&mut planner, width);
-    let output_rows: Vec<usize> = (first..height).collect();
-    output_rows
-        .par_chunks(ROW_BLOCK)
+    // Each source row's centre θ with its sine and cosine (the cone test), and its texels' solid
+    // angle.
+    let centres: Vec<(f64, f64, f64, f64)> = (0..height)
+        .map(|y| {
+            let theta = grid.row_theta(y);
+            let (s, c) = theta.sin_cos();
+            (theta, s, c, grid.row_solid_angle(y))
+        })
+        .collect();
+    (first..height)
+        .into_par_iter()
         .map_init(
             || even.clone(),
-            |even, block| {
-                // R = −V (the last rows' pole) has no normal: its row stays zero.
-                let rows: Vec<Option<OutputRow>> = block
-                    .iter()
-                    .map(|&y| {
-                        let theta = grid.row_theta(y);
-                        let (s, c) = theta.sin_cos();
-                        let theta_star = cutoff.at(theta);
-                        let cos_star = if theta_star >= PI { f64::NEG_INFINITY } else { theta_star.cos() };
-                        let prepared = model.prepare_view(DVec3::new(s, 0.0, c), DVec3::Z)?;
-                        Some(OutputRow { theta, sin_cos: (s, c), theta_star, cos_star, prepared })
-                    })
-                    .collect();
+            |even, y_out| {
+                let theta_r = grid.row_theta(y_out);
+                let (s_r, z_r) = theta_r.sin_cos();
+                let mut row = vec![[0.0; 3]; width];
+                // R = −V has no normal: its row stays zero.
+                let Some(prepared) = model.prepare_view(DVec3::new(s_r, 0.0, z_r), DVec3::Z) else {
+                    return row;
+                };
+                let theta_star = cutoff.at(theta_r);
+                let cos_star = if theta_star >= PI { f64::NEG_INFINITY } else { theta_star.cos() };
                 let mut kernel = vec![vec![0.0; bins]; channels];
                 let mut spectrum = vec![vec![0.0; bins]; channels];
-                let mut acc = vec![[(); 3].map(|_| inverse.make_input_vec()); block.len()];
-                // Each output row sums its source rows in order, whatever the blocks.
-                for (y, node) in nodes.iter().enumerate() {
-                    let theta = grid.row_theta(y);
-                    let (st, ct) = theta.sin_cos();
-                    let solid_angle = grid.row_solid_angle(y);
-                    let src = &spectra[y * 3 * bins..(y + 1) * 3 * bins];
-                    for (row, acc) in rows.iter().zip(acc.iter_mut()) {
-                        let Some(row) = row else { continue };
-                        if (theta - row.theta).abs() > row.theta_star {
-                            continue;
-                        }
-                        let (s_r, z_r) = row.sin_cos;
-                        // The cone test on the texel's centre, as the cone sums do. cos d falls
-                        // with d: the row's texels in the cone are d < end.
-                        let end =
-                            cos_d[..bins].iter().position(|&c| ct * z_r + st * s_r * c < row.cos_star).unwrap_or(bins);
-                        if end == 0 {
-                            continue;
-                        }
-                        // R and V lie in the xz-plane, and ρ̂ is even under the mirror y → −y
-                        // (isotropy with bilateral symmetry; Kajiya–Kay through T·ω and T·V), so
-                        // the kernel is even in d: its half d = 0..=W/2 is evaluated (zero past
-                        // the cone), and its spectrum is real.
-                        kernel.iter_mut().for_each(|k| k.fill(0.0));
-                        match half_angle {
-                            Some(lobe) => {
-                                // Grey: one channel computed, copied to any other.
-                                let rho_hat = lobe.on_view_circle(&row.prepared, node.z, node.sin_theta);
-                                let (first, rest) = kernel.split_at_mut(1);
-                                for ((k, &c), &s) in first[0][..end].iter_mut().zip(&cos_d).zip(&sin_d) {
-                                    *k = solid_angle * rho_hat(c, s);
-                                }
-                                for k in rest {
-                                    k[..end].copy_from_slice(&first[0][..end]);
-                                }
+                let mut acc = [(); 3].map(|_| inverse.make_input_vec());
+                for ((&(theta, st, ct, solid_angle), node), src) in
+                    centres.iter().zip(&nodes).zip(spectra.chunks_exact(3 * bins))
+                {
+                    if (theta - theta_r).abs() > theta_star {
+                        continue;
+                    }
+                    // The cone test on the texel's centre, as the cone sums do. cos d falls with
+                    // d: the row's texels in the cone are d < end.
+                    let end = cos_d[..bins].iter().position(|&c| ct * z_r + st * s_r * c < cos_star).unwrap_or(bins);
+                    if end == 0 {
+                        continue;
+                    }
+                    // R and V lie in the xz-plane, and ρ̂ is even under the mirror y → −y
+                    // (isotropy with bilateral symmetry; Kajiya–Kay through T·ω and T·V), so the
+                    // kernel is even in d: its half d = 0..=W/2 is evaluated (zero past the
+                    // cone), and its spectrum is real.
+                    kernel.iter_mut().for_each(|k| k.fill(0.0));
+                    match half_angle {
+                        Some(lobe) => {
+                            // Grey: one channel computed, copied to any other.
+                            let rho_hat = lobe.on_view_circle(&prepared, node.z, node.sin_theta);
+                            let (first, rest) = kernel.split_at_mut(1);
+                            for ((k, &c), &s) in first[0][..end].iter_mut().zip(&cos_d).zip(&sin_d) {
+                                *k = solid_angle * rho_hat(c, s);
                             }
-                            None => {
-                                for d in 0..end {
-                                    let l = DVec3::new(node.sin_theta * cos_d[d], node.sin_theta * sin_d[d], node.z);
-                                    let v = model.rho_hat_prepared(&row.prepared, l);
-                                    for (k, v) in kernel.iter_mut().zip(v) {
-                                        k[d] = solid_angle * v;
-                                    }
+                            for k in rest {
+                                k[..end].copy_from_slice(&first[0][..end]);
+                            }
+                        }
+                        None => {
+                            for d in 0..end {
+                                let l = DVec3::new(node.sin_theta * cos_d[d], node.sin_theta * sin_d[d], node.z);
+                                let v = model.rho_hat_prepared(&prepared, l);
+                                for (k, v) in kernel.iter_mut().zip(v) {
+                                    k[d] = solid_angle * v;
                                 }
                             }
                         }
-                        for (k, out) in kernel.iter().zip(spectrum.iter_mut()) {
-                            even.transform(k, out);
-                        }
-                        for (c, acc) in acc.iter_mut().enumerate() {
-                            let k = &spectrum[c.min(channels - 1)];
-                            // Σ_x L(x) k(x − x_o) is the inverse transform of L̂·conj(k̂), k̂ real.
-                            for ((a, l), k) in acc.iter_mut().zip(&src[c * bins..(c + 1) * bins]).zip(k) {
-                                *a += l * k;
-                            }
+                    }
+                    for (k, out) in kernel.iter().zip(spectrum.iter_mut()) {
+                        even.transform(k, out);
+                    }
+                    for (c, acc) in acc.iter_mut().enumerate() {
+                        let k = &spectrum[c.min(channels - 1)];
+                        // Σ_x L(x) k(x − x_o) is the inverse transform of L̂·conj(k̂), k̂ real.
+                        for ((a, l), k) in acc.iter_mut().zip(&src[c * bins..(c + 1) * bins]).zip(k) {
+                            *a += l * k;
                         }
                     }
                 }
                 let mut out = inverse.make_output_vec();
                 let mut scratch = inverse.make_scratch_vec();
-                let mut values = vec![[0.0; 3]; block.len() * width];
-                for ((row, acc), values) in rows.iter().zip(acc.iter_mut()).zip(values.chunks_mut(width)) {
-                    if row.is_none() {
-                        continue;
-                    }
-                    for (c, acc) in acc.iter_mut().enumerate() {
-                        inverse_row(&*inverse, acc, &mut out, &mut scratch);
-                        for (p, v) in values.iter_mut().zip(&out) {
-                            p[c] = *v;
-                        }
+                for (c, acc) in acc.iter_mut().enumerate() {
+                    inverse_row(&*inverse, acc, &mut out, &mut scratch);
+                    for (p, v) in row.iter_mut().zip(&out) {
+                        p[c] = *v;
                     }
                 }
-                values
+                row
             },
         )
         .flatten_iter()
