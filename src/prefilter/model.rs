@@ -273,8 +273,9 @@ impl Model {
 const HALF_ANGLE_TOLERANCE: f64 = 1e-5;
 
 /// The most entries a [`HalfAngleLobe`] may take (0.5 MB). Torrance-Sparrow takes 4 097 for
-/// any σ: its support in cos θ_h, where ρ is above 10⁻¹² of the peak, is about 14σ², and linear
-/// interpolation within the tolerance needs a spacing of about σ²√(2·10⁻⁵), both σ². Curves
+/// every σ from 0.005 to 0.3 (2 049 at 0.5): its support in cos θ_h, where ρ is above 10⁻¹² of
+/// the peak, is about 14σ², and linear interpolation within the tolerance needs a spacing of
+/// about σ²√(2·10⁻⁵), both σ² while θ_h is small. Curves
 /// with a kink of unbounded curvature, such as Blinn-Phong's cos^s θ_h for s < 1 at θ_h = 90°,
 /// exceed it and are evaluated exactly.
 pub const MAX_HALF_ANGLE_ENTRIES: usize = 1 << 16;
