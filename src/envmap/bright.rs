@@ -96,9 +96,7 @@ impl BrightSources {
     pub fn add_to_latlong(&self, image: &mut RgbImage) {
         let grid = crate::sphere::LatLong::new(image.width, image.height);
         for t in &self.texels {
-            let (fx, fy) = grid.position(t.dir);
-            let x = (fx.floor().max(0.0) as usize).min(image.width - 1);
-            let y = (fy.floor().max(0.0) as usize).min(image.height - 1);
+            let (x, y) = grid.texel_of(t.dir);
             let scale = t.solid_angle / grid.row_solid_angle(y);
             let px = &mut image.pixels[y * image.width + x];
             for c in 0..3 {

@@ -68,6 +68,13 @@ impl LatLong {
         (phi(d) / TAU * self.width as f64, theta(d) / PI * self.height as f64)
     }
 
+    /// The texel (x, y) a direction falls in: `position` floored, clamped to the grid.
+    #[inline]
+    pub fn texel_of(&self, d: DVec3) -> (usize, usize) {
+        let (fx, fy) = self.position(d);
+        ((fx.floor().max(0.0) as usize).min(self.width - 1), (fy.floor().max(0.0) as usize).min(self.height - 1))
+    }
+
     /// Bilinear taps of direction `d` between texel centres: φ wraps, θ clamps to the first and
     /// last rows. Four (pixel index, weight) pairs; the weights sum to 1.
     #[inline]
