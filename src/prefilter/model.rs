@@ -345,10 +345,8 @@ impl HalfAngleLobe {
         if cos_i <= 0.0 {
             return 0.0;
         }
-        // |ω_i + ω_o|² = 2 + 2 ω_i·ω_o; opposite directions have θ_h = 0 (brdf::models::theta_h).
-        let sum_sq = 2.0 + 2.0 * l.dot(view.v);
-        let cos_h = if sum_sq > 0.0 { (cos_i + view.wo_n.z) / sum_sq.sqrt() } else { 1.0 };
-        self.at(cos_i, cos_h)
+        let (scale, offset) = half_vector_scale(l.dot(view.v));
+        self.at(cos_i, (cos_i + view.wo_n.z) * scale + offset)
     }
 
     /// ρ̂ for light on the circle ω_i = (s cos φ, s sin φ, z) about a view along +Z (`view`
@@ -357,9 +355,7 @@ impl HalfAngleLobe {
     /// sin φ. The rows of the view-frame convolution ([`super::view_axis`]) are such circles.
     pub fn on_view_circle(&self, view: &PreparedView, z: f64, s: f64) -> impl Fn(f64, f64) -> f64 + '_ {
         debug_assert!(view.v == DVec3::Z, "the view of a view circle is +Z");
-        let sum_sq = 2.0 + 2.0 * z;
-        // cos θ_h = (N·ω_i + N·V)·scale + offset: 1 at ω_i = −V (θ_h = 0 by convention).
-        let (scale, offset) = if sum_sq > 0.0 { (1.0 / sum_sq.sqrt(), 0.0) } else { (0.0, 1.0) };
+        let (scale, offset) = half_vector_scale(z);
         let (a, b, c) = (view.n.x * s, view.n.y * s, view.n.z * z);
         let n_v = view.wo_n.z;
         move |cos_phi, sin_phi| {
@@ -388,6 +384,18 @@ impl HalfAngleLobe {
         } else {
             rho
         }
+    }
+}
+
+/// cos θ_h = (N·ω_i + N·ω_o)·scale + offset for ω_i·ω_o = `cos_io`: scale = 1/|ω_i + ω_o| with
+/// |ω_i + ω_o|² = 2 + 2 ω_i·ω_o, and opposite directions have θ_h = 0 (offset 1, as
+/// [`crate::brdf::models::theta_h`]).
+fn half_vector_scale(cos_io: f64) -> (f64, f64) {
+    let sum_sq = 2.0 + 2.0 * cos_io;
+    if sum_sq > 0.0 {
+        (1.0 / sum_sq.sqrt(), 0.0)
+    } else {
+        (0.0, 1.0)
     }
 }
 
