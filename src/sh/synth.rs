@@ -5,7 +5,7 @@
 //! φ gives all W pixels in O(W log W).
 
 use super::legendre::LegendreTable;
-use super::{basis, count, index, index_nonneg, ShCoeffs};
+use super::{basis, count, index, ShCoeffs};
 use crate::io::RgbImage;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -47,12 +47,15 @@ pub fn eval(coeffs: &ShCoeffs, table: &LegendreTable, dir: DVec3, scratch: &mut 
 pub struct RowSynth {
     width: usize,
     ifft: std::sync::Arc<dyn realfft::ComplexToReal<f64>>,
+    /// The half-texel shift e^{iπm/W} of each bin m ≤ W/2, as (sin, cos).
+    shift: Vec<(f64, f64)>,
 }
 
 impl RowSynth {
     /// A synthesizer for rows of `width` texels.
     pub fn new(width: usize) -> Self {
-        RowSynth { width, ifft: RealFftPlanner::<f64>::new().plan_fft_inverse(width) }
+        let shift = (0..=width / 2).map(|m| (PI * m as f64 / width as f64).sin_cos()).collect();
+        RowSynth { width, ifft: RealFftPlanner::<f64>::new().plan_fft_inverse(width), shift }
     }
 
     /// The highest frequency a row can hold (W/2).
@@ -80,7 +83,7 @@ impl RowSynth {
             } else {
                 // f = Re Σ_m (a_m − i b_m) e^{imφ}; the inverse FFT sums X_m e^{2πimx/W} over
                 // ±m, i.e. 2 Re(X_m e^{…}), and the half-texel shift is the phase e^{iπm/W}.
-                let (s, c) = (PI * m as f64 / w as f64).sin_cos();
+                let (s, c) = self.shift[m];
                 Complex::new(a[m], -b[m]) * Complex::new(c, s) * 0.5
             };
         }
@@ -94,8 +97,9 @@ impl RowSynth {
 /// Rows are taken in mirrored pairs, θ and π − θ: P̄_l^m(−z) = (−1)^{l+m} P̄_l^m(z), so one
 /// Legendre evaluation serves both. With E_m and O_m the parts of a_m(θ) = Σ_l L_lm √2 P̄_l^m
 /// over the bands with l + m even and odd, a_m(θ) = E_m + O_m and a_m(π − θ) = E_m − O_m (b_m
-/// likewise). The sum over l runs over contiguous m (the coefficients rearranged band by band),
-/// for all three channels at once.
+/// likewise). The sums are taken one order m at a time, the column P̄_l^m, l ≥ m, run over every
+/// row pair at once ([`LegendreTable::column`]), and the rows' inverse FFTs follow; each sum
+/// over l is in the same order as row by row, so the image is too.
 pub fn synthesize_latlong(coeffs: &ShCoeffs, width: usize, height: usize) -> Result<RgbImage, SynthError> {
     let order = coeffs.order;
     if 2 * order > width {
@@ -103,58 +107,54 @@ pub fn synthesize_latlong(coeffs: &ShCoeffs, width: usize, height: usize) -> Res
     }
     let table = LegendreTable::new(order);
     let rows = RowSynth::new(width);
-    // [cos or sin][index_nonneg(l, m)][channel]: the coefficients of m and of −m.
-    let len = index_nonneg(order, order) + 1;
-    let mut by_band = [vec![[0.0; 3]; len], vec![[0.0; 3]; len]];
-    for l in 0..=order {
-        for m in 0..=l {
-            by_band[0][index_nonneg(l, m)] = coeffs.rgb[index(l, m as isize)];
-            if m > 0 {
-                by_band[1][index_nonneg(l, m)] = coeffs.rgb[index(l, -(m as isize))];
-            }
-        }
-    }
     let pairs: Vec<(usize, Option<usize>)> = crate::sphere::LatLong::new(width, height).mirrored_row_pairs().collect();
-    let synthesized: Vec<[Vec<[f32; 3]>; 2]> = pairs
-        .par_iter()
-        .map(|&(y, mirror)| {
-            let theta = PI * (y as f64 + 0.5) / height as f64;
-            let (st, ct) = theta.sin_cos();
-            let mut plm = vec![0.0; count(order)];
-            table.eval(ct, st, &mut plm);
-            // [parity of l][cos or sin][m][channel].
-            let mut parts = [
-                [vec![[0.0; 3]; order + 1], vec![[0.0; 3]; order + 1]],
-                [vec![[0.0; 3]; order + 1], vec![[0.0; 3]; order + 1]],
-            ];
-            for l in 0..=order {
-                // P̄_l^m for m = 0..=l sits at l² + l + m.
-                let p_l = &plm[l * l + l..=l * l + 2 * l];
-                for k in 0..2 {
-                    let band = &by_band[k][index_nonneg(l, 0)..=index_nonneg(l, l)];
-                    for ((acc, p), v) in parts[l % 2][k][..=l].iter_mut().zip(p_l).zip(band) {
+    let n = pairs.len();
+    let (sin_theta, cos_theta): (Vec<f64>, Vec<f64>) =
+        pairs.iter().map(|&(y, _)| (PI * (y as f64 + 0.5) / height as f64).sin_cos()).unzip();
+    let diagonals = table.diagonals(&sin_theta);
+    // Per order m: [part][cos or sin][channel][pair] with part 0 the bands with l + m even (the
+    // even part in z) and 1 the rest, each summed over l in order, the column of Legendre
+    // values run over all pairs at once.
+    let columns: Vec<Vec<f64>> = (0..=order)
+        .into_par_iter()
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |column_scratch, m| {
+                let mut parts = vec![0.0; 12 * n];
+                let kinds = if m == 0 { 1 } else { 2 };
+                table.column(m, &cos_theta, &diagonals[m * n..(m + 1) * n], column_scratch, |l, values| {
+                    let part = &mut parts[((l + m) % 2) * 6 * n..][..6 * n];
+                    for k in 0..kinds {
+                        let coefficient = coeffs.rgb[index(l, if k == 0 { m as isize } else { -(m as isize) })];
                         for c in 0..3 {
-                            acc[c] += p * v[c];
+                            for (acc, p) in part[(k * 3 + c) * n..][..n].iter_mut().zip(values) {
+                                *acc += p * coefficient[c];
+                            }
                         }
                     }
-                }
-            }
-            let mut buffers = rows.buffers();
-            let (mut a, mut b) = (vec![0.0; order + 1], vec![0.0; order + 1]);
+                });
+                parts
+            },
+        )
+        .collect();
+    let buffers = || (rows.buffers(), vec![0.0; order + 1], vec![0.0; order + 1]);
+    let synthesized: Vec<[Vec<[f32; 3]>; 2]> = (0..n)
+        .into_par_iter()
+        .map_init(buffers, |(buffers, a, b), j| {
+            let mirror = pairs[j].1;
             let mut out = [vec![[0.0f32; 3]; width], vec![[0.0f32; 3]; if mirror.is_some() { width } else { 0 }]];
             for (half, sign) in [(0, 1.0), (1, -1.0)] {
                 if half == 1 && mirror.is_none() {
                     break;
                 }
                 for c in 0..3 {
-                    for m in 0..=order {
-                        // The part with l + m even is the even part in z.
-                        let (even, odd) = (&parts[m % 2], &parts[1 - m % 2]);
+                    for (m, column) in columns.iter().enumerate() {
+                        let at = |part: usize, k: usize| column[((part * 2 + k) * 3 + c) * n + j];
                         let scale = if m == 0 { 1.0 } else { SQRT_2 };
-                        a[m] = scale * (even[0][m][c] + sign * odd[0][m][c]);
-                        b[m] = scale * (even[1][m][c] + sign * odd[1][m][c]);
+                        a[m] = scale * (at(0, 0) + sign * at(1, 0));
+                        b[m] = scale * (at(0, 1) + sign * at(1, 1));
                     }
-                    rows.synth(&a, &b, &mut buffers);
+                    rows.synth(a, b, buffers);
                     for (px, v) in out[half].iter_mut().zip(&buffers.1) {
                         px[c] = *v as f32;
                     }
