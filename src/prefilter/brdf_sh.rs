@@ -17,7 +17,7 @@
 //! lobes near θ = 0) and the trapezoid rule in φ (exact for the trigonometric polynomials).
 
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
-use crate::sh::legendre::LegendreTable;
+use crate::sh::legendre::{column_sums, LegendreTable};
 use crate::sh::{count, index};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -220,29 +220,26 @@ pub fn from_radial(u: impl Fn(f64) -> [f64; 3] + Sync, f: usize, nodes: usize) -
         .map(|&(t, w)| (0.5 * (t - 1.0), 0.5 * w))
         .chain(half.iter().map(|&(t, w)| (0.5 * (t + 1.0), 0.5 * w)))
         .collect();
-    // Fixed chunks of nodes, summed in order: the same for any thread count.
+    // Fixed chunks of nodes, summed in order: the same for any thread count. Within a chunk the
+    // zonal column P̄_l^0 runs over all its nodes at once (`LegendreTable::column`).
     let chunks: Vec<(Vec<[f64; 3]>, f64)> = points
-        .par_chunks(128)
+        .par_chunks(256)
         .map(|chunk| {
-            let mut pl = vec![0.0; f + 1];
+            // Lobes about R vanish on a whole half (Phong's below the horizon of R): no work
+            // there.
+            let lit: Vec<(f64, f64, [f64; 3])> =
+                chunk.iter().map(|&(x, w)| (x, w, u(x))).filter(|p| p.2 != [0.0; 3]).collect();
+            let energy: f64 =
+                lit.iter().map(|(_, w, v)| 4.0 * PI * 2.0 * PI * w * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])).sum();
+            let n = lit.len();
+            let xs: Vec<f64> = lit.iter().map(|p| p.0).collect();
+            // [channel][node]: the weight times the lobe.
+            let weighted: Vec<f64> = (0..3).flat_map(|c| lit.iter().map(move |(_, w, v)| w * v[c])).collect();
             let mut coeffs = vec![[0.0; 3]; f + 1];
-            let mut energy = 0.0;
-            for &(x, w) in chunk {
-                let v = u(x);
-                // Lobes about R vanish on a whole half (Phong's below the horizon of R): no work
-                // there.
-                if v == [0.0; 3] {
-                    continue;
-                }
-                table.eval_zonal(x, &mut pl);
-                energy += 4.0 * PI * 2.0 * PI * w * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-                for l in 0..=f {
-                    let k = scale * w * pl[l];
-                    for ch in 0..3 {
-                        coeffs[l][ch] += k * v[ch];
-                    }
-                }
-            }
+            let diagonal = vec![0.5 / PI.sqrt(); n];
+            table.column(0, &xs, &diagonal, &mut (Vec::new(), Vec::new()), |l, values| {
+                coeffs[l] = column_sums::<3>(values, &weighted, 3).map(|s| scale * s);
+            });
             (coeffs, energy)
         })
         .collect();
