@@ -322,7 +322,9 @@ pub fn reflection_map(shrm: &Shrm, view: DVec3) -> RgbImage {
     image.pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         let mut ylm = vec![0.0; n];
         for (x, px) in row.iter_mut().enumerate() {
-            let weights: &[f64] = if shrm.global {
+            // Y_00 is the same in every frame: a P_B = 0 SHRM (radially symmetric BRDFs) needs
+            // no texel frame.
+            let weights: &[f64] = if shrm.global || p == 0 {
                 &global_y
             } else {
                 crate::sh::basis::eval_basis_dir(&table, texel_frame(w, h, x, y).transpose() * view, &mut ylm);
