@@ -140,14 +140,16 @@ pub fn project_latlong(
         }
     };
     // ∫ over a column of cos or sin mφ, relative to Δφ times the centre's value.
-    let column = |m: usize| {
-        let half = PI * m as f64 / w as f64;
-        if quadrature == TexelQuadrature::Midpoint || m == 0 {
-            1.0
-        } else {
-            half.sin() / half
-        }
-    };
+    let column: Vec<f64> = (0..=order)
+        .map(|m| {
+            let half = PI * m as f64 / w as f64;
+            if quadrature == TexelQuadrature::Midpoint || m == 0 {
+                1.0
+            } else {
+                half.sin() / half
+            }
+        })
+        .collect();
     let row_is_black = |y: usize| img.row(y).iter().all(|p| *p == [0.0; 3]);
     let table = LegendreTable::new(order);
     let fft = RealFftPlanner::<f64>::new().plan_fft_forward(w);
@@ -167,14 +169,16 @@ pub fn project_latlong(
     let parts = |part: usize, k: usize, c: usize| ((part * 2 + k) * 3 + c) * (order + 1);
     let stride = parts(2, 0, 0);
     let mut sums = vec![0.0; pairs.len() * stride];
-    let fft_buffers = || (fft.make_input_vec(), fft.make_output_vec(), fft.make_scratch_vec(), [0.0; 2]);
+    // Per worker: the FFT's buffers and [row of the pair][cos or sin] at m.
+    let fft_buffers = || {
+        let row_sums = [vec![[0.0; 2]; order + 1], vec![[0.0; 2]; order + 1]];
+        (fft.make_input_vec(), fft.make_output_vec(), fft.make_scratch_vec(), row_sums)
+    };
     sums.par_chunks_mut(stride).zip(&pairs).for_each_init(
         fft_buffers,
-        |(input, spectrum, scratch, _), (out, &(y, mirror))| {
+        |(input, spectrum, scratch, row_sums), (out, &(y, mirror))| {
             let omega = LatLong::new(w, h).row_solid_angle(y);
             for c in 0..3 {
-                // [row of the pair][cos or sin] at m.
-                let mut row_sums = [vec![[0.0; 2]; order + 1], vec![[0.0; 2]; order + 1]];
                 for (row, sum) in std::iter::once(y).chain(mirror).zip(row_sums.iter_mut()) {
                     for (slot, px) in input.iter_mut().zip(img.row(row)) {
                         *slot = px[c] as f64;
@@ -188,11 +192,11 @@ pub fn project_latlong(
                         *s = [cos * z.re + sin * z.im, -(cos * z.im - sin * z.re)];
                     }
                 }
-                let [top, bottom] = &row_sums;
+                let [top, bottom] = &*row_sums;
                 for k in 0..2 {
                     for m in 0..=order {
                         let (t, b) = (top[m][k], if mirror.is_some() { bottom[m][k] } else { 0.0 });
-                        let weight = if m == 0 { omega } else { omega * SQRT_2 * column(m) };
+                        let weight = if m == 0 { omega } else { omega * SQRT_2 * column[m] };
                         out[parts(0, k, c) + m] = (t + b) * weight;
                         out[parts(1, k, c) + m] = (t - b) * weight;
                     }
