@@ -56,13 +56,13 @@ pub const ANGULAR_EPSILON: f64 = 1e-5;
 const BRIGHT_RULE_TOLERANCE: f64 = 1e-3;
 
 /// How many source texels a radially symmetric lobe must span (its width √(∫u dω / u_max)) for
-/// its bright texels to go through spherical harmonics ([`add_bright_sh`]). The texel integrals
+/// its bright texels to go through spherical harmonics ([`bright_harmonics`]). The texel integrals
 /// keep that path exact for any width; the bound is one of cost: the band it needs grows as the
 /// lobe narrows (11, 25, 53 for Phong s = 8, 32, 128, 9–34 texels wide at 256×128), while the
 /// zonal filter's cost falls with the cone.
 const SH_BRIGHT_TEXELS_PER_WIDTH: f64 = 8.0;
 
-/// Gauss–Legendre nodes in z per texel of the bright texels' projection ([`add_bright_sh`]).
+/// Gauss–Legendre nodes in z per texel of the bright texels' projection ([`bright_harmonics`]).
 const SH_BRIGHT_Z_NODES: usize = 3;
 
 /// How the prefilter chooses its orders and treats the lighting.
@@ -183,8 +183,13 @@ pub struct Prefiltered {
     pub lighting: ShCoeffs,
     /// The window's band factors.
     pub factors: Vec<f64>,
-    /// The local SHRM of the remainder (windowed), without the bright part.
+    /// The local SHRM of the remainder (windowed), plus the bright texels when they went
+    /// through spherical harmonics (`bright_harmonics`).
     pub remainder_shrm: Shrm,
+    /// The bright texels' reflected radiance as spherical harmonics (kernel applied, no window),
+    /// for a radially symmetric lobe wide enough for them ([`bright_harmonics`]); synthesized
+    /// with the remainder, so the angular passes leave those texels out.
+    pub bright_harmonics: Option<ShCoeffs>,
     /// The bright texels.
     pub bright: BrightSources,
     /// The lat-long remainder (bright sources clipped) for the angular fallback, when the
@@ -301,8 +306,16 @@ pub fn prefilter(
     if width < 2 * f_b + 2 {
         return Err(ShrmError::TooSmall { width, f_b, need: 2 * f_b + 2 }.into());
     }
+    let bright_harmonics = match &remainder {
+        Some(rest) if radial && !bright.is_empty() => {
+            let source = LatLong::new(rest.image().width, rest.image().height);
+            bright_harmonics(model, &bright, source, &kernel, width)
+        }
+        _ => None,
+    };
     let factors = settings.window.factors(f_b);
-    let remainder_shrm = remainder_shrm(model, &brdf, &light, &factors, width, height, progress)?;
+    let remainder_shrm =
+        remainder_shrm(model, &brdf, &light, &factors, bright_harmonics.as_ref(), width, height, progress)?;
     let report = Report {
         maps: MapsFrom::Shrm,
         rule: match (settings.orders, settings.rule) {
@@ -314,7 +327,17 @@ pub fn prefilter(
         bright: bright.report(),
         window: WindowReport { kind: settings.window, t: settings.window.guarded().then_some(0.0) },
     };
-    Ok(Prefiltered { brdf, kernel, lighting: light, factors, remainder_shrm, bright, remainder_map: remainder, report })
+    Ok(Prefiltered {
+        brdf,
+        kernel,
+        lighting: light,
+        factors,
+        remainder_shrm,
+        bright_harmonics,
+        bright,
+        remainder_map: remainder,
+        report,
+    })
 }
 
 /// The mean reflected radiance per channel, which the texel floor is a fraction of: band 0 of
@@ -332,12 +355,15 @@ fn mean_reflected(brdf: &BrdfSh, light: &ShCoeffs, bright: &BrightSources) -> [f
 }
 
 /// The local SHRM of the (windowed) remainder: the 1-D path for radially symmetric BRDFs
-/// (B(R) = Σ Λ_l ρ̂_l L_lm Y_lm(R), one layer B_00 = √(4π) B), App. C otherwise.
+/// (B(R) = Σ Λ_l ρ̂_l L_lm Y_lm(R), one layer B_00 = √(4π) B), with the bright texels'
+/// `bright` coefficients added unwindowed and synthesized in the same pass; App. C otherwise.
+#[allow(clippy::too_many_arguments)]
 fn remainder_shrm(
     model: &Model,
     brdf: &BrdfSh,
     light: &ShCoeffs,
     factors: &[f64],
+    bright: Option<&ShCoeffs>,
     width: usize,
     height: usize,
     progress: &dyn Progress,
@@ -350,6 +376,9 @@ fn remainder_shrm(
             for ch in 0..3 {
                 c[ch] *= k[ch] * (4.0 * PI).sqrt();
             }
+        }
+        if let Some(bright) = bright {
+            conv = conv.plus(&bright.scaled((4.0 * PI).sqrt()));
         }
         let layer = crate::sh::synth::synthesize_latlong(&conv, width, height).map_err(|_| ShrmError::TooSmall {
             width,
@@ -368,10 +397,10 @@ impl Prefiltered {
     /// towards +Z first.
     pub fn shrm(&mut self, model: &Model, global: bool, progress: &dyn Progress) -> Result<Shrm, PrefilterError> {
         let mut out = self.remainder_shrm.clone();
-        if !self.bright.is_empty() {
+        if !self.bright.is_empty() && self.bright_harmonics.is_none() {
             if model.centre().is_some() {
                 let mut layer = RgbImage::new(out.width(), out.height());
-                add_bright(&mut layer, model, &self.bright, self.source_grid(), Lobe::Radial(&self.kernel));
+                add_bright(&mut layer, model, &self.bright, self.source_grid(), Lobe::Radial);
                 let s = (4.0 * PI).sqrt() as f32;
                 for (o, b) in out.layers[0].pixels.iter_mut().zip(&layer.pixels) {
                     for c in 0..3 {
@@ -417,7 +446,9 @@ impl Prefiltered {
             None => vec![1.0; f_b + 1],
         };
         let (w, h) = (self.remainder_shrm.width(), self.remainder_shrm.height());
-        let windowed = |factors: &[f64]| remainder_shrm(model, &self.brdf, &self.lighting, factors, w, h, progress);
+        let bright = self.bright_harmonics.as_ref();
+        let windowed =
+            |factors: &[f64]| remainder_shrm(model, &self.brdf, &self.lighting, factors, bright, w, h, progress);
         // A synthesis that fails ends the search (taken as non-negative); the error is returned
         // with the map the search settles on.
         let min_of = |maps: &Result<Vec<RgbImage>, PrefilterError>| match maps {
@@ -453,9 +484,11 @@ impl Prefiltered {
                 let mut added = RgbImage::new(w, h);
                 let lobe = match &cutoff {
                     Some(cutoff) => Lobe::View(view, cutoff),
-                    None => Lobe::Radial(&self.kernel),
+                    None => Lobe::Radial,
                 };
-                add_bright(&mut added, model, &self.bright, self.source_grid(), lobe);
+                if self.bright_harmonics.is_none() {
+                    add_bright(&mut added, model, &self.bright, self.source_grid(), lobe);
+                }
                 let replaced = match (&cone, &cutoff) {
                     (Some(cone), Some(cutoff)) => {
                         view_axis::beyond(cone, model, cutoff, view, valid, LatLong::new(w, h), None)
@@ -508,8 +541,8 @@ fn has_negative(map: &RgbImage) -> bool {
 /// The lobe the bright texels are filtered with.
 #[derive(Clone, Copy)]
 enum Lobe<'a> {
-    /// Radially symmetric, with its zonal kernel k_l (for [`add_bright_sh`]; may be empty).
-    Radial(&'a [[f64; 3]]),
+    /// Radially symmetric.
+    Radial,
     /// View-dependent: the view and the cones per view angle.
     View(DVec3, &'a CutoffTable),
 }
@@ -518,33 +551,27 @@ enum Lobe<'a> {
 /// lat-long map of R (of N for Lambert). A texel visits only the bright texels within its lobe's
 /// cone (1 − 10⁻⁵ of the lobe; for view-dependent BRDFs per view angle, from the cutoff table):
 /// the bright texels are sorted by θ, and a row of texels at θ_R takes the range θ_R ± θ*. A
-/// radially symmetric lobe takes a cheaper exact path when it can: spherical harmonics for a lobe
-/// wide against the texels ([`add_bright_sh`]), else, on a map as wide as the `source` grid the
-/// texels were split on, the zonal filter of their excess ([`add_bright_zonal`]: FFT rows, whose
-/// cost does not grow with the number of bright texels, which a wide lobe visits nearly all of
-/// per texel).
+/// radially symmetric lobe takes a cheaper exact path when it can (a lobe wide against the
+/// texels has already gone through spherical harmonics, [`bright_harmonics`]): on a map as wide
+/// as the `source` grid the texels were split on, the zonal filter of their excess
+/// ([`add_bright_zonal`]: FFT rows, whose cost does not grow with the number of bright texels,
+/// which a wide lobe visits nearly all of per texel).
 fn add_bright(map: &mut RgbImage, model: &Model, bright: &BrightSources, source: Option<LatLong>, lobe: Lobe<'_>) {
     if bright.is_empty() {
         return;
     }
     let radial_star = match lobe {
-        Lobe::Radial(_) => radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON),
+        Lobe::Radial => radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON),
         Lobe::View(_, cutoff) => cutoff.max(),
     };
-    if let (Lobe::Radial(kernel), Some(source)) = (lobe, source) {
-        // The cone's truncation drops up to u(cos θ*) per unit of bright energy at a texel;
-        // the harmonics' may drop as much.
-        let dropped = model.lobe(radial_star.cos())[1];
-        if add_bright_sh(map, model, bright, source, kernel, dropped) {
-            return;
-        }
+    if let (Lobe::Radial, Some(source)) = (lobe, source) {
         if source.width == map.width && add_bright_zonal(map, model, bright, source, radial_star) {
             return;
         }
     }
     let view = match lobe {
         Lobe::View(v, cutoff) => Some((v, cutoff)),
-        Lobe::Radial(_) => None,
+        Lobe::Radial => None,
     };
     let (w, h) = (map.width, map.height);
     let grid = LatLong::new(w, h);
@@ -589,36 +616,36 @@ fn add_bright(map: &mut RgbImage, model: &Model, bright: &BrightSources, source:
     });
 }
 
-/// [`add_bright`] for a radially symmetric lobe through spherical harmonics, when the lobe spans
-/// at least [`SH_BRIGHT_TEXELS_PER_WIDTH`] texels of the `source` grid. The excess, constant
-/// e_j over each bright texel t_j of the grid, has coefficients E_lm = Σ_j e_j ∫_{t_j} Y_lm dω,
-/// and its reflection map is Σ_l k_l Σ_m E_lm Y_lm(R) (Funk–Hecke). The texel integrals are exact
-/// in φ (∫ cos or sin mφ over a column is the centre's value × Δφ · sinc(mΔφ/2)) and take
-/// [`SH_BRIGHT_Z_NODES`] Gauss–Legendre nodes in z, so a lobe a few texels wide sees the
-/// texels' extent, as the zonal filter's texel rule does. By the addition theorem
-/// |Σ_m Y_lm(ω) Y_lm(R)| ≤ (2l + 1)/4π, so cutting at band F changes a texel by at most
-/// Σ_j e_j ΔΩ_j · Σ_{l > F} |k_l| (2l + 1)/4π: F is the smallest band that keeps the second
-/// factor under `dropped`, what the cone's truncation may drop. The exact map is non-negative, so negative values of the cut series are set to zero
-/// (which only brings them closer). False, leaving `map` alone, for a narrower lobe, or when the
-/// kernel has not died out by its last band (k_l is known no further), or the map is too narrow
-/// for band F.
-fn add_bright_sh(
-    map: &mut RgbImage,
+/// The bright texels' reflected radiance for a radially symmetric lobe as spherical harmonics,
+/// when the lobe spans at least [`SH_BRIGHT_TEXELS_PER_WIDTH`] texels of the `source` grid. The
+/// excess, constant e_j over each bright texel t_j of the grid, has coefficients
+/// E_lm = Σ_j e_j ∫_{t_j} Y_lm dω, and its reflection map is Σ_l k_l Σ_m E_lm Y_lm(R)
+/// (Funk–Hecke): these are k_l E_lm. The texel integrals are exact in φ (∫ cos or sin mφ over a
+/// column is the centre's value × Δφ · sinc(mΔφ/2)) and take [`SH_BRIGHT_Z_NODES`]
+/// Gauss–Legendre nodes in z, so a lobe a few texels wide sees the texels' extent, as the zonal
+/// filter's texel rule does. By the addition theorem |Σ_m Y_lm(ω) Y_lm(R)| ≤ (2l + 1)/4π, so
+/// cutting at band F changes a texel by at most Σ_j e_j ΔΩ_j · Σ_{l > F} |k_l| (2l + 1)/4π: F is
+/// the smallest band that keeps the second factor under u(cos θ*), what the cone of the angular
+/// passes may drop per unit of energy. They are synthesized with the remainder's coefficients in
+/// one pass, where a synthesis of their own, clamped at zero, doubled the maps' synthesis:
+/// the clamp moved no texel by more than that bound. `None` for a narrower lobe, or when the
+/// kernel has not died out by its last band (k_l is known no further), or an output `width` too
+/// narrow for band F.
+fn bright_harmonics(
     model: &Model,
     bright: &BrightSources,
     source: LatLong,
     kernel: &[[f64; 3]],
-    dropped: f64,
-) -> bool {
+    width: usize,
+) -> Option<ShCoeffs> {
     let peak = model.lobe(1.0)[1];
-    let Some(k0) = kernel.first().filter(|_| peak > 0.0) else {
-        return false;
-    };
+    let k0 = kernel.first().filter(|_| peak > 0.0)?;
     // k_0 = ∫u dω (Funk–Hecke).
-    let width = (k0[1] / peak).max(0.0).sqrt();
-    if width < SH_BRIGHT_TEXELS_PER_WIDTH * PI / source.height as f64 {
-        return false;
+    let lobe_width = (k0[1] / peak).max(0.0).sqrt();
+    if lobe_width < SH_BRIGHT_TEXELS_PER_WIDTH * PI / source.height as f64 {
+        return None;
     }
+    let dropped = model.lobe(radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON).cos())[1];
     let per_band: Vec<f64> = kernel
         .iter()
         .enumerate()
@@ -627,7 +654,7 @@ fn add_bright_sh(
     // Bands beyond the kernel's last are taken as nothing: only when that band itself is
     // under a thousandth of the allowance.
     if per_band[per_band.len() - 1] > 1e-3 * dropped {
-        return false;
+        return None;
     }
     let mut order = per_band.len() - 1;
     let mut tail = 0.0;
@@ -635,28 +662,18 @@ fn add_bright_sh(
         tail += per_band[order];
         order -= 1;
     }
-    if 2 * order > map.width.min(source.width) {
-        return false;
+    if 2 * order > width.min(source.width) {
+        return None;
     }
     let quadrature = TexelQuadrature::Integral { z_nodes: SH_BRIGHT_Z_NODES };
-    let Ok(mut coeffs) = project_latlong(&excess_image(bright, source), order, quadrature, &NoProgress) else {
-        return false;
-    };
+    let mut coeffs = project_latlong(&excess_image(bright, source), order, quadrature, &NoProgress).ok()?;
     for (i, c) in coeffs.rgb.iter_mut().enumerate() {
         let k = kernel[lm(i).0];
         for ch in 0..3 {
             c[ch] *= k[ch];
         }
     }
-    let Ok(filtered) = crate::sh::synth::synthesize_latlong(&coeffs, map.width, map.height) else {
-        return false;
-    };
-    for (px, f) in map.pixels.iter_mut().zip(&filtered.pixels) {
-        for c in 0..3 {
-            px[c] += f[c].max(0.0);
-        }
-    }
-    true
+    Some(coeffs)
 }
 
 /// The bright texels' excess as an image on the grid they were split on (black elsewhere).
@@ -1017,7 +1034,7 @@ mod tests {
         for spec in ["phong:s=8", "phong:s=128"] {
             let model = Model::new(Brdf::parse(spec).unwrap(), true).unwrap();
             let mut zonal = RgbImage::new(64, 32);
-            add_bright(&mut zonal, &model, &bright, Some(grid), Lobe::Radial(&[]));
+            add_bright(&mut zonal, &model, &bright, Some(grid), Lobe::Radial);
             let theta_star = radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON);
             let expected = brute_force(grid, &model, &bright, theta_star);
             let peak = expected.iter().map(|p| p[0]).fold(0.0, f64::max);
@@ -1038,20 +1055,21 @@ mod tests {
             let kernel: Vec<[f64; 3]> = (0..=31).map(|l| coefficients.radial_kernel(l)).collect();
             let theta_star = radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON);
             let dropped = model.lobe(theta_star.cos())[1];
-            let mut harmonics = RgbImage::new(64, 32);
-            assert_eq!(add_bright_sh(&mut harmonics, &model, &bright, grid, &kernel, dropped), wide, "{spec}");
-            if wide {
-                assert!(harmonics.pixels.iter().flatten().all(|&v| v >= 0.0));
+            let harmonics = bright_harmonics(&model, &bright, grid, &kernel, 64);
+            assert_eq!(harmonics.is_some(), wide, "{spec}");
+            if let Some(coeffs) = harmonics {
+                let map = crate::sh::synth::synthesize_latlong(&coeffs, 64, 32).unwrap();
                 let energy = [0, 1, 2].map(|c| bright.texels.iter().map(|t| t.excess[c] * t.solid_angle).sum::<f64>());
-                assert_close(
-                    spec,
-                    &harmonics,
-                    &brute_force(grid, &model, &bright, PI),
-                    1e-3,
-                    energy.map(|e| dropped * e),
-                );
+                let bound = energy.map(|e| dropped * e);
+                // The cut series may dip below zero by no more than its bound.
+                for p in &map.pixels {
+                    for c in 0..3 {
+                        assert!(p[c] as f64 >= -bound[c], "{spec}: {} below −{}", p[c], bound[c]);
+                    }
+                }
+                assert_close(spec, &map, &brute_force(grid, &model, &bright, PI), 1e-3, bound);
                 // Cut before the kernel has died out, the path declines: k_l is not known further.
-                assert!(!add_bright_sh(&mut harmonics, &model, &bright, grid, &kernel[..8], dropped));
+                assert!(bright_harmonics(&model, &bright, grid, &kernel[..8], 64).is_none());
             }
         }
     }

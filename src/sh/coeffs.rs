@@ -44,6 +44,23 @@ impl ShCoeffs {
         self.band_energy_rgb().iter().map(|e| e[0] + e[1] + e[2]).collect()
     }
 
+    /// The coefficient-wise sum, to the higher of the two orders.
+    pub fn plus(&self, other: &ShCoeffs) -> ShCoeffs {
+        let (high, low) = if self.order >= other.order { (self, other) } else { (other, self) };
+        let mut sum = high.clone();
+        for (s, o) in sum.rgb.iter_mut().zip(&low.rgb) {
+            for c in 0..3 {
+                s[c] += o[c];
+            }
+        }
+        sum
+    }
+
+    /// Every coefficient times `factor`.
+    pub fn scaled(&self, factor: f64) -> ShCoeffs {
+        ShCoeffs { order: self.order, rgb: self.rgb.iter().map(|c| c.map(|v| v * factor)).collect() }
+    }
+
     /// Keeps bands 0..=order (which must not exceed the current order).
     pub fn truncated(&self, order: usize) -> ShCoeffs {
         let order = order.min(self.order);
