@@ -160,7 +160,7 @@ fn row(
     let (f_b, p_b) =
         if f_b == 0 { ("angle".to_string(), "–".to_string()) } else { (f_b.to_string(), p_b.to_string()) };
     format!(
-        "| {probe} | `{spec}` | {view} | {f_b} | {p_b} | {:.2} % | {:.2} % | {:.2} % ({}, {}) | {:.2} % | {:.2} % | {:.2} % | {default_s:.3} | {paper_s:.3} | {:.1}× |",
+        "| {probe} | `{spec}` | {view} | {f_b} | {p_b} | {:.2} % | {:.2} % | {:.2} % ({}, {}) | {:.2} % | {:.2} % | {:.2} % | {default_s:.4} | {paper_s:.4} | {:.1}× |",
         100.0 * m.negative_fraction,
         100.0 * m.p99_texel_error,
         100.0 * m.max_texel_error,
