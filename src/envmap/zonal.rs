@@ -359,7 +359,7 @@ pub fn zonal_filter(
     let inverse = planner.plan_fft_inverse(width);
     let even = EvenSpectrum::new(&mut planner, width);
 
-    let spectra = row_spectra(latlong, &*forward);
+    let spectra = row_spectra(latlong, &*forward, |y| visit[y]);
 
     let out_grid = LatLong::new(width, out_height);
     let mut pixels = vec![[0.0; 3]; width * out_height];
@@ -389,6 +389,7 @@ pub fn zonal_filter(
             let (s_r, z_r) = theta_r.sin_cos();
             s.acc.iter_mut().chain(s.acc_mirror.iter_mut()).for_each(|a| a.fill(Complex::new(0.0, 0.0)));
             let mut total = 0.0;
+            let mut touched = false;
             for y in 0..height {
                 let mirrored = mirror.is_some() && visit[height - 1 - y];
                 if !(visit[y] || mirrored) || !plan.pair_kernel((z_r, s_r), theta_r, y, &mut s.half) {
@@ -397,6 +398,7 @@ pub fn zonal_filter(
                 // The even kernel's (real) spectrum.
                 s.even.transform(&s.half, &mut s.kernel_spectrum);
                 total += s.kernel_spectrum[0];
+                touched = true;
                 let sources = [(y, &mut s.acc), (height - 1 - y, &mut s.acc_mirror)];
                 for (source_row, acc) in sources.into_iter().take(if mirror.is_some() { 2 } else { 1 }) {
                     let source = &spectra[source_row * 3 * bins..(source_row + 1) * 3 * bins];
@@ -417,6 +419,11 @@ pub fn zonal_filter(
             };
             for (row, weight, acc) in outputs {
                 *weight = total;
+                // No source row reached this one (a sparse map's rows outside every cone): it
+                // stays zero, as its transform would leave it.
+                if !touched {
+                    continue;
+                }
                 for c in 0..3 {
                     inverse_row(&*inverse, &mut acc[c], &mut s.out, &mut s.inverse_scratch);
                     for (p, v) in row.iter_mut().zip(&s.out) {
@@ -433,26 +440,27 @@ pub fn zonal_filter(
 }
 
 /// The spectra of every row and channel of a lat-long image, laid out [y][channel][m] (W/2 + 1
-/// bins each): what the rows of a circular correlation in φ are multiplied with.
-pub(crate) fn row_spectra(latlong: &RgbImage, forward: &dyn RealToComplex<f64>) -> Vec<Complex<f64>> {
+/// bins each): what the rows of a circular correlation in φ are multiplied with. Rows `wanted`
+/// refuses are left zero without a transform (black rows, whose spectrum is zero).
+pub(crate) fn row_spectra(
+    latlong: &RgbImage,
+    forward: &dyn RealToComplex<f64>,
+    wanted: impl Fn(usize) -> bool + Sync,
+) -> Vec<Complex<f64>> {
     let bins = latlong.width / 2 + 1;
-    (0..latlong.height)
-        .into_par_iter()
-        .flat_map_iter(|y| {
-            let mut input = forward.make_input_vec();
-            let mut scratch = forward.make_scratch_vec();
-            let mut out = Vec::with_capacity(3 * bins);
-            for c in 0..3 {
+    let mut spectra = vec![Complex::new(0.0, 0.0); latlong.height * 3 * bins];
+    spectra.par_chunks_mut(3 * bins).enumerate().filter(|(y, _)| wanted(*y)).for_each_init(
+        || (forward.make_input_vec(), forward.make_scratch_vec()),
+        |(input, scratch), (y, out)| {
+            for (c, spectrum) in out.chunks_exact_mut(bins).enumerate() {
                 for (v, p) in input.iter_mut().zip(latlong.row(y)) {
                     *v = p[c] as f64;
                 }
-                let mut spectrum = forward.make_output_vec();
-                forward.process_with_scratch(&mut input, &mut spectrum, &mut scratch).expect("sizes from the plan");
-                out.extend(spectrum);
+                forward.process_with_scratch(input, spectrum, scratch).expect("sizes from the plan");
             }
-            out
-        })
-        .collect()
+        },
+    );
+    spectra
 }
 
 /// The spectrum of an even kernel over the W offsets of a row (k_d = k_{W−d}) from its half

@@ -287,7 +287,7 @@ fn filter_rows(source: &RgbImage, model: &Model, cutoff: &CutoffTable, first: us
     let mut planner = RealFftPlanner::<f64>::new();
     let forward = planner.plan_fft_forward(width);
     let inverse = planner.plan_fft_inverse(width);
-    let spectra = row_spectra(source, &*forward);
+    let spectra = row_spectra(source, &*forward, |_| true);
     // Each source row's node: the midpoint rule of the cone sums (z-midpoint, exact solid angle).
     let nodes: Vec<SubRow> = (0..height).map(|y| TexelRule::midpoint().sub_rows(grid, y)[0]).collect();
     let half_angle = model.half_angle_lobe();
