@@ -34,9 +34,10 @@ use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows};
 use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::{NoProgress, Progress};
+use crate::sh::convolve::convolve_zonal_rgb;
 use crate::sh::project::{map_energy_rgb, project, project_latlong, TexelQuadrature};
 use crate::sh::window::{self, Window, WindowReport};
-use crate::sh::{lm, ShCoeffs};
+use crate::sh::ShCoeffs;
 use crate::sphere::LatLong;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -315,7 +316,7 @@ pub fn prefilter(
     };
     let factors = settings.window.factors(f_b);
     let remainder_shrm =
-        remainder_shrm(model, &brdf, &light, &factors, bright_harmonics.as_ref(), width, height, progress)?;
+        remainder_shrm(model, &brdf, &light, &factors, bright_harmonics.as_ref(), (width, height), progress)?;
     let report = Report {
         maps: MapsFrom::Shrm,
         rule: match (settings.orders, settings.rule) {
@@ -354,40 +355,19 @@ fn mean_reflected(brdf: &BrdfSh, light: &ShCoeffs, bright: &BrightSources) -> [f
     [0, 1, 2].map(|c| (r[c] * l00[c] * y00).abs())
 }
 
-/// The local SHRM of the (windowed) remainder: the 1-D path for radially symmetric BRDFs
-/// (B(R) = Σ Λ_l ρ̂_l L_lm Y_lm(R), one layer B_00 = √(4π) B), with the bright texels'
-/// `bright` coefficients added unwindowed and synthesized in the same pass; App. C otherwise.
-#[allow(clippy::too_many_arguments)]
+/// The local SHRM of the remainder with the window's band `factors`, plus the bright texels
+/// when they went through spherical harmonics (`bright`, unwindowed; [`shrm::from_lighting`]).
 fn remainder_shrm(
     model: &Model,
     brdf: &BrdfSh,
     light: &ShCoeffs,
     factors: &[f64],
     bright: Option<&ShCoeffs>,
-    width: usize,
-    height: usize,
+    (width, height): (usize, usize),
     progress: &dyn Progress,
 ) -> Result<Shrm, PrefilterError> {
     let windowed = window::apply(light, factors);
-    if model.centre().is_some() {
-        let mut conv = windowed;
-        for (i, c) in conv.rgb.iter_mut().enumerate() {
-            let k = brdf.radial_kernel(lm(i).0);
-            for ch in 0..3 {
-                c[ch] *= k[ch] * (4.0 * PI).sqrt();
-            }
-        }
-        if let Some(bright) = bright {
-            conv = conv.plus(&bright.scaled((4.0 * PI).sqrt()));
-        }
-        let layer = crate::sh::synth::synthesize_latlong(&conv, width, height).map_err(|_| ShrmError::TooSmall {
-            width,
-            f_b: brdf.f,
-            need: 2 * brdf.f + 2,
-        })?;
-        return Ok(Shrm { f_b: brdf.f, p_b: 0, global: false, layers: vec![layer] });
-    }
-    Ok(shrm::local_shrm(&windowed, brdf, width, height, progress)?)
+    Ok(shrm::from_lighting(model.centre().is_some(), &windowed, brdf, bright, width, height, progress)?)
 }
 
 impl Prefiltered {
@@ -448,7 +428,7 @@ impl Prefiltered {
         let (w, h) = (self.remainder_shrm.width(), self.remainder_shrm.height());
         let bright = self.bright_harmonics.as_ref();
         let windowed =
-            |factors: &[f64]| remainder_shrm(model, &self.brdf, &self.lighting, factors, bright, w, h, progress);
+            |factors: &[f64]| remainder_shrm(model, &self.brdf, &self.lighting, factors, bright, (w, h), progress);
         // A synthesis that fails ends the search (taken as non-negative); the error is returned
         // with the map the search settles on.
         let min_of = |maps: &Result<Vec<RgbImage>, PrefilterError>| match maps {
@@ -666,14 +646,8 @@ fn bright_harmonics(
         return None;
     }
     let quadrature = TexelQuadrature::Integral { z_nodes: SH_BRIGHT_Z_NODES };
-    let mut coeffs = project_latlong(&excess_image(bright, source), order, quadrature, &NoProgress).ok()?;
-    for (i, c) in coeffs.rgb.iter_mut().enumerate() {
-        let k = kernel[lm(i).0];
-        for ch in 0..3 {
-            c[ch] *= k[ch];
-        }
-    }
-    Some(coeffs)
+    let coeffs = project_latlong(&excess_image(bright, source), order, quadrature, &NoProgress).ok()?;
+    Some(convolve_zonal_rgb(&coeffs, |l| kernel[l]))
 }
 
 /// The bright texels' excess as an image on the grid they were split on (black elsewhere).

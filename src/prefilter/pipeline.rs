@@ -136,27 +136,7 @@ pub fn frequency(
     let lighting_seconds = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let shrm =
-        if model.centre().is_some() {
-            // 1-D path: B(R) = Σ Λ_l ρ̂_l L_lm Y_lm(R); the SHRM's single layer is B_00 = √(4π) B.
-            let kernel = |l: usize| brdf.radial_kernel(l);
-            let mut conv = light.clone();
-            for (i, c) in conv.rgb.iter_mut().enumerate() {
-                let (l, _) = crate::sh::lm(i);
-                let k = kernel(l);
-                for ch in 0..3 {
-                    c[ch] *= k[ch] * (4.0 * std::f64::consts::PI).sqrt();
-                }
-            }
-            if width < 2 * f_b + 2 {
-                return Err(ShrmError::TooSmall { width, f_b, need: 2 * f_b + 2 }.into());
-            }
-            let layer = crate::sh::synth::synthesize_latlong(&conv, width, height)
-                .map_err(|_| ShrmError::TooSmall { width, f_b, need: 2 * f_b + 2 })?;
-            Shrm { f_b, p_b: 0, global: false, layers: vec![layer] }
-        } else {
-            shrm::local_shrm(&light, &brdf, width, height, progress)?
-        };
+    let shrm = shrm::from_lighting(model.centre().is_some(), &light, &brdf, None, width, height, progress)?;
     let shrm_seconds = t.elapsed().as_secs_f64();
     let epsilon_achieved = brdf.residual(brdf.f, brdf.p);
     Ok(Frequency {

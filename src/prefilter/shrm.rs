@@ -22,6 +22,7 @@
 use super::brdf_sh::BrdfSh;
 use crate::io::RgbImage;
 use crate::progress::Progress;
+use crate::sh::convolve::{convolve_zonal, convolve_zonal_rgb};
 use crate::sh::rotate::ShRotation;
 use crate::sh::synth::RowSynth;
 use crate::sh::wigner::YRotationPlan;
@@ -101,6 +102,38 @@ impl Shrm {
 pub fn texel_frame(width: usize, height: usize, x: usize, y: usize) -> DMat3 {
     let grid = crate::sphere::LatLong::new(width, height);
     crate::sphere::frame(grid.row_theta(y), grid.column_phi(x))
+}
+
+/// The local SHRM of lighting `light` under `brdf` on a `width`×`height` lat-long grid. A
+/// radially symmetric BRDF takes the 1-D path, B(R) = Σ Λ_l ρ̂_l L_lm Y_lm(R) plus `reflected`
+/// (coefficients of radiance already reflected, such as bright texels filtered apart), in one
+/// synthesis: the single layer B_00 = √(4π) B. Any other takes App. C ([`local_shrm`]), and
+/// `reflected` must be `None`.
+pub fn from_lighting(
+    radial: bool,
+    light: &ShCoeffs,
+    brdf: &BrdfSh,
+    reflected: Option<&ShCoeffs>,
+    width: usize,
+    height: usize,
+    progress: &dyn Progress,
+) -> Result<Shrm, ShrmError> {
+    if !radial {
+        debug_assert!(reflected.is_none(), "reflected radiance is added on the 1-D path only");
+        return local_shrm(light, brdf, width, height, progress);
+    }
+    let f_b = brdf.f;
+    let too_small = ShrmError::TooSmall { width, f_b, need: 2 * f_b + 2 };
+    if width < 2 * f_b + 2 {
+        return Err(too_small);
+    }
+    let root = (4.0 * std::f64::consts::PI).sqrt();
+    let mut layer = convolve_zonal_rgb(light, |l| brdf.radial_kernel(l).map(|k| k * root));
+    if let Some(reflected) = reflected {
+        layer = layer.plus(&convolve_zonal(reflected, |_| root));
+    }
+    let layer = crate::sh::synth::synthesize_latlong(&layer, width, height).map_err(|_| too_small)?;
+    Ok(Shrm { f_b, p_b: 0, global: false, layers: vec![layer] })
 }
 
 /// Synthesizes the local SHRM B_pq(α, β) on a `width`×`height` lat-long grid.

@@ -56,11 +56,6 @@ impl ShCoeffs {
         sum
     }
 
-    /// Every coefficient times `factor`.
-    pub fn scaled(&self, factor: f64) -> ShCoeffs {
-        ShCoeffs { order: self.order, rgb: self.rgb.iter().map(|c| c.map(|v| v * factor)).collect() }
-    }
-
     /// Keeps bands 0..=order (which must not exceed the current order).
     pub fn truncated(&self, order: usize) -> ShCoeffs {
         let order = order.min(self.order);

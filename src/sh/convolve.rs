@@ -33,12 +33,18 @@ pub fn clamped_cosine(l: usize) -> f64 {
 
 /// Multiplies band l by `kernel(l)`.
 pub fn convolve_zonal(coeffs: &ShCoeffs, kernel: impl Fn(usize) -> f64) -> ShCoeffs {
+    convolve_zonal_rgb(coeffs, |l| [kernel(l); 3])
+}
+
+/// Multiplies band l of each channel by that channel's `kernel(l)` (a coloured zonal kernel,
+/// such as a BRDF's Λ_l ρ̂_l per channel).
+pub fn convolve_zonal_rgb(coeffs: &ShCoeffs, kernel: impl Fn(usize) -> [f64; 3]) -> ShCoeffs {
     let mut out = coeffs.clone();
     for l in 0..=coeffs.order {
         let k = kernel(l);
         for m in -(l as isize)..=(l as isize) {
             let c = &mut out.rgb[super::index(l, m)];
-            for v in c.iter_mut() {
+            for (v, k) in c.iter_mut().zip(k) {
                 *v *= k;
             }
         }

@@ -32,7 +32,7 @@
 #[cfg(test)]
 use super::index;
 use super::legendre::legendre_polynomials;
-use super::{lm, ShCoeffs};
+use super::ShCoeffs;
 use std::f64::consts::PI;
 
 /// A window family (`--window`).
@@ -110,13 +110,7 @@ pub fn heat_factors(order: usize, t: f64) -> Vec<f64> {
 
 /// Coefficients with band l multiplied by `factors[l]` (bands beyond the factors are dropped).
 pub fn apply(coeffs: &ShCoeffs, factors: &[f64]) -> ShCoeffs {
-    let mut out = coeffs.clone();
-    for (i, c) in out.rgb.iter_mut().enumerate() {
-        let (l, _) = lm(i);
-        let w = factors.get(l).copied().unwrap_or(0.0);
-        c.iter_mut().for_each(|v| *v *= w);
-    }
-    out
+    super::convolve::convolve_zonal(coeffs, |l| factors.get(l).copied().unwrap_or(0.0))
 }
 
 /// The smallest heat parameter t for which the windowed kernel (1) of band factors
