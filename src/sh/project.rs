@@ -139,8 +139,9 @@ pub fn project_latlong(
             crate::quadrature::gauss_legendre_cached(z_nodes.max(1)).iter().map(|&(x, w)| (x, 0.5 * w)).collect()
         }
     };
-    // ∫ over a column of cos or sin mφ, relative to Δφ times the centre's value.
-    let column: Vec<f64> = (0..=order)
+    // ∫ over a texel column of cos or sin mφ, relative to Δφ times the centre's value (a sinc; 1
+    // for the midpoint rule). Not to be confused with the Legendre columns of step 3.
+    let column_sinc: Vec<f64> = (0..=order)
         .map(|m| {
             let half = PI * m as f64 / w as f64;
             if quadrature == TexelQuadrature::Midpoint || m == 0 {
@@ -196,7 +197,7 @@ pub fn project_latlong(
                 for k in 0..2 {
                     for m in 0..=order {
                         let (t, b) = (top[m][k], if mirror.is_some() { bottom[m][k] } else { 0.0 });
-                        let weight = if m == 0 { omega } else { omega * SQRT_2 * column[m] };
+                        let weight = if m == 0 { omega } else { omega * SQRT_2 * column_sinc[m] };
                         out[parts(0, k, c) + m] = (t + b) * weight;
                         out[parts(1, k, c) + m] = (t - b) * weight;
                     }
