@@ -18,6 +18,7 @@
 use super::EnvMap;
 use crate::io::RgbImage;
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// The brightest share of the sphere that may be moved to the angular pass.
@@ -115,44 +116,96 @@ pub fn luminance(rgb: [f32; 3]) -> f64 {
 /// mean is the map's without its brightest share, clipped at Q: a sun 10⁴ × the sky would
 /// otherwise raise the mean, and with it the threshold, to well above the sky, leaving a clipped
 /// sun of hundreds of times the sky in the remainder.
+///
+/// Q is found from a histogram of Y, so no texel list is sorted: one pass puts each texel's
+/// solid angle and Y × solid angle into its bin, the bins from the top find the one in which the
+/// brightest `AREA_FRACTION` of the area is reached, and a second pass sorts only that bin's
+/// texels. Q is then the full sort's value (ties in Y give the same Q in any order), and the
+/// clipped mean is the bins below plus that bin's texels clipped plus Q × the area above.
 pub fn auto_threshold(map: &EnvMap) -> f64 {
-    let mut texels: Vec<(f64, f64)> = Vec::with_capacity(map.texel_count());
-    map.for_each_texel(|t| texels.push((luminance(t.rgb), t.solid_angle)));
-    let total_area: f64 = texels.iter().map(|t| t.1).sum();
-    let q = brightest_area_bound(&mut texels, AREA_FRACTION * total_area);
-    let clipped_mean = texels.iter().map(|t| t.0.min(q) * t.1).sum::<f64>() / total_area;
+    // Per block of rows, in parallel; blocks merged in order, so the sums are the same for any
+    // thread count.
+    let rows = map.rows();
+    let blocks: Vec<(Vec<(f64, f64)>, f64)> = rows
+        .par_chunks(BLOCK_ROWS)
+        .map(|block| {
+            let mut bins = vec![(0.0f64, 0.0f64); HISTOGRAM_BINS];
+            let mut area = 0.0;
+            for &(face, y) in block {
+                map.for_each_value_in_row(face, y, |rgb, omega| {
+                    let lum = luminance(rgb);
+                    let bin = &mut bins[histogram_bin(lum)];
+                    bin.0 += omega;
+                    bin.1 += lum * omega;
+                    area += omega;
+                });
+            }
+            (bins, area)
+        })
+        .collect();
+    let mut bins = vec![(0.0f64, 0.0f64); HISTOGRAM_BINS];
+    let mut total_area = 0.0;
+    for (block, area) in &blocks {
+        for (b, v) in bins.iter_mut().zip(block) {
+            b.0 += v.0;
+            b.1 += v.1;
+        }
+        total_area += area;
+    }
+    let area = AREA_FRACTION * total_area;
+    // The bin in which the brightest texels' area first exceeds `area`, and the area above it.
+    let mut above = 0.0;
+    let Some(critical) = (0..HISTOGRAM_BINS).rev().find(|&b| {
+        if above + bins[b].0 > area {
+            return true;
+        }
+        above += bins[b].0;
+        false
+    }) else {
+        // No area (an empty map): nothing is bright.
+        return 0.0;
+    };
+    let mut texels: Vec<(f64, f64)> = rows
+        .par_chunks(BLOCK_ROWS)
+        .flat_map_iter(|block| {
+            let mut found = Vec::new();
+            for &(face, y) in block {
+                map.for_each_value_in_row(face, y, |rgb, omega| {
+                    let lum = luminance(rgb);
+                    if histogram_bin(lum) == critical {
+                        found.push((lum, omega));
+                    }
+                });
+            }
+            found
+        })
+        .collect();
+    texels.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+    let mut covered = above;
+    let q = texels
+        .iter()
+        .find(|&&(_, omega)| {
+            covered += omega;
+            covered > area
+        })
+        .map_or(0.0, |t| t.0);
+    let below: f64 = bins[..critical].iter().map(|b| b.1).sum();
+    let clipped: f64 = texels.iter().map(|&(y, omega)| y.min(q) * omega).sum();
+    let clipped_mean = (below + clipped + q * above) / total_area;
     q.max(MEAN_MULTIPLE * clipped_mean)
 }
 
-/// Q: the luminance of the texel at which the brightest texels' solid angle first exceeds
-/// `area` (0 if it never does). `texels` holds (luminance, solid angle) and is reordered.
-///
-/// Only the brightest few percent of the texels are sorted: they cover the area unless their
-/// solid angles are far below the mean (texels near a lat-long pole), and then all are. Ties in
-/// luminance give the same Q in any order (Q is their common value), so the result is the full
-/// sort's.
-fn brightest_area_bound(texels: &mut [(f64, f64)], area: f64) -> f64 {
-    let n = texels.len();
-    let descending = |a: &(f64, f64), b: &(f64, f64)| b.0.total_cmp(&a.0);
-    let mut head = ((n as f64 * AREA_FRACTION * 4.0).ceil() as usize).min(n);
-    loop {
-        if head < n {
-            texels.select_nth_unstable_by(head, descending);
-        }
-        let top = &mut texels[..head];
-        top.sort_unstable_by(descending);
-        let mut covered = 0.0;
-        for &(y, omega) in top.iter() {
-            covered += omega;
-            if covered > area {
-                return y;
-            }
-        }
-        if head == n {
-            return 0.0;
-        }
-        head = n;
-    }
+/// Bins of [`auto_threshold`]'s histogram: one per value of the top 11 bits of Y as an f32
+/// (sign, exponent and 2 bits of mantissa), so a bin spans at most 1/4 of its values.
+const HISTOGRAM_BINS: usize = 1 << 11;
+
+/// Rows per block of [`auto_threshold`]'s and [`split`]'s parallel passes.
+const BLOCK_ROWS: usize = 16;
+
+/// Y's bin: the order of the bins is that of Y for Y ≥ 0 (the bits of non-negative floats
+/// order as the floats do; rounding to f32 keeps the order); negative Y and NaN go to bin 0.
+fn histogram_bin(y: f64) -> usize {
+    ((y.max(0.0) as f32).to_bits() >> 21) as usize
 }
 
 /// Splits a map into the remainder (clipped at the threshold) and the bright texels, in any
@@ -164,33 +217,52 @@ pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
         BrightRule::Auto => auto_threshold(map),
         BrightRule::Threshold(t) => t,
     };
+    // Per block of rows, in parallel: the sums and the texels above the threshold (few), with
+    // their clipped values; merged in order, so the same for any thread count.
+    struct Block {
+        sums: [f64; 4],
+        clipped: Vec<(usize, usize, [f32; 3])>,
+        texels: Vec<BrightTexel>,
+    }
+    let blocks: Vec<Block> = map
+        .rows()
+        .par_chunks(BLOCK_ROWS)
+        .map(|rows| {
+            let mut block = Block { sums: [0.0; 4], clipped: Vec::new(), texels: Vec::new() };
+            for &(face, y) in rows {
+                let img = &map.images()[face];
+                // A lat-long row shares one solid angle.
+                let row_omega = (map.layout() == super::Layout::LatLong).then(|| map.texel_solid_angle(face, 0, y));
+                for (x, px) in img.row(y).iter().enumerate() {
+                    let Some(omega) = row_omega.unwrap_or_else(|| map.texel_solid_angle(face, x, y)) else { continue };
+                    let l = luminance(*px);
+                    let [total, total2, bright, bright2] = &mut block.sums;
+                    *total += l * omega;
+                    *total2 += l * l * omega;
+                    if l > threshold {
+                        let keep = threshold / l;
+                        let excess = px.map(|c| c as f64 * (1.0 - keep));
+                        block.clipped.push((face, y * img.width + x, px.map(|c| (c as f64 * keep) as f32)));
+                        *bright += (excess[0] + excess[1] + excess[2]) / 3.0 * omega;
+                        *bright2 += (l * l - threshold * threshold) * omega;
+                        let (dir, _) = map.texel_geometry(face, x, y).expect("a texel with a solid angle is mapped");
+                        block.texels.push(BrightTexel { dir, solid_angle: omega, excess });
+                    }
+                }
+            }
+            block
+        })
+        .collect();
     let mut remainder = map.clone();
-    let (mut total, mut total2, mut bright, mut bright2) = (0.0, 0.0, 0.0, 0.0);
+    let [mut total, mut total2, mut bright, mut bright2] = [0.0; 4];
     let mut texels = Vec::new();
-    let latlong = map.layout() == super::Layout::LatLong;
-    for (face, img) in remainder.images_mut().iter_mut().enumerate() {
-        let w = img.width;
-        let mut row_omega = None;
-        for (i, px) in img.pixels.iter_mut().enumerate() {
-            let (x, y) = (i % w, i / w);
-            // A lat-long row shares one solid angle: computed at its first texel.
-            if !latlong || x == 0 {
-                row_omega = map.texel_solid_angle(face, x, y);
-            }
-            let Some(omega) = row_omega else { continue };
-            let l = luminance(*px);
-            total += l * omega;
-            total2 += l * l * omega;
-            if l > threshold {
-                let keep = threshold / l;
-                let excess = px.map(|c| c as f64 * (1.0 - keep));
-                *px = px.map(|c| (c as f64 * keep) as f32);
-                bright += (excess[0] + excess[1] + excess[2]) / 3.0 * omega;
-                bright2 += (l * l - threshold * threshold) * omega;
-                let (dir, _) = map.texel_geometry(face, x, y).expect("a texel with a solid angle is mapped");
-                texels.push(BrightTexel { dir, solid_angle: omega, excess });
-            }
+    for block in blocks {
+        let [a, b, c, d] = block.sums;
+        (total, total2, bright, bright2) = (total + a, total2 + b, bright + c, bright2 + d);
+        for (face, i, px) in block.clipped {
+            remainder.images_mut()[face].pixels[i] = px;
         }
+        texels.extend(block.texels);
     }
     let fraction = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
     let sources = BrightSources {
@@ -380,24 +452,39 @@ mod tests {
     }
 
     #[test]
-    fn the_partial_sort_finds_the_full_sorts_bound() {
-        // The definition: sort all texels by luminance, brightest first, and take the one at
-        // which the accumulated solid angle first exceeds the area. Ties (luminance from a few
-        // levels), solid angles spread like a lat-long map's, and areas the brightest 4 % cover
-        // and ones that need the fallback to the full sort.
-        let mut rng = crate::rng::SplitMix64::new(7);
-        let texels: Vec<(f64, f64)> =
-            (0..2000).map(|_| ((rng.range_i64(0, 40) as f64).powi(2), 1e-4 + rng.next_f64().powi(3))).collect();
-        let total: f64 = texels.iter().map(|t| t.1).sum();
-        for share in [0.0, 0.001, 0.01, 0.03, 0.2, 0.9, 1.5] {
-            let area = share * total;
-            let mut sorted = texels.clone();
-            sorted.sort_by(|a, b| b.0.total_cmp(&a.0));
+    fn the_histogram_finds_the_full_sorts_threshold() {
+        // The definition: sort all texels by luminance, brightest first, take Q at the one where
+        // the accumulated solid angle first exceeds AREA_FRACTION of the sphere, and the mean
+        // of min(Y, Q). Maps with ties (luminance from a few levels, so the critical bin holds
+        // many texels), luminance over many decades, negative texels, and a sun.
+        let reference = |map: &EnvMap| {
+            let mut texels = Vec::new();
+            map.for_each_texel(|t| texels.push((luminance(t.rgb), t.solid_angle)));
+            let total: f64 = texels.iter().map(|t| t.1).sum();
+            texels.sort_by(|a, b| b.0.total_cmp(&a.0));
             let mut covered = 0.0;
-            let expected = sorted.iter().find(|t| (covered += t.1, covered > area).1).map_or(0.0, |t| t.0);
-            let mut work = texels.clone();
-            assert_eq!(brightest_area_bound(&mut work, area), expected, "area share {share}");
+            let q = texels.iter().find(|t| (covered += t.1, covered > AREA_FRACTION * total).1).map_or(0.0, |t| t.0);
+            let mean = texels.iter().map(|t| t.0.min(q) * t.1).sum::<f64>() / total;
+            q.max(MEAN_MULTIPLE * mean)
+        };
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let mut image =
+            |width: usize, height: usize, pixel: &mut dyn FnMut(&mut crate::rng::SplitMix64) -> [f32; 3]| {
+                let pixels = (0..width * height).map(|_| pixel(&mut rng)).collect();
+                EnvMap::latlong(RgbImage { width, height, pixels })
+            };
+        let levels = image(128, 64, &mut |rng| [(rng.range_i64(0, 40) as f32).powi(2); 3]);
+        let decades = image(128, 64, &mut |rng| {
+            let v = 10f32.powf(8.0 * rng.next_f64() as f32 - 3.0);
+            [v, 0.5 * v, 2.0 * v]
+        });
+        let signed = image(64, 32, &mut |rng| [rng.next_f64() as f32 - 0.3; 3]);
+        for (name, map) in [("levels", levels.unwrap()), ("decades", decades.unwrap()), ("signed", signed.unwrap())]
+            .into_iter()
+            .chain([("sun", sky_with_sun())])
+        {
+            let (got, want) = (auto_threshold(&map), reference(&map));
+            assert!((got - want).abs() <= 1e-12 * want.abs(), "{name}: {got} vs {want}");
         }
-        assert_eq!(brightest_area_bound(&mut [], 1.0), 0.0);
     }
 }
