@@ -233,12 +233,15 @@ pub fn from_radial(u: impl Fn(f64) -> [f64; 3] + Sync, f: usize, nodes: usize) -
                 lit.iter().map(|(_, w, v)| 4.0 * PI * 2.0 * PI * w * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])).sum();
             let n = lit.len();
             let xs: Vec<f64> = lit.iter().map(|p| p.0).collect();
+            // A grey lobe (every radially symmetric model's) needs one dot product per band.
+            let channels = if lit.iter().all(|(_, _, v)| v[1] == v[0] && v[2] == v[0]) { 1 } else { 3 };
             // [channel][node]: the weight times the lobe.
-            let weighted: Vec<f64> = (0..3).flat_map(|c| lit.iter().map(move |(_, w, v)| w * v[c])).collect();
+            let weighted: Vec<f64> = (0..channels).flat_map(|c| lit.iter().map(move |(_, w, v)| w * v[c])).collect();
             let mut coeffs = vec![[0.0; 3]; f + 1];
             let diagonal = vec![0.5 / PI.sqrt(); n];
             table.column(0, &xs, &diagonal, &mut (Vec::new(), Vec::new()), |l, values| {
-                coeffs[l] = column_sums::<3>(values, &weighted, 3).map(|s| scale * s);
+                let sums = column_sums::<3>(values, &weighted, channels).map(|s| scale * s);
+                coeffs[l] = if channels == 1 { [sums[0]; 3] } else { sums };
             });
             (coeffs, energy)
         })

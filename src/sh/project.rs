@@ -151,7 +151,8 @@ pub fn project_latlong(
             }
         })
         .collect();
-    let row_is_black = |y: usize| img.row(y).iter().all(|p| *p == [0.0; 3]);
+    let black: Vec<bool> = (0..h).map(|y| img.row(y).iter().all(|p| *p == [0.0; 3])).collect();
+    let row_is_black = |y: usize| black[y];
     let table = LegendreTable::new(order);
     let fft = RealFftPlanner::<f64>::new().plan_fft_forward(w);
     // Phase that moves the FFT's sample points from φ = 2πx/W to the texel centres
@@ -181,6 +182,11 @@ pub fn project_latlong(
             let omega = LatLong::new(w, h).row_solid_angle(y);
             for c in 0..3 {
                 for (row, sum) in std::iter::once(y).chain(mirror).zip(row_sums.iter_mut()) {
+                    if row_is_black(row) {
+                        // A sparse image's lit row is often mirrored by a black one.
+                        sum.fill([0.0; 2]);
+                        continue;
+                    }
                     for (slot, px) in input.iter_mut().zip(img.row(row)) {
                         *slot = px[c] as f64;
                     }
@@ -314,6 +320,16 @@ pub fn map_energy(map: &EnvMap) -> f64 {
 /// ∫ L² dΩ per channel by the same quadrature: by Bessel's inequality, at least the energy of
 /// any set of bands of the map.
 pub fn map_energy_rgb(map: &EnvMap) -> [f64; 3] {
+    map_integral_of(map, |v| v * v)
+}
+
+/// ∫ L dΩ per channel by the same quadrature (√(4π) L_00).
+pub fn map_integral_rgb(map: &EnvMap) -> [f64; 3] {
+    map_integral_of(map, |v| v)
+}
+
+/// ∫ f(L) dΩ per channel, each texel's value times its solid angle.
+fn map_integral_of(map: &EnvMap, f: impl Fn(f64) -> f64 + Sync) -> [f64; 3] {
     let rows = map.rows();
     let blocks: Vec<[f64; 3]> = rows
         .par_chunks(BLOCK_ROWS)
@@ -327,7 +343,7 @@ pub fn map_energy_rgb(map: &EnvMap) -> [f64; 3] {
                     if let Some(omega) = row.or_else(|| map.texel_solid_angle(face, x, y)) {
                         let v = img.get(x, y);
                         for c in 0..3 {
-                            e[c] += omega * v[c] as f64 * v[c] as f64;
+                            e[c] += omega * f(v[c] as f64);
                         }
                     }
                 }
