@@ -414,6 +414,9 @@ pub struct Truncation {
     pub theta_star: f64,
     /// ∫ outside the cone / ∫ everywhere (≤ ε).
     pub left_out: f64,
+    /// The lobe's width √(∫u dω / max u) in radians: the side of a square of its effective
+    /// solid angle (√(2π/(s + 1)) for Phong), how many texels it spans.
+    pub width: f64,
 }
 
 /// θ* for a radially symmetric lobe u(cos γ) (grey or luminance): the smallest angle whose cone
@@ -431,16 +434,18 @@ pub fn radial_truncation(u: impl Fn(f64) -> f64, epsilon: f64) -> Truncation {
         .collect();
     let total: f64 = nodes.iter().map(|n| n.1).sum();
     if total <= 0.0 {
-        return Truncation { theta_star: PI, left_out: 0.0 };
+        return Truncation { theta_star: PI, left_out: 0.0, width: 0.0 };
     }
+    let peak = nodes.iter().map(|&(gamma, _)| u(gamma.cos())).fold(u(1.0), f64::max);
+    let width = (TAU * total / peak).sqrt();
     let mut acc = 0.0;
     for &(gamma, w) in &nodes {
         acc += w;
         if acc >= (1.0 - epsilon) * total {
-            return Truncation { theta_star: gamma, left_out: (1.0 - acc / total).max(0.0) };
+            return Truncation { theta_star: gamma, left_out: (1.0 - acc / total).max(0.0), width };
         }
     }
-    Truncation { theta_star: PI, left_out: 0.0 }
+    Truncation { theta_star: PI, left_out: 0.0, width }
 }
 
 /// θ* of [`radial_truncation`].
@@ -728,13 +733,16 @@ mod tests {
     }
 
     #[test]
-    fn phong_cutoff_matches_appendix_d() {
+    fn phong_cutoff_matches_appendix_d_and_its_width_is_the_lobes() {
         for s in [8.0f64, 64.0, 512.0] {
             let u = |x: f64| if x > 0.0 { x.powf(s) } else { 0.0 };
             let got = radial_truncation(u, 0.05);
             let want = 0.05f64.powf(1.0 / (s + 1.0)).acos();
             assert!((got.theta_star - want).abs() < 0.01 * want + 2e-3, "s={s}: {got:?} vs {want}");
             assert!(got.left_out <= 0.05 && got.left_out > 0.04, "{got:?}");
+            // ∫ x^s dω = 2π/(s + 1) over the hemisphere, and the peak is 1.
+            let width = (TAU / (s + 1.0)).sqrt();
+            assert!((got.width - width).abs() < 1e-9 * width, "s={s}: width {} vs {width}", got.width);
         }
     }
 

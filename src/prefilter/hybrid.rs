@@ -22,7 +22,7 @@
 //! part (its single layer is a reflection map); for view-dependent BRDFs the bright part is
 //! projected onto the view basis texel by texel (exact in angle, truncated at P_B like the rest).
 
-use super::angular::{radial_cutoff, ConePyramid, CutoffTable};
+use super::angular::{radial_cutoff, radial_truncation, ConePyramid, CutoffTable};
 use super::brdf_sh::BrdfSh;
 use super::model::Model;
 use super::orders::{first_projection, texel_orders, LightEnergy, OrderRule, TexelOrders};
@@ -30,12 +30,12 @@ use super::pipeline::{brdf_coefficients, Lighting, Orders, PrefilterError};
 use super::shrm::{self, texel_frame, Shrm, ShrmError};
 use super::view_axis;
 use crate::envmap::bright::{split, BrightReport, BrightRule, BrightSources};
-use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows};
+use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows, MAX_TEXELS};
 use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::{NoProgress, Progress};
 use crate::sh::convolve::convolve_zonal_rgb;
-use crate::sh::project::{map_energy_rgb, project, project_latlong, TexelQuadrature};
+use crate::sh::project::{map_energy_rgb, map_integral_rgb, project, project_latlong, TexelQuadrature};
 use crate::sh::window::{self, Window, WindowReport};
 use crate::sh::ShCoeffs;
 use crate::sphere::LatLong;
@@ -52,9 +52,14 @@ pub const MAX_TEXEL_ORDER: usize = 255;
 /// [`view_frame_maps`], whose documents give it as ε achieved).
 pub const ANGULAR_EPSILON: f64 = 1e-5;
 
-/// The share of a radially symmetric lobe's weight the bright texels' rule may misplace
-/// ([`rule_for_kernel`]).
-const BRIGHT_RULE_TOLERANCE: f64 = 1e-3;
+/// The share of a radially symmetric lobe's weight the zonal filter's texel rule may misplace
+/// ([`rule_for_kernel`]), for the bright texels and for [`zonal_maps`].
+const RULE_TOLERANCE: f64 = 1e-3;
+
+/// Radially symmetric lobes narrower than this many texels of the lighting's lat-long grid
+/// (width √(∫u dω / u_max)) are filtered in angle whole ([`zonal_maps`]). Phong's width is
+/// √(2π/(s + 1)): s = 128 spans 9 texels at 256×128, s = 256 6.4, s = 512 4.5.
+pub const ZONAL_TEXELS_PER_WIDTH: f64 = 8.0;
 
 /// How many source texels a radially symmetric lobe must span (its width √(∫u dω / u_max)) for
 /// its bright texels to go through spherical harmonics ([`bright_harmonics`]). The texel integrals
@@ -113,14 +118,29 @@ pub enum MapsFrom {
     Angle,
 }
 
-/// True when the default bake integrates its reflection maps in angle: a view-dependent BRDF
-/// and the texel rule choosing the orders. Per view, the whole map in the view's frame with the
-/// bright texels splatted into it costs less than the SHRM path's own per-view work (its bright
-/// texels pair by pair and its fallback for grazing texels), before the SHRM's one-off cost:
-/// Grace at 256×128, 7 views in angle against 8 through the SHRM, 0.14 against 0.17 s a view at
-/// σ = 0.1 and 0.09 against 0.19 s at σ = 0.3 (`docs/prefilter.md`, "Maps in angle").
-pub fn maps_in_angle(model: &Model, settings: &Settings) -> bool {
-    model.centre().is_none() && settings.orders.is_none() && settings.rule == OrderRule::Texel
+/// True when the default bake integrates its reflection maps of `map` in angle, the texel rule
+/// choosing the orders:
+///
+/// - **A view-dependent BRDF.** Per view, the whole map in the view's frame with the bright
+///   texels splatted into it costs less than the SHRM path's own per-view work (its bright
+///   texels pair by pair and its fallback for grazing texels), before the SHRM's one-off cost:
+///   Grace at 256×128, 7 views in angle against 8 through the SHRM, 0.14 against 0.17 s a view
+///   at σ = 0.1 and 0.09 against 0.19 s at σ = 0.3 (`docs/prefilter.md`, "Maps in angle").
+/// - **A radially symmetric lobe narrower than [`ZONAL_TEXELS_PER_WIDTH`] texels of the map's
+///   lat-long grid**, on an output grid as wide as it ([`zonal_maps`]).
+pub fn maps_in_angle(model: &Model, settings: &Settings, map: &EnvMap) -> bool {
+    if settings.orders.is_some() || settings.rule != OrderRule::Texel {
+        return false;
+    }
+    if model.centre().is_none() {
+        return true;
+    }
+    let grid = latlong_grid(map);
+    let (width, height) = settings.size.unwrap_or((grid.width, grid.height));
+    let texel = PI / grid.height as f64;
+    width == grid.width
+        && [grid.height, height].iter().all(|h| width.checked_mul(*h).is_some_and(|n| n <= MAX_TEXELS))
+        && radial_truncation(|x| model.lobe(x)[1], ANGULAR_EPSILON).width < ZONAL_TEXELS_PER_WIDTH * texel
 }
 
 /// Reflection maps integrated in angle, with what the document reports of them.
@@ -133,13 +153,70 @@ pub struct InAngle {
     pub report: Report,
 }
 
+/// Reflection maps with every texel in angle, when [`maps_in_angle`] says so: [`zonal_maps`] for
+/// a radially symmetric lobe, [`view_frame_maps`] for a view-dependent one.
+pub fn angle_maps(
+    model: &Model,
+    map: &EnvMap,
+    views: &[DVec3],
+    bright_rule: BrightRule,
+    size: Option<(usize, usize)>,
+    progress: &dyn Progress,
+) -> Result<InAngle, PrefilterError> {
+    match model.centre() {
+        Some(_) => zonal_maps(model, map, views, size, progress),
+        None => view_frame_maps(model, map, views, bright_rule, size),
+    }
+}
+
+/// The reflection map of a radially symmetric lobe narrow against the lighting's texels, for
+/// every view: the zonal filter of the whole lat-long map ([`zonal_filter`]), each texel's sum
+/// over the texels whose centres lie in its lobe's cone (1 − 10⁻⁵ of the lobe) of their exact
+/// integrals of it ([`RULE_TOLERANCE`]). No expansion and no split: every texel, the sun's too,
+/// takes the same exact path, so nothing rings and nothing is windowed. R&H §6.3: the
+/// frequency-space cost grows with the Phong exponent (F_B ~ √s, and (F_B + 1)² coefficients)
+/// while the angular cost falls with it (the cone's area ~ 1/s), so past some s* angle is the
+/// cheaper; [`ZONAL_TEXELS_PER_WIDTH`] is that crossover, measured. The output is the lighting's
+/// width (the filter's shift invariance in φ) and `size`'s height, or the lighting's.
+fn zonal_maps(
+    model: &Model,
+    map: &EnvMap,
+    views: &[DVec3],
+    size: Option<(usize, usize)>,
+    progress: &dyn Progress,
+) -> Result<InAngle, PrefilterError> {
+    let latlong = as_latlong(map).map_err(|e| PrefilterError::Resample(e.to_string()))?;
+    let image = latlong.image();
+    let height = size.map_or(image.height, |(_, h)| h);
+    let kernel = |x: f64| model.lobe(x)[1];
+    let cone = radial_cutoff(kernel, ANGULAR_EPSILON);
+    let rule = rule_for_kernel(image.width, image.height, &kernel, cone, height, RULE_TOLERANCE).rule;
+    let filtered = zonal_filter(image, kernel, cone, &rule, height, Rows::Lit, progress)
+        .map_err(|e| PrefilterError::Angular(e.into()))?;
+    let reflected = filtered.to_image();
+    let report = Report {
+        maps: MapsFrom::Angle,
+        rule: "none".into(),
+        texel: None,
+        // Every texel went through angle.
+        bright: BrightReport {
+            threshold: None,
+            texels: image.pixels.len(),
+            energy_fraction: 1.0,
+            squared_fraction: 1.0,
+        },
+        window: WindowReport { kind: Window::None, t: None },
+    };
+    Ok(InAngle { maps: vec![reflected; views.len()], size: (image.width, height), report })
+}
+
 /// Reflection maps of a view-dependent BRDF with every texel in angle: the view-frame integral
 /// of [`view_axis::beyond`] over the whole map, of the remainder and of the bright texels'
 /// excess added to it as energy (its splat keeps each part's energy and centre, so it errs at
 /// second order in the frame's texel against the lobe's width). No spherical harmonics, so
 /// nothing rings and no window is needed; the grid is the lighting's own lat-long grid unless `size` is given (there
 /// is no F_B to size it by, as for `--method angular`).
-pub fn view_frame_maps(
+fn view_frame_maps(
     model: &Model,
     map: &EnvMap,
     views: &[DVec3],
@@ -256,7 +333,14 @@ pub fn prefilter(
                 kernel = (0..=l_max).map(|l| full.radial_kernel(l)).collect();
             }
             let rule = |light: &ShCoeffs, energy: &LightEnergy| {
-                texel_orders(model, &full, energy, mean_reflected(&full, light, &bright), settings.epsilon, max_p)
+                texel_orders(
+                    model,
+                    &full,
+                    energy,
+                    mean_reflected(&full, light.rgb[0], &bright),
+                    settings.epsilon,
+                    max_p,
+                )
             };
             let orders = match (&remainder, &full_light) {
                 (Some(rest), _) => {
@@ -264,7 +348,9 @@ pub fn prefilter(
                     // bounded by the map's energy, and only when that bound decides F_B is the
                     // projection taken further (`orders`: the same F_B as projecting to l_max).
                     let energy = map_energy_rgb(rest);
-                    let mut order = first_projection(model, &full, max_p, l_max);
+                    let l00 = map_integral_rgb(rest).map(|v| v / (4.0 * PI).sqrt());
+                    let mean = mean_reflected(&full, l00, &bright);
+                    let mut order = first_projection(model, &full, max_p, l_max, energy, mean, settings.epsilon);
                     loop {
                         let light = project(rest, order, progress)?;
                         if let Some(orders) = rule(&light, &LightEnergy::projected(&light, energy, l_max)) {
@@ -342,10 +428,11 @@ pub fn prefilter(
 }
 
 /// The mean reflected radiance per channel, which the texel floor is a fraction of: band 0 of
-/// the light field, ρ̂_000 L_00 Y_00 (L_00 of the whole map: remainder plus bright part).
-fn mean_reflected(brdf: &BrdfSh, light: &ShCoeffs, bright: &BrightSources) -> [f64; 3] {
+/// the light field, ρ̂_000 L_00 Y_00 (L_00 of the whole map: the remainder's `l00` plus the
+/// bright part's).
+fn mean_reflected(brdf: &BrdfSh, l00: [f64; 3], bright: &BrightSources) -> [f64; 3] {
     let y00 = 1.0 / (4.0 * PI).sqrt();
-    let mut l00 = light.rgb[0];
+    let mut l00 = l00;
     for t in &bright.texels {
         for c in 0..3 {
             l00[c] += t.excess[c] * t.solid_angle * y00;
@@ -461,14 +548,15 @@ impl Prefiltered {
         Ok(views
             .iter()
             .map(|&view| {
-                let mut added = RgbImage::new(w, h);
                 let lobe = match &cutoff {
                     Some(cutoff) => Lobe::View(view, cutoff),
                     None => Lobe::Radial,
                 };
-                if self.bright_harmonics.is_none() {
+                let added = (self.bright_harmonics.is_none() && !self.bright.is_empty()).then(|| {
+                    let mut added = RgbImage::new(w, h);
                     add_bright(&mut added, model, &self.bright, self.source_grid(), lobe);
-                }
+                    added
+                });
                 let replaced = match (&cone, &cutoff) {
                     (Some(cone), Some(cutoff)) => {
                         view_axis::beyond(cone, model, cutoff, view, valid, LatLong::new(w, h), None)
@@ -497,8 +585,9 @@ struct AngularPart {
     /// Texels whose remainder is replaced (index, value): the fallback beyond the valid view
     /// angle.
     replaced: Vec<(usize, [f32; 3])>,
-    /// Added to every texel (the bright sources).
-    added: RgbImage,
+    /// Added to every texel (the bright sources), when they were not synthesized with the
+    /// remainder.
+    added: Option<RgbImage>,
 }
 
 impl AngularPart {
@@ -506,7 +595,8 @@ impl AngularPart {
         for &(i, v) in &self.replaced {
             map.pixels[i] = v;
         }
-        for (px, a) in map.pixels.iter_mut().zip(&self.added.pixels) {
+        let Some(added) = &self.added else { return };
+        for (px, a) in map.pixels.iter_mut().zip(&added.pixels) {
             for c in 0..3 {
                 px[c] += a[c];
             }
@@ -665,7 +755,7 @@ fn excess_image(bright: &BrightSources, source: LatLong) -> RgbImage {
 fn add_bright_zonal(map: &mut RgbImage, model: &Model, bright: &BrightSources, source: LatLong, cone: f64) -> bool {
     let excess = excess_image(bright, source);
     let kernel = |x: f64| model.lobe(x)[1];
-    let rule = rule_for_kernel(source.width, source.height, &kernel, cone, map.height, BRIGHT_RULE_TOLERANCE).rule;
+    let rule = rule_for_kernel(source.width, source.height, &kernel, cone, map.height, RULE_TOLERANCE).rule;
     let Ok(filtered) = zonal_filter(&excess, kernel, cone, &rule, map.height, Rows::Lit, &NoProgress) else {
         return false;
     };
@@ -835,6 +925,10 @@ impl ViewProjection {
 
 /// The map as lat-long ([`as_latlong`]) split into its clipped remainder and bright texels.
 fn split_latlong(map: &EnvMap, rule: BrightRule) -> Result<(EnvMap, BrightSources), PrefilterError> {
+    if map.layout() == Layout::LatLong {
+        // The split's remainder is the one copy of the map.
+        return Ok(split(map, rule));
+    }
     let latlong = as_latlong(map).map_err(|e| PrefilterError::Resample(e.to_string()))?;
     Ok(split(&latlong, rule))
 }
@@ -845,8 +939,17 @@ pub fn as_latlong(env: &EnvMap) -> Result<EnvMap, envmap::EnvMapError> {
     if env.layout() == Layout::LatLong {
         return Ok(env.clone());
     }
+    let grid = latlong_grid(env);
+    envmap::resample(env, Layout::LatLong, grid.width, grid.height, 3)
+}
+
+/// The lat-long grid [`as_latlong`] puts `env` on.
+fn latlong_grid(env: &EnvMap) -> LatLong {
+    if env.layout() == Layout::LatLong {
+        return LatLong::new(env.image().width, env.image().height);
+    }
     let s = env.max_order().max(16);
-    envmap::resample(env, Layout::LatLong, 2 * s, s, 3)
+    LatLong::new(2 * s, s)
 }
 
 #[cfg(test)]
@@ -1073,6 +1176,66 @@ mod tests {
                 }
             }
             assert!(worst < 0.05, "view {view}: worst relative error {worst} over texels ≥ 5 % of the peak");
+        }
+    }
+
+    /// A lobe narrow against the lighting's texels (Phong s = 512, about one 5.6° texel wide)
+    /// takes the zonal filter of the whole map, a wide one (s = 8, 8.5 texels) the SHRM, as do
+    /// fixed orders, the energy rule and an output of another width. The map in angle is the
+    /// brute-force sum over every texel of its 16 × 16-node integral of the lobe, within the
+    /// texel rule's tolerance plus the cone's 10⁻⁵, for every view.
+    #[test]
+    fn a_lobe_narrow_against_the_texels_is_filtered_in_angle_whole() {
+        let grid = LatLong::new(64, 32);
+        let sun = DVec3::new(0.6, 0.2, 0.5).normalize();
+        let image = RgbImage::from_fn(64, 32, |x, y| {
+            let d = grid.texel_direction(x, y);
+            let v = if d.dot(sun) > 0.995 { 5000.0 } else { 1.0 + 0.5 * d.z as f32 };
+            [v, 0.5 * v, 0.25 * v]
+        });
+        let map = EnvMap::latlong(image.clone()).unwrap();
+        let settings = Settings {
+            epsilon: 0.01,
+            rule: OrderRule::Texel,
+            orders: None,
+            max_p: 6,
+            bright: BrightRule::Auto,
+            window: Window::Nonneg,
+            size: None,
+        };
+        let sharp = Model::new(Brdf::parse("phong:s=512").unwrap(), true).unwrap();
+        let wide = Model::new(Brdf::parse("phong:s=8").unwrap(), true).unwrap();
+        assert!(maps_in_angle(&sharp, &settings, &map));
+        assert!(maps_in_angle(&sharp, &Settings { size: Some((64, 48)), ..settings }, &map));
+        assert!(!maps_in_angle(&wide, &settings, &map));
+        assert!(!maps_in_angle(&sharp, &Settings { size: Some((128, 64)), ..settings }, &map));
+        assert!(!maps_in_angle(&sharp, &Settings { rule: OrderRule::Energy, ..settings }, &map));
+        assert!(!maps_in_angle(&sharp, &Settings { orders: Some((20, 0)), ..settings }, &map));
+
+        let views = [DVec3::Z, DVec3::new(1.0, 0.0, 0.2).normalize()];
+        let done = angle_maps(&sharp, &map, &views, BrightRule::Auto, None, &NoProgress).unwrap();
+        assert_eq!((done.size, done.report.maps, done.maps.len()), ((64, 32), MapsFrom::Angle, 2));
+        assert_eq!(done.maps[0], done.maps[1], "a radially symmetric lobe ignores the view");
+        assert_eq!(done.report.bright.energy_fraction, 1.0);
+        let kernel = |x: f64| sharp.lobe(x)[1];
+        let expected = crate::envmap::zonal::zonal_filter_reference(
+            &image,
+            kernel,
+            PI,
+            &crate::envmap::zonal::TexelRule::new(16).unwrap(),
+            32,
+        )
+        .unwrap();
+        // The rule misplaces at most 10⁻³ of the lobe's weight over its probe texels; one texel
+        // of a lobe a texel wide errs by a few times that (0.32 % here).
+        let peak = expected.pixels.iter().map(|p| p[0]).fold(0.0, f64::max);
+        for (got, want) in done.maps[0].pixels.iter().zip(&expected.pixels) {
+            for c in 0..3 {
+                let (a, b) = (got[c] as f64, want[c]);
+                let (error, allowed) =
+                    if b > 0.01 * peak { ((a - b).abs() / b, 5e-3) } else { ((a - b).abs() / peak, 2e-4) };
+                assert!(error <= allowed, "{got:?} vs {want:?}: {error}");
+            }
         }
     }
 }

@@ -19,10 +19,10 @@
 //!   The lighting need not be projected to l_max to apply (1): bands above the projected order L
 //!   hold at most the map's whole energy ∫ L² dω (Bessel's inequality), so by Cauchy–Schwarz
 //!   they add at most √(∫ L² dω) · √(Σ_{l > L} w_l²) to e(F), w_l being band l's factor in (1).
-//!   The rule projects to a first L where the BRDF's factors have fallen away
-//!   ([`first_projection`]) and projects further only when that term decides F_B: the F_B it
+//!   The rule projects to the first L at which that term is under 1 % of ε × the floor
+//!   ([`first_projection`]) and projects further only when the term decides F_B: the F_B it
 //!   returns is the one a projection to l_max gives, at the cost of a projection to L (Phong
-//!   s = 8 on a 256×128 map: L = 22 against l_max = 127).
+//!   s = 8 on Grace at 256×128: L = 23 against l_max = 127; s = 128: L = 65, F_B = 52).
 //!
 //!   For view-dependent BRDFs a tighter form per view angle θ_o (cos θ_o = R·V): at a fixed ω_o,
 //!   band l of ρ̂ as a function of ω_i has norm n_l(θ_o), and by Cauchy–Schwarz per band
@@ -171,19 +171,45 @@ fn tails(weights: &[[f64; 3]], light: &LightEnergy) -> (Vec<[f64; 3]>, Vec<[f64;
     (tail.collect(), known)
 }
 
-/// The band [`texel_orders`] is given the lighting to first: twice the band where the BRDF's
-/// factors w_l of (1) (every view angle, P = `max_p`) have fallen to 10⁻³ of their largest,
-/// within `l_max`. Beyond it a Gaussian-like kernel (Phong's falls like exp(−l²/2s)) is below
-/// 10⁻¹² of its peak, so bounding those bands by the map's whole energy decides nothing.
-pub fn first_projection(model: &Model, brdf: &BrdfSh, max_p: usize, l_max: usize) -> usize {
+/// The share of ε the bound on the unprojected bands may take at the first projection
+/// ([`first_projection`]).
+const FIRST_PROJECTION_SHARE: f64 = 0.01;
+
+/// The band [`texel_orders`] is given the lighting to first: the smallest L ≤ `l_max` at which
+/// the bound on the bands above it, √(∫ L² dω) · √(Σ_{L < l ≤ l_max} w_l²) with the BRDF's
+/// factors w_l of (1) (every view angle, P = `max_p`), is under [`FIRST_PROJECTION_SHARE`] of
+/// ε × the texel floor in every channel. `map_energy` is ∫ L² dω, `mean_reflected` the mean
+/// reflected radiance the floor is a fraction of. The bound then barely moves e(F), so the rule
+/// decides F_B at this L unless the projected bands alone come within 1 % of ε at F_B − 1; and
+/// L is no larger than it must be: the projection's cost grows as L² (Phong s = 128 on Grace at
+/// 256×128: L = 60 where twice the band at which w_l falls to 10⁻³ was 84, for F_B = 52).
+pub fn first_projection(
+    model: &Model,
+    brdf: &BrdfSh,
+    max_p: usize,
+    l_max: usize,
+    map_energy: [f64; 3],
+    mean_reflected: [f64; 3],
+    epsilon: f64,
+) -> usize {
     let p = if model.centre().is_some() { 0 } else { max_p.min(brdf.p) };
-    let w: Vec<f64> = band_weights(brdf, p, l_max.min(brdf.f), &view_weights(p, None))
-        .iter()
-        .map(|w| w[0].max(w[1]).max(w[2]))
-        .collect();
-    let peak = w.iter().cloned().fold(0.0, f64::max);
-    let fallen = (0..w.len()).rev().find(|&l| w[l] > 1e-3 * peak).map_or(0, |l| l + 1);
-    (2 * fallen).min(l_max)
+    let l_max = l_max.min(brdf.f);
+    let w = band_weights(brdf, p, l_max, &view_weights(p, None));
+    let allowed = mean_reflected.map(|m| FIRST_PROJECTION_SHARE * epsilon * TEXEL_FLOOR * m.abs());
+    // Σ_{L < l ≤ l_max} w_l² per channel, from L = l_max down.
+    let mut above = [0.0; 3];
+    let mut first = l_max;
+    for l in (0..l_max).rev() {
+        for c in 0..3 {
+            above[c] += w[l + 1][c] * w[l + 1][c];
+        }
+        let fits = (0..3).all(|c| allowed[c] <= 0.0 || (map_energy[c] * above[c]).sqrt() <= allowed[c]);
+        if !fits {
+            break;
+        }
+        first = l;
+    }
+    first
 }
 
 /// The view residual r(θ_o) a texel's view angle may have and still be taken from the SHRM,
@@ -522,14 +548,29 @@ mod tests {
         }
     }
 
-    /// The first projection holds Phong's F_B: twice the band where the kernel falls to 10⁻³.
+    /// The first projection is the smallest band whose unprojected bound fits 1 % of ε: one band
+    /// less does not, and a kernel that falls faster (a rougher lobe) or a brighter floor needs
+    /// fewer bands.
     #[test]
-    fn the_first_projection_covers_a_gaussian_kernel() {
-        let model = Model::new(Brdf::parse("phong:s=8").unwrap(), true).unwrap();
-        let brdf = model.coefficients(127, 0);
-        // Phong's kernel ≈ exp(−l²/2s): 10⁻³ at l ≈ √(2s ln 10³) ≈ 10.5.
-        let l = first_projection(&model, &brdf, 0, 127);
-        assert!((20..=24).contains(&l), "{l}");
-        assert_eq!(first_projection(&model, &brdf, 0, 15), 15);
+    fn the_first_projection_is_where_the_bound_on_the_bands_above_fits() {
+        let (energy, mean, epsilon) = ([50.0; 3], [1.0; 3], 0.01);
+        let allowed = FIRST_PROJECTION_SHARE * epsilon * TEXEL_FLOOR;
+        let bound = |brdf: &BrdfSh, l: usize| {
+            let w = band_weights(brdf, 0, 127, &view_weights(0, None));
+            (energy[0] * w[l + 1..].iter().map(|w| w[0] * w[0]).sum::<f64>()).sqrt()
+        };
+        let mut firsts = Vec::new();
+        for s in ["phong:s=8", "phong:s=32", "phong:s=128"] {
+            let model = Model::new(Brdf::parse(s).unwrap(), true).unwrap();
+            let brdf = model.coefficients(127, 0);
+            let l = first_projection(&model, &brdf, 0, 127, energy, mean, epsilon);
+            assert!(bound(&brdf, l) <= allowed && bound(&brdf, l - 1) > allowed, "{s}: {l}");
+            // Phong's kernel falls like exp(−l²/2s).
+            assert!(l as f64 > (2.0 * 8.0f64).sqrt() && l < 127, "{s}: {l}");
+            assert!(first_projection(&model, &brdf, 0, 127, energy, [100.0; 3], epsilon) < l, "{s}");
+            assert_eq!(first_projection(&model, &brdf, 0, 15, energy, [1e-9; 3], epsilon), 15);
+            firsts.push(l);
+        }
+        assert!(firsts.windows(2).all(|f| f[0] < f[1]), "{firsts:?}");
     }
 }

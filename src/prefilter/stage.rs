@@ -271,7 +271,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
             // asks about their expansion; the SHRM is then made only for its file.
             let in_angle = match lighting {
                 Lighting::Map(env)
-                    if !views.is_empty() && !config.bound && hybrid::maps_in_angle(&model, &settings) =>
+                    if !views.is_empty() && !config.bound && hybrid::maps_in_angle(&model, &settings, env) =>
                 {
                     Some(env)
                 }
@@ -282,7 +282,7 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
                 Some(env) if !shrm_wanted => {
                     let t = Instant::now();
                     let done =
-                        hybrid::view_frame_maps(&model, env, &views, config.bright, config.size).map_err(fail)?;
+                        hybrid::angle_maps(&model, env, &views, config.bright, config.size, progress).map_err(fail)?;
                     timings.maps_seconds = t.elapsed().as_secs_f64();
                     bake = Some(done.report);
                     // No expansion: F_B = P_B = 0; ε achieved is the lobe weight outside the cones.
@@ -294,10 +294,12 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
                     timings.shrm_seconds = t.elapsed().as_secs_f64();
                     let size = (pre.remainder_shrm.width(), pre.remainder_shrm.height());
                     let t = Instant::now();
-                    let maps = match in_angle {
-                        // On the SHRM's grid, so the document's size holds for both.
+                    // On the SHRM's grid, so the document's size holds for both (a radially
+                    // symmetric lobe's zonal filter keeps the lighting's width: else the SHRM's).
+                    let on_grid = Settings { size: Some(size), ..settings };
+                    let maps = match in_angle.filter(|env| hybrid::maps_in_angle(&model, &on_grid, env)) {
                         Some(env) => {
-                            let done = hybrid::view_frame_maps(&model, env, &views, config.bright, Some(size))
+                            let done = hybrid::angle_maps(&model, env, &views, config.bright, Some(size), progress)
                                 .map_err(fail)?;
                             pre.report.maps = done.report.maps;
                             done.maps
