@@ -108,7 +108,10 @@ pub fn bake(
         maps: vec![MapRequest { file: "map.exr".into(), view }],
         ..Config::new(brdf.clone())
     });
+    // In the worker pool, as the CLI runs its stage (`pool.install`): from the main thread
+    // every parallel region of the bake would hop threads, a wake-up and a sleep each (tens of
+    // µs on a shared machine), which a user's run does not pay.
     let start = Instant::now();
-    let out = stage::run(&config, Lighting::Map(map), &NoProgress)?;
+    let out = rayon::scope(|_| stage::run(&config, Lighting::Map(map), &NoProgress))?;
     Ok((out, start.elapsed().as_secs_f64()))
 }
