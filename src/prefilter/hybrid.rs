@@ -1035,16 +1035,21 @@ mod tests {
         }
     }
 
-    /// A dim sky with a small sun on coarse texels (5.6°) and its bright texels.
-    fn sky_with_sun() -> (LatLong, BrightSources) {
+    /// A dim sky with a small sun on coarse texels (5.6°), 64×32.
+    fn sunlit_sky() -> RgbImage {
         let grid = LatLong::new(64, 32);
         let sun = DVec3::new(0.6, 0.2, 0.5).normalize();
-        let image = RgbImage::from_fn(64, 32, |x, y| {
+        RgbImage::from_fn(64, 32, |x, y| {
             let d = grid.texel_direction(x, y);
             let v = if d.dot(sun) > 0.995 { 5000.0 } else { 1.0 + 0.5 * d.z as f32 };
             [v, 0.5 * v, 0.25 * v]
-        });
-        let (_, bright) = split(&EnvMap::latlong(image).unwrap(), BrightRule::Auto);
+        })
+    }
+
+    /// [`sunlit_sky`]'s grid and bright texels.
+    fn sky_with_sun() -> (LatLong, BrightSources) {
+        let grid = LatLong::new(64, 32);
+        let (_, bright) = split(&EnvMap::latlong(sunlit_sky()).unwrap(), BrightRule::Auto);
         assert!(!bright.is_empty() && bright.texels.len() < 20, "{} bright texels", bright.texels.len());
         (grid, bright)
     }
@@ -1190,13 +1195,7 @@ mod tests {
     /// texel rule's tolerance plus the cone's 10⁻⁵, for every view.
     #[test]
     fn a_lobe_narrow_against_the_texels_is_filtered_in_angle_whole() {
-        let grid = LatLong::new(64, 32);
-        let sun = DVec3::new(0.6, 0.2, 0.5).normalize();
-        let image = RgbImage::from_fn(64, 32, |x, y| {
-            let d = grid.texel_direction(x, y);
-            let v = if d.dot(sun) > 0.995 { 5000.0 } else { 1.0 + 0.5 * d.z as f32 };
-            [v, 0.5 * v, 0.25 * v]
-        });
+        let image = sunlit_sky();
         let map = EnvMap::latlong(image.clone()).unwrap();
         let settings = Settings {
             epsilon: 0.01,
