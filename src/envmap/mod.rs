@@ -170,16 +170,9 @@ impl EnvMap {
         }
     }
 
-    /// Calls `f` with the value and solid angle of every mapped texel, in the order of
-    /// [`EnvMap::for_each_texel`], without the directions (a lat-long row's solid angle once).
-    pub fn for_each_value(&self, mut f: impl FnMut([f32; 3], f64)) {
-        for (face, y) in self.rows() {
-            self.for_each_value_in_row(face, y, &mut f);
-        }
-    }
-
-    /// [`EnvMap::for_each_value`] for row `y` of image `face` alone: rows as units of parallel
-    /// work.
+    /// Calls `f` with the value and solid angle of every mapped texel of row `y` of image
+    /// `face`, in the order of [`EnvMap::for_each_texel`], without the directions (a lat-long
+    /// row's solid angle once): rows as units of parallel work.
     pub fn for_each_value_in_row(&self, face: usize, y: usize, mut f: impl FnMut([f32; 3], f64)) {
         let row_omega = (self.layout == Layout::LatLong).then(|| self.texel_solid_angle(face, 0, y)).flatten();
         for (x, &rgb) in self.images[face].row(y).iter().enumerate() {

@@ -712,14 +712,11 @@ fn bright_harmonics(
     kernel: &[[f64; 3]],
     width: usize,
 ) -> Option<ShCoeffs> {
-    let peak = model.lobe(1.0)[1];
-    let k0 = kernel.first().filter(|_| peak > 0.0)?;
-    // k_0 = ∫u dω (Funk–Hecke).
-    let lobe_width = (k0[1] / peak).max(0.0).sqrt();
-    if lobe_width < SH_BRIGHT_TEXELS_PER_WIDTH * PI / source.height as f64 {
+    let truncation = radial_truncation(|x| model.lobe(x)[1], ANGULAR_EPSILON);
+    if kernel.is_empty() || truncation.width < SH_BRIGHT_TEXELS_PER_WIDTH * PI / source.height as f64 {
         return None;
     }
-    let dropped = model.lobe(radial_cutoff(|x| model.lobe(x)[1], ANGULAR_EPSILON).cos())[1];
+    let dropped = model.lobe(truncation.theta_star.cos())[1];
     let per_band: Vec<f64> = kernel
         .iter()
         .enumerate()

@@ -267,8 +267,9 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
                 window: config.window,
                 size: config.size,
             };
-            // A view-dependent BRDF's maps are integrated in angle (`hybrid`), unless --bound
-            // asks about their expansion; the SHRM is then made only for its file.
+            // A view-dependent BRDF's maps, and a narrow radially symmetric lobe's, are
+            // integrated in angle (`hybrid::maps_in_angle`), unless --bound asks about their
+            // expansion; the SHRM is then made only for its file.
             let in_angle = match lighting {
                 Lighting::Map(env)
                     if !views.is_empty() && !config.bound && hybrid::maps_in_angle(&model, &settings, env) =>
