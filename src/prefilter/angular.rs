@@ -40,7 +40,7 @@ use crate::sphere::{self, LatLong};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Errors of the angular reference.
 #[derive(Debug, thiserror::Error)]
@@ -425,22 +425,28 @@ pub fn radial_truncation(u: impl Fn(f64) -> f64, epsilon: f64) -> Truncation {
     // Cumulative ∫_0^γ u(cos γ') sin γ' dγ' outwards from the axis, by a 4-point Gauss rule on
     // each of 512 equal panels in γ (node spacing ~π/2000, as fine near the axis as a 2000-node
     // rule in cos γ, without solving for its nodes), then the first node where it reaches 1 − ε.
+    // The nodes (γ, cos γ, weight × sin γ) are the same for every lobe: computed once, they
+    // leave 2 048 evaluations of u (77 → 5 µs for Phong).
     const PANELS: usize = 512;
-    let rule = gauss_legendre(4);
-    let h = PI / PANELS as f64;
-    let nodes: Vec<(f64, f64)> = (0..PANELS)
-        .flat_map(|k| rule.iter().map(move |&(t, w)| (h * (k as f64 + 0.5 + 0.5 * t), 0.5 * h * w)))
-        .map(|(gamma, w)| (gamma, w * gamma.sin() * u(gamma.cos())))
-        .collect();
-    let total: f64 = nodes.iter().map(|n| n.1).sum();
+    static NODES: OnceLock<Vec<(f64, f64, f64)>> = OnceLock::new();
+    let nodes = NODES.get_or_init(|| {
+        let rule = gauss_legendre(4);
+        let h = PI / PANELS as f64;
+        (0..PANELS)
+            .flat_map(|k| rule.iter().map(move |&(t, w)| (h * (k as f64 + 0.5 + 0.5 * t), 0.5 * h * w)))
+            .map(|(gamma, w)| (gamma, gamma.cos(), w * gamma.sin()))
+            .collect()
+    });
+    let values: Vec<f64> = nodes.iter().map(|&(_, cos, _)| u(cos)).collect();
+    let total: f64 = nodes.iter().zip(&values).map(|(n, v)| n.2 * v).sum();
     if total <= 0.0 {
         return Truncation { theta_star: PI, left_out: 0.0, width: 0.0 };
     }
-    let peak = nodes.iter().map(|&(gamma, _)| u(gamma.cos())).fold(u(1.0), f64::max);
+    let peak = values.iter().fold(u(1.0), |a, &b| a.max(b));
     let width = (TAU * total / peak).sqrt();
     let mut acc = 0.0;
-    for &(gamma, w) in &nodes {
-        acc += w;
+    for (&(gamma, _, w), v) in nodes.iter().zip(&values) {
+        acc += w * v;
         if acc >= (1.0 - epsilon) * total {
             return Truncation { theta_star: gamma, left_out: (1.0 - acc / total).max(0.0), width };
         }
