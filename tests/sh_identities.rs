@@ -8,7 +8,9 @@ use prtkit::progress::NoProgress;
 use prtkit::quadrature::gauss_legendre;
 use prtkit::sh::basis::eval_basis_dir;
 use prtkit::sh::legendre::LegendreTable;
-use prtkit::sh::project::{map_energy, project, project_latlong, project_naive, TexelQuadrature};
+use prtkit::sh::project::{
+    map_energy, project, project_latlong, project_latlong_texels, project_naive, TexelQuadrature,
+};
 use prtkit::sh::rotate::ShRotation;
 use prtkit::sh::synth::{synthesize_latlong, synthesize_map};
 use prtkit::sh::{count, index, ShCoeffs};
@@ -295,6 +297,40 @@ fn the_texel_integral_projection_integrates_each_texel() {
     assert!(project_latlong(&img, w / 2 + 1, TexelQuadrature::Midpoint, &NoProgress).is_err());
     let off = midpoint.rgb.iter().zip(&expected).map(|(a, b)| (a[0] - b[0]).abs()).fold(0.0, f64::max);
     assert!(off > 1e-2 * scale, "midpoint off by {off:e} of {scale:e}");
+}
+
+#[test]
+fn the_texels_projection_is_the_image_projection_of_those_texels() {
+    // The same sparse map as above given as texels (the odd height's middle row, a row and its
+    // mirror, a row whose mirror is black), one of them split in two at the same place: each
+    // row's Fourier sums taken directly must give the image path's coefficients (FFT) for both
+    // quadratures, to rounding.
+    let (w, h, order) = (24, 13, 10);
+    let lit: [(usize, usize, f64); 4] = [(3, 2, 7.0), (17, 10, 2.0), (5, 4, 3.0), (20, 6, 5.0)];
+    let mut img = RgbImage::new(w, h);
+    let mut texels = Vec::new();
+    for &(x, y, v) in &lit {
+        img.pixels[y * w + x] = [v as f32, 0.5 * v as f32, 2.0 * v as f32];
+        texels.push((x, y, [v, 0.5 * v, 2.0 * v]));
+    }
+    texels[0].2 = [3.0, 1.5, 6.0];
+    texels.push((3, 2, [4.0, 2.0, 8.0]));
+    for quadrature in [TexelQuadrature::Midpoint, TexelQuadrature::Integral { z_nodes: 2 }] {
+        let image = project_latlong(&img, order, quadrature, &NoProgress).unwrap();
+        let direct = project_latlong_texels((w, h), &texels, order, quadrature).unwrap();
+        let scale = image.rgb.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (i, (a, b)) in direct.rgb.iter().zip(&image.rgb).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() < 1e-13 * scale,
+                    "{quadrature:?}, coefficient {i}, channel {c}: {} against {}",
+                    a[c],
+                    b[c]
+                );
+            }
+        }
+    }
+    assert!(project_latlong_texels((w, h), &texels, w / 2 + 1, TexelQuadrature::Midpoint).is_err());
 }
 
 #[test]

@@ -17,6 +17,7 @@
 
 use super::EnvMap;
 use crate::io::RgbImage;
+use crate::sphere::LatLong;
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -92,18 +93,28 @@ impl BrightSources {
         }
     }
 
-    /// Puts the excess back into a lat-long image of any size: each texel into the texel its
-    /// direction falls in, scaled by the ratio of solid angles so the image keeps its energy.
+    /// Puts the excess back into a lat-long image of any size ([`BrightSources::on_latlong`]).
     pub fn add_to_latlong(&self, image: &mut RgbImage) {
-        let grid = crate::sphere::LatLong::new(image.width, image.height);
-        for t in &self.texels {
-            let (x, y) = grid.texel_of(t.dir);
-            let scale = t.solid_angle / grid.row_solid_angle(y);
+        for (x, y, v) in self.on_latlong(LatLong::new(image.width, image.height)) {
             let px = &mut image.pixels[y * image.width + x];
             for c in 0..3 {
-                px[c] += (t.excess[c] * scale) as f32;
+                px[c] += v[c] as f32;
             }
         }
+    }
+
+    /// The excess as texels (x, y, value) of a lat-long grid of any size: each texel at the
+    /// texel its direction falls in, scaled by the ratio of solid angles so the grid keeps its
+    /// energy (on the grid the texels were split on, their own places and values).
+    pub fn on_latlong(&self, grid: LatLong) -> Vec<(usize, usize, [f64; 3])> {
+        self.texels
+            .iter()
+            .map(|t| {
+                let (x, y) = grid.texel_of(t.dir);
+                let scale = t.solid_angle / grid.row_solid_angle(y);
+                (x, y, t.excess.map(|e| e * scale))
+            })
+            .collect()
     }
 }
 

@@ -35,7 +35,7 @@ use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::{NoProgress, Progress};
 use crate::sh::convolve::convolve_zonal_rgb;
-use crate::sh::project::{map_energy_rgb, map_integral_rgb, project, project_latlong, TexelQuadrature};
+use crate::sh::project::{map_energy_rgb, map_integral_rgb, project, project_latlong_texels, TexelQuadrature};
 use crate::sh::window::{self, Window, WindowReport};
 use crate::sh::ShCoeffs;
 use crate::sphere::LatLong;
@@ -737,7 +737,8 @@ fn bright_harmonics(
         return None;
     }
     let quadrature = TexelQuadrature::Integral { z_nodes: SH_BRIGHT_Z_NODES };
-    let coeffs = project_latlong(&excess_image(bright, source), order, quadrature, &NoProgress).ok()?;
+    let texels = bright.on_latlong(source);
+    let coeffs = project_latlong_texels((source.width, source.height), &texels, order, quadrature).ok()?;
     Some(convolve_zonal_rgb(&coeffs, |l| kernel[l]))
 }
 
