@@ -130,87 +130,19 @@ pub fn luminance(rgb: [f32; 3]) -> f64 {
 ///
 /// Q is found from a histogram of Y, so no texel list is sorted: one pass puts each texel's
 /// solid angle and Y × solid angle into its bin, the bins from the top find the one in which the
-/// brightest `AREA_FRACTION` of the area is reached, and a second pass sorts only that bin's
-/// texels. Q is then the full sort's value (ties in Y give the same Q in any order), and the
-/// clipped mean is the bins below plus that bin's texels clipped plus Q × the area above.
+/// brightest `AREA_FRACTION` of the area is reached, and a second pass gathers the texels of
+/// that bin and above, of which only that bin's are sorted. Q is then the full sort's value
+/// (ties in Y give the same Q in any order), and the clipped mean is the bins below plus that
+/// bin's texels clipped plus Q × the area above.
 pub fn auto_threshold(map: &EnvMap) -> f64 {
-    // Per block of rows, in parallel; blocks merged in order, so the sums are the same for any
-    // thread count.
-    let rows = map.rows();
-    let blocks: Vec<(Vec<(f64, f64)>, f64)> = rows
-        .par_chunks(BLOCK_ROWS)
-        .map(|block| {
-            let mut bins = vec![(0.0f64, 0.0f64); HISTOGRAM_BINS];
-            let mut area = 0.0;
-            for &(face, y) in block {
-                map.for_each_value_in_row(face, y, |rgb, omega| {
-                    let lum = luminance(rgb);
-                    let bin = &mut bins[histogram_bin(lum)];
-                    bin.0 += omega;
-                    bin.1 += lum * omega;
-                    area += omega;
-                });
-            }
-            (bins, area)
-        })
-        .collect();
-    let mut bins = vec![(0.0f64, 0.0f64); HISTOGRAM_BINS];
-    let mut total_area = 0.0;
-    for (block, area) in &blocks {
-        for (b, v) in bins.iter_mut().zip(block) {
-            b.0 += v.0;
-            b.1 += v.1;
-        }
-        total_area += area;
-    }
-    let area = AREA_FRACTION * total_area;
-    // The bin in which the brightest texels' area first exceeds `area`, and the area above it.
-    let mut above = 0.0;
-    let Some(critical) = (0..HISTOGRAM_BINS).rev().find(|&b| {
-        if above + bins[b].0 > area {
-            return true;
-        }
-        above += bins[b].0;
-        false
-    }) else {
-        // No area (an empty map): nothing is bright.
-        return 0.0;
-    };
-    let mut texels: Vec<(f64, f64)> = rows
-        .par_chunks(BLOCK_ROWS)
-        .flat_map_iter(|block| {
-            let mut found = Vec::new();
-            for &(face, y) in block {
-                map.for_each_value_in_row(face, y, |rgb, omega| {
-                    let lum = luminance(rgb);
-                    if histogram_bin(lum) == critical {
-                        found.push((lum, omega));
-                    }
-                });
-            }
-            found
-        })
-        .collect();
-    texels.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-    let mut covered = above;
-    let q = texels
-        .iter()
-        .find(|&&(_, omega)| {
-            covered += omega;
-            covered > area
-        })
-        .map_or(0.0, |t| t.0);
-    let below: f64 = bins[..critical].iter().map(|b| b.1).sum();
-    let clipped: f64 = texels.iter().map(|&(y, omega)| y.min(q) * omega).sum();
-    let clipped_mean = (below + clipped + q * above) / total_area;
-    q.max(MEAN_MULTIPLE * clipped_mean)
+    Histogram::of(map).auto_threshold(map).0
 }
 
 /// Bins of [`auto_threshold`]'s histogram: one per value of the top 11 bits of Y as an f32
 /// (sign, exponent and 2 bits of mantissa), so a bin spans at most 1/4 of its values.
 const HISTOGRAM_BINS: usize = 1 << 11;
 
-/// Rows per block of [`auto_threshold`]'s and [`split`]'s parallel passes.
+/// Rows per block of the split's parallel passes.
 const BLOCK_ROWS: usize = 16;
 
 /// Y's bin: the order of the bins is that of Y for Y ≥ 0 (the bits of non-negative floats
@@ -219,68 +151,153 @@ fn histogram_bin(y: f64) -> usize {
     ((y.max(0.0) as f32).to_bits() >> 21) as usize
 }
 
+/// The split's pass over every texel: per bin of Y its solid angle and ∫ Y dω, and ∫ Y² dω.
+/// Per block of rows, in parallel; blocks merged in order, so the sums are the same for any
+/// thread count.
+struct Histogram {
+    bins: Vec<(f64, f64)>,
+    squared: f64,
+}
+
+/// A texel the split looks at after the histogram: (image, column, row, Y, solid angle).
+type Candidate = (usize, usize, usize, f64, f64);
+
+impl Histogram {
+    fn of(map: &EnvMap) -> Self {
+        let blocks: Vec<Histogram> = map
+            .rows()
+            .par_chunks(BLOCK_ROWS)
+            .map(|block| {
+                let mut bins = vec![(0.0f64, 0.0f64); HISTOGRAM_BINS];
+                let mut squared = 0.0;
+                // Neighbouring texels mostly share a bin: summed in registers while they do, not
+                // through the bin in memory (a chain of stores and loads per texel).
+                let mut run = (0, 0.0, 0.0);
+                for &(face, y) in block {
+                    map.for_each_value_in_row(face, y, |_, rgb, omega| {
+                        let lum = luminance(rgb);
+                        let bin = histogram_bin(lum);
+                        if bin != run.0 {
+                            bins[run.0].0 += run.1;
+                            bins[run.0].1 += run.2;
+                            run = (bin, 0.0, 0.0);
+                        }
+                        run.1 += omega;
+                        run.2 += lum * omega;
+                        squared += lum * lum * omega;
+                    });
+                }
+                bins[run.0].0 += run.1;
+                bins[run.0].1 += run.2;
+                Histogram { bins, squared }
+            })
+            .collect();
+        let mut total = Histogram { bins: vec![(0.0, 0.0); HISTOGRAM_BINS], squared: 0.0 };
+        for block in &blocks {
+            for (b, v) in total.bins.iter_mut().zip(&block.bins) {
+                b.0 += v.0;
+                b.1 += v.1;
+            }
+            total.squared += block.squared;
+        }
+        total
+    }
+
+    fn area(&self) -> f64 {
+        self.bins.iter().map(|b| b.0).sum()
+    }
+
+    /// [`auto_threshold`] and the texels of Q's bin and above, which hold every texel above it.
+    fn auto_threshold(&self, map: &EnvMap) -> (f64, Vec<Candidate>) {
+        let (bins, total_area) = (&self.bins, self.area());
+        let area = AREA_FRACTION * total_area;
+        // The bin in which the brightest texels' area first exceeds `area`, and the area above it.
+        let mut above = 0.0;
+        let Some(critical) = (0..HISTOGRAM_BINS).rev().find(|&b| {
+            if above + bins[b].0 > area {
+                return true;
+            }
+            above += bins[b].0;
+            false
+        }) else {
+            // No area (an empty map): nothing is bright.
+            return (0.0, Vec::new());
+        };
+        let candidates = texels_from_bin(map, critical);
+        let mut texels: Vec<(f64, f64)> =
+            candidates.iter().filter(|t| histogram_bin(t.3) == critical).map(|t| (t.3, t.4)).collect();
+        texels.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+        let mut covered = above;
+        let q = texels
+            .iter()
+            .find(|&&(_, omega)| {
+                covered += omega;
+                covered > area
+            })
+            .map_or(0.0, |t| t.0);
+        let below: f64 = bins[..critical].iter().map(|b| b.1).sum();
+        let clipped: f64 = texels.iter().map(|&(y, omega)| y.min(q) * omega).sum();
+        let clipped_mean = (below + clipped + q * above) / total_area;
+        (q.max(MEAN_MULTIPLE * clipped_mean), candidates)
+    }
+}
+
+/// The texels whose Y falls in bin `from` or above, in the map's order.
+fn texels_from_bin(map: &EnvMap, from: usize) -> Vec<Candidate> {
+    map.rows()
+        .par_chunks(BLOCK_ROWS)
+        .flat_map_iter(|block| {
+            let mut found = Vec::new();
+            for &(face, y) in block {
+                map.for_each_value_in_row(face, y, |x, rgb, omega| {
+                    let lum = luminance(rgb);
+                    if histogram_bin(lum) >= from {
+                        found.push((face, x, y, lum, omega));
+                    }
+                });
+            }
+            found
+        })
+        .collect()
+}
+
 /// Splits a map into the remainder (clipped at the threshold) and the bright texels, in any
 /// layout. [`BrightRule::Off`] and maps with nothing above the threshold come back whole with an
 /// empty bright part.
+///
+/// Two passes over the texels: the histogram (which gives the energies, and [`auto_threshold`]
+/// its Q), and the texels from the threshold's bin up (a threshold above Q lies in Q's bin or
+/// above). The few above the threshold are then clipped in a copy of the map.
 pub fn split(map: &EnvMap, rule: BrightRule) -> (EnvMap, BrightSources) {
-    let threshold = match rule {
+    let histogram = match rule {
         BrightRule::Off => return (map.clone(), BrightSources { threshold: f64::INFINITY, ..Default::default() }),
-        BrightRule::Auto => auto_threshold(map),
-        BrightRule::Threshold(t) => t,
+        _ => Histogram::of(map),
     };
-    // Per block of rows, in parallel: the sums and the texels above the threshold (few), with
-    // their clipped values; merged in order, so the same for any thread count.
-    struct Block {
-        sums: [f64; 4],
-        clipped: Vec<(usize, usize, [f32; 3])>,
-        texels: Vec<BrightTexel>,
-    }
-    let blocks: Vec<Block> = map
-        .rows()
-        .par_chunks(BLOCK_ROWS)
-        .map(|rows| {
-            let mut block = Block { sums: [0.0; 4], clipped: Vec::new(), texels: Vec::new() };
-            for &(face, y) in rows {
-                let img = &map.images()[face];
-                // A lat-long row shares one solid angle.
-                let row_omega = (map.layout() == super::Layout::LatLong).then(|| map.texel_solid_angle(face, 0, y));
-                for (x, px) in img.row(y).iter().enumerate() {
-                    let Some(omega) = row_omega.unwrap_or_else(|| map.texel_solid_angle(face, x, y)) else { continue };
-                    let l = luminance(*px);
-                    let [total, total2, bright, bright2] = &mut block.sums;
-                    *total += l * omega;
-                    *total2 += l * l * omega;
-                    if l > threshold {
-                        let keep = threshold / l;
-                        let excess = px.map(|c| c as f64 * (1.0 - keep));
-                        block.clipped.push((face, y * img.width + x, px.map(|c| (c as f64 * keep) as f32)));
-                        *bright += (excess[0] + excess[1] + excess[2]) / 3.0 * omega;
-                        *bright2 += (l * l - threshold * threshold) * omega;
-                        let (dir, _) = map.texel_geometry(face, x, y).expect("a texel with a solid angle is mapped");
-                        block.texels.push(BrightTexel { dir, solid_angle: omega, excess });
-                    }
-                }
-            }
-            block
-        })
-        .collect();
+    let (threshold, candidates) = match rule {
+        BrightRule::Threshold(t) => (t, texels_from_bin(map, histogram_bin(t))),
+        _ => histogram.auto_threshold(map),
+    };
     let mut remainder = map.clone();
-    let [mut total, mut total2, mut bright, mut bright2] = [0.0; 4];
+    let (mut bright, mut bright2) = (0.0, 0.0);
     let mut texels = Vec::new();
-    for block in blocks {
-        let [a, b, c, d] = block.sums;
-        (total, total2, bright, bright2) = (total + a, total2 + b, bright + c, bright2 + d);
-        for (face, i, px) in block.clipped {
-            remainder.images_mut()[face].pixels[i] = px;
-        }
-        texels.extend(block.texels);
+    for &(face, x, y, l, omega) in candidates.iter().filter(|t| t.3 > threshold) {
+        let image = &mut remainder.images_mut()[face];
+        let px = image.get(x, y);
+        let keep = threshold / l;
+        let excess = px.map(|c| c as f64 * (1.0 - keep));
+        image.set(x, y, px.map(|c| (c as f64 * keep) as f32));
+        bright += (excess[0] + excess[1] + excess[2]) / 3.0 * omega;
+        bright2 += (l * l - threshold * threshold) * omega;
+        let (dir, _) = map.texel_geometry(face, x, y).expect("a texel with a solid angle is mapped");
+        texels.push(BrightTexel { dir, solid_angle: omega, excess });
     }
+    let total: f64 = histogram.bins.iter().map(|b| b.1).sum();
     let fraction = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
     let sources = BrightSources {
         threshold,
         texels,
         energy_fraction: fraction(bright, total),
-        squared_fraction: fraction(bright2, total2),
+        squared_fraction: fraction(bright2, histogram.squared),
     };
     (remainder, sources)
 }

@@ -170,14 +170,14 @@ impl EnvMap {
         }
     }
 
-    /// Calls `f` with the value and solid angle of every mapped texel of row `y` of image
+    /// Calls `f` with the column, value and solid angle of every mapped texel of row `y` of image
     /// `face`, in the order of [`EnvMap::for_each_texel`], without the directions (a lat-long
     /// row's solid angle once): rows as units of parallel work.
-    pub fn for_each_value_in_row(&self, face: usize, y: usize, mut f: impl FnMut([f32; 3], f64)) {
+    pub fn for_each_value_in_row(&self, face: usize, y: usize, mut f: impl FnMut(usize, [f32; 3], f64)) {
         let row_omega = (self.layout == Layout::LatLong).then(|| self.texel_solid_angle(face, 0, y)).flatten();
         for (x, &rgb) in self.images[face].row(y).iter().enumerate() {
             if let Some(omega) = row_omega.or_else(|| self.texel_solid_angle(face, x, y)) {
-                f(rgb, omega);
+                f(x, rgb, omega);
             }
         }
     }
