@@ -212,24 +212,36 @@ impl LegendreTable {
 
 /// Σ_j values[j] · parts[q·n + j] for the first `kinds` of q < K (n = values.len(); the rest
 /// 0): a column's values against K weight vectors, as the projections sum them. Four
-/// interleaved partial sums combined in a fixed order: vectorizable, and the same bits on every
-/// run and thread count.
+/// interleaved partial sums per q combined in a fixed order: vectorizable, and the same bits on
+/// every run and thread count. When all K are asked for, the K sums advance together, four
+/// nodes at a time, so their chains of additions overlap where one sum after another waits on
+/// each addition (the projection's six sums over 64 rows).
 pub fn column_sums<const K: usize>(values: &[f64], parts: &[f64], kinds: usize) -> [f64; K] {
+    let n = values.len();
+    if kinds >= K {
+        return dot_rows(values, std::array::from_fn(|q| &parts[q * n..(q + 1) * n]));
+    }
+    std::array::from_fn(|q| if q < kinds { dot_rows(values, [&parts[q * n..(q + 1) * n]])[0] } else { 0.0 })
+}
+
+/// Σ_j values[j] · rows[q][j] for every q, in four lanes per q (j mod 4 below the last multiple
+/// of 4, the rest after), combined as (lane 0 + lane 1) + (lane 2 + lane 3) + rest.
+fn dot_rows<const K: usize>(values: &[f64], rows: [&[f64]; K]) -> [f64; K] {
     const LANES: usize = 4;
     let n = values.len();
     let whole = n - n % LANES;
-    std::array::from_fn(|q| {
-        if q >= kinds {
-            return 0.0;
-        }
-        let part = &parts[q * n..(q + 1) * n];
-        let mut lanes = [0.0; LANES];
-        for (v, p) in values[..whole].chunks_exact(LANES).zip(part[..whole].chunks_exact(LANES)) {
+    let mut lanes = [[0.0; LANES]; K];
+    for (j, v) in values[..whole].chunks_exact(LANES).enumerate() {
+        for (lanes, row) in lanes.iter_mut().zip(&rows) {
+            let p = &row[j * LANES..][..LANES];
             for i in 0..LANES {
                 lanes[i] += v[i] * p[i];
             }
         }
-        let tail: f64 = values[whole..].iter().zip(&part[whole..]).map(|(v, p)| v * p).sum();
+    }
+    std::array::from_fn(|q| {
+        let tail: f64 = values[whole..].iter().zip(&rows[q][whole..n]).map(|(v, p)| v * p).sum();
+        let lanes = &lanes[q];
         (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + tail
     })
 }
