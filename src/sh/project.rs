@@ -203,12 +203,17 @@ pub fn project_latlong_texels(
         let mut row_sums = [vec![[[0.0; 2]; 3]; order + 1], vec![[[0.0; 2]; 3]; order + 1]];
         for (row, sum) in std::iter::once(y).chain(mirror).zip(row_sums.iter_mut()) {
             for &&(x, _, v) in row_texels(row) {
-                let step = 2 * x + 1;
-                for (m, s) in sum.iter_mut().enumerate() {
-                    let (sin, cos) = turns[m * step % (2 * w)];
+                // m(2x + 1) mod 2W, stepped without a division per term.
+                let (step, mut turn) = (2 * x + 1, 0);
+                for s in sum.iter_mut() {
+                    let (sin, cos) = turns[turn];
                     for c in 0..3 {
                         s[c][0] += v[c] * cos;
                         s[c][1] += v[c] * sin;
+                    }
+                    turn += step;
+                    if turn >= 2 * w {
+                        turn -= 2 * w;
                     }
                 }
             }
