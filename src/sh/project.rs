@@ -174,11 +174,12 @@ pub fn project_latlong(
 }
 
 /// [`project_latlong`] of a W × H image that is black but for a few texels, given as (x, y,
-/// value); texels at the same place add. Each lit row's Fourier sums are taken directly,
-/// Σ_texels v {cos, sin}(mφ_x) with mφ_x = πm(2x + 1)/W read from a table of the 2W multiples
-/// of π/W (no recurrence error): O(texels · F), where the image's path pays an image, a scan of
-/// every row and an FFT per lit row and channel. The bright texels' excess goes this way
-/// (`prefilter`): on Grace at 256 × 128, 315 texels on 40 rows.
+/// value); texels at the same place add, texels off the grid are left out. Each lit row's
+/// Fourier sums are taken directly, Σ_texels v {cos, sin}(mφ_x) with mφ_x = πm(2x + 1)/W read
+/// from a table of the 2W multiples of π/W (no recurrence error): O(texels · F), where the
+/// image's path pays an image, a scan of every row and an FFT per lit row and channel. The
+/// bright texels' excess goes this way (`prefilter`): on Grace at 256 × 128, 315 texels in 31
+/// mirrored pairs of rows.
 pub fn project_latlong_texels(
     (w, h): (usize, usize),
     texels: &[(usize, usize, [f64; 3])],
@@ -199,7 +200,7 @@ pub fn project_latlong_texels(
     let turns: Vec<(f64, f64)> = (0..2 * w).map(|j| (PI * j as f64 / w as f64).sin_cos()).collect();
     let mut sums = vec![0.0; pairs.len() * rows.stride()];
     sums.par_chunks_mut(rows.stride()).zip(&pairs).for_each(|(out, &(y, mirror))| {
-        // [row of the pair][channel][m][cos or sin]
+        // [row of the pair][m][channel][cos or sin]
         let mut row_sums = [vec![[[0.0; 2]; 3]; order + 1], vec![[[0.0; 2]; 3]; order + 1]];
         for (row, sum) in std::iter::once(y).chain(mirror).zip(row_sums.iter_mut()) {
             for &&(x, _, v) in row_texels(row) {
