@@ -426,7 +426,7 @@ pub fn radial_truncation(u: impl Fn(f64) -> f64, epsilon: f64) -> Truncation {
     // each of 512 equal panels in γ (node spacing ~π/2000, as fine near the axis as a 2000-node
     // rule in cos γ, without solving for its nodes), then the first node where it reaches 1 − ε.
     // The nodes (γ, cos γ, weight × sin γ) are the same for every lobe: computed once, they
-    // leave 2 048 evaluations of u (77 → 5 µs for Phong).
+    // leave 2 048 evaluations of u (77 → 16 µs for Phong).
     const PANELS: usize = 512;
     static NODES: OnceLock<Vec<(f64, f64, f64)>> = OnceLock::new();
     let nodes = NODES.get_or_init(|| {

@@ -182,7 +182,7 @@ const FIRST_PROJECTION_SHARE: f64 = 0.01;
 /// reflected radiance the floor is a fraction of. The bound then barely moves e(F), so the rule
 /// decides F_B at this L unless the projected bands alone come within 1 % of ε at F_B − 1; and
 /// L is no larger than it must be: the projection's cost grows as L² (Phong s = 128 on Grace at
-/// 256×128: L = 60 where twice the band at which w_l falls to 10⁻³ was 84, for F_B = 52).
+/// 256×128: L = 65 where twice the band at which w_l falls to 10⁻³ was 84, for F_B = 52).
 pub fn first_projection(
     model: &Model,
     brdf: &BrdfSh,
