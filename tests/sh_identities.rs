@@ -302,9 +302,9 @@ fn the_texel_integral_projection_integrates_each_texel() {
 #[test]
 fn the_texels_projection_is_the_image_projection_of_those_texels() {
     // The same sparse map as above given as texels (the odd height's middle row, a row and its
-    // mirror, a row whose mirror is black), one of them split in two at the same place: each
-    // row's Fourier sums taken directly must give the image path's coefficients (FFT) for both
-    // quadratures, to rounding.
+    // mirror, a row whose mirror is black), one of them split in two at the same place, and two
+    // off the grid (left out): each row's Fourier sums taken directly must give the image path's
+    // coefficients (FFT) for both quadratures, to rounding.
     let (w, h, order) = (24, 13, 10);
     let lit: [(usize, usize, f64); 4] = [(3, 2, 7.0), (17, 10, 2.0), (5, 4, 3.0), (20, 6, 5.0)];
     let mut img = RgbImage::new(w, h);
@@ -315,6 +315,8 @@ fn the_texels_projection_is_the_image_projection_of_those_texels() {
     }
     texels[0].2 = [3.0, 1.5, 6.0];
     texels.push((3, 2, [4.0, 2.0, 8.0]));
+    // Off the grid: left out.
+    texels.extend([(w, 0, [9.0; 3]), (0, h, [9.0; 3])]);
     for quadrature in [TexelQuadrature::Midpoint, TexelQuadrature::Integral { z_nodes: 2 }] {
         let image = project_latlong(&img, order, quadrature, &NoProgress).unwrap();
         let direct = project_latlong_texels((w, h), &texels, order, quadrature).unwrap();

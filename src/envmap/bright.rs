@@ -479,6 +479,59 @@ mod tests {
         assert!(split(&sky_with_sun(), BrightRule::Off).1.is_empty());
     }
 
+    /// The split against its definition, texel by texel: every texel with Y > T and no other is
+    /// bright, with excess L(1 − T/Y) and the remainder L·T/Y, and the energy shares are
+    /// Σ (Y − T) ΔΩ / Σ Y ΔΩ and Σ (Y² − T²) ΔΩ / Σ Y² ΔΩ over all texels. For the automatic
+    /// threshold and given ones (inside a histogram bin, on a bin's edge, below every texel), on
+    /// a lat-long map and on a cube cross (unmapped texels, solid angles per texel).
+    #[test]
+    fn the_split_moves_exactly_the_texels_above_the_threshold() {
+        let sky = sky_with_sun();
+        let cross = super::super::resample(&sky, super::super::Layout::CrossHorizontal, 96, 72, 2).unwrap();
+        for (name, map) in [("lat-long", sky), ("cross", cross)] {
+            let edge = f32::from_bits((histogram_bin(2.0) << 21) as u32) as f64;
+            for rule in
+                [BrightRule::Auto, BrightRule::Threshold(1.7), BrightRule::Threshold(edge), BrightRule::Threshold(-1.0)]
+            {
+                let (rest, bright) = split(&map, rule);
+                let t = bright.threshold;
+                if let BrightRule::Threshold(given) = rule {
+                    assert_eq!(t, given);
+                }
+                let (mut total, mut total2, mut above, mut above2, mut count) = (0.0, 0.0, 0.0, 0.0, 0);
+                let mut texels = bright.texels.iter();
+                for (face, img) in map.images().iter().enumerate() {
+                    for y in 0..img.height {
+                        for x in 0..img.width {
+                            let Some((dir, omega)) = map.texel_geometry(face, x, y) else { continue };
+                            let (px, l) = (img.get(x, y), luminance(img.get(x, y)));
+                            let kept = rest.images()[face].get(x, y);
+                            total += l * omega;
+                            total2 += l * l * omega;
+                            if l <= t {
+                                assert_eq!(kept, px, "{name} {rule:?}: ({face}, {x}, {y}) moved");
+                                continue;
+                            }
+                            count += 1;
+                            above += (l - t) * omega;
+                            above2 += (l * l - t * t) * omega;
+                            let texel = texels.next().expect("a bright texel for every texel above T");
+                            assert!(texel.dir.abs_diff_eq(dir, 1e-12) && texel.solid_angle == omega, "{name} {rule:?}");
+                            for c in 0..3 {
+                                let v = px[c] as f64;
+                                assert!((texel.excess[c] - v * (1.0 - t / l)).abs() <= 1e-12 * v, "{name} {rule:?}");
+                                assert!((kept[c] as f64 - v * t / l).abs() <= 1e-6 * v, "{name} {rule:?}");
+                            }
+                        }
+                    }
+                }
+                assert_eq!(bright.texels.len(), count, "{name} {rule:?}");
+                assert!((bright.energy_fraction - above / total).abs() <= 1e-12, "{name} {rule:?}");
+                assert!((bright.squared_fraction - above2 / total2).abs() <= 1e-12, "{name} {rule:?}");
+            }
+        }
+    }
+
     #[test]
     fn the_histogram_finds_the_full_sorts_threshold() {
         // The definition: sort all texels by luminance, brightest first, take Q at the one where
