@@ -55,7 +55,8 @@ impl Phong {
 }
 
 /// x^s for x in [0, 1]: by repeated multiplication when s is an integer (an exact product
-/// rounded at most 2·log₂ s times, about 20 times faster than `powf`), else `powf`.
+/// rounded at most 2·log₂ s times; 1.5–2 times faster than `powf` for s = 8–512, measured over
+/// 10⁵ values), else `powf`.
 #[inline]
 pub fn power(x: f64, s: f64) -> f64 {
     if s.fract() == 0.0 && s.abs() <= i32::MAX as f64 {
