@@ -96,8 +96,8 @@ pub fn beyond(
     let first = (0..grid.height).rev().find(|&y| grid.row_theta(y) <= min_theta_o).unwrap_or(0);
     let rows = filter_rows(&source, model, cutoff, first);
     // Row by row, each texel's direction from its row's and column's sines and cosines (those
-    // of `texel_direction`, computed once): a whole map read back took 3 ms of libm calls on
-    // Grace at 256×128, more than its lookups.
+    // of `texel_direction`, computed once), and the view angle only when there is a threshold:
+    // the read-back and what follows it, Grace at 256×128, σ = 0.1 grazing, 3.2 → 2.3 ms.
     let columns: Vec<(f64, f64)> = (0..out.width).map(|x| out.column_phi(x).sin_cos()).collect();
     let read_back: Vec<Vec<(usize, [f32; 3])>> = (0..out.height)
         .into_par_iter()
