@@ -106,3 +106,55 @@ fn grace_matches_ramamoorthi_hanrahan_2001() {
         }
     }
 }
+
+/// Mean luminance of each face of level 0 of an RGBA16F KTX2 cube, read with the `ktx2` crate
+/// (an independent reader), in file order +X, −X, +Y, −Y, +Z, −Z.
+fn face_luminance(ktx2_file: &std::path::Path) -> [f64; 6] {
+    let bytes = std::fs::read(ktx2_file).unwrap();
+    let reader = ktx2::Reader::new(&bytes[..]).unwrap();
+    assert_eq!(reader.header().format, Some(ktx2::Format::R16G16B16A16_SFLOAT));
+    let level = reader.levels().next().unwrap();
+    let texels: Vec<f64> =
+        level.data.chunks_exact(2).map(|b| half::f16::from_le_bytes([b[0], b[1]]).to_f64()).collect();
+    let per_face = texels.len() / 6;
+    std::array::from_fn(|f| {
+        let face = &texels[f * per_face..(f + 1) * per_face];
+        let sum: f64 = face.chunks_exact(4).map(|t| 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]).sum();
+        sum / (per_face / 4) as f64
+    })
+}
+
+/// The README's `ibl` example: pbrt's `grace_latlong.exr` stores the floor in row 0, so it bakes
+/// upright only with `--flip-vertical`. In the glTF frame (+Y up) the cathedral's lit vault must
+/// then be on +Y and its dark floor on −Y, in the cube (read back by an independent KTX2 reader)
+/// and in the SH irradiance (the y coefficient, Y_1,−1 ∝ y, positive). Without the flip both
+/// are upside down, which is what the option is for.
+#[test]
+fn the_readmes_ibl_example_bakes_grace_with_the_vault_on_plus_y() {
+    let Some(dir) = shared() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let bake = |name: &str, flip: bool| {
+        let out = tmp.path().join(name);
+        let mut ibl = std::process::Command::new(env!("CARGO_BIN_EXE_ibl"));
+        ibl.arg(dir.join("grace_latlong.exr")).arg("-o").arg(&out).args(["--samples", "0", "-q"]);
+        if flip {
+            ibl.arg("--flip-vertical");
+        }
+        assert!(ibl.status().unwrap().success());
+        let sh: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("sh.json")).unwrap()).unwrap();
+        let y_rgb: Vec<f64> = sh["coefficients"][1].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        (face_luminance(&out.join("specular.ktx2")), y_rgb, sh)
+    };
+    let (upright, y, sh) = bake("upright", true);
+    let (brightest, _) = upright.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap();
+    assert_eq!(brightest, 2, "+Y must be the brightest face: {upright:?}");
+    assert!(upright[2] > 3.0 * upright[3], "vault (+Y) against floor (−Y): {upright:?}");
+    assert!(y.iter().all(|&c| c > 0.0), "SH y coefficient {y:?}");
+    assert!(sh["conventions"]["input_orientation"].as_str().unwrap().starts_with("flipped vertically"));
+    assert_eq!(sh["frame"]["flip_vertical"], serde_json::Value::Bool(true));
+
+    let (stored, y, _) = bake("as-stored", false);
+    assert!(stored[3] > 3.0 * stored[2], "as stored, the vault is on −Y: {stored:?}");
+    assert!(y.iter().all(|&c| c < 0.0), "as stored, SH y coefficient {y:?}");
+    eprintln!("face luminance +X −X +Y −Y +Z −Z, flipped: {upright:.4?}, as stored: {stored:.4?}");
+}

@@ -5,7 +5,7 @@
 
 use super::common::Context;
 use crate::brdf::Brdf;
-use crate::envmap::{EnvMap, Layout, LoadOptions, NegativePolicy};
+use crate::envmap::{EnvMap, Layout, LoadOptions, NegativePolicy, Orientation};
 use crate::factor::{Channel, Domain, Method, Sampling};
 use crate::io::Output;
 use anyhow::{Context as _, Result};
@@ -61,12 +61,36 @@ pub struct EnvArgs {
     /// error.
     #[arg(long, default_value = "error")]
     pub negative: NegativePolicy,
+
+    #[command(flatten)]
+    pub orient: OrientArgs,
+}
+
+/// How an environment map is turned on reading: one declaration for every stage that reads one.
+#[derive(Clone, Copy, Debug, Default, clap::Args)]
+pub struct OrientArgs {
+    /// Mirror the map top to bottom on reading (z → −z: a lat-long map's rows reversed; cube maps
+    /// and probes to match), for files stored upside down such as pbrt's grace_latlong.exr, whose
+    /// row 0 is the floor. Documents record it (conventions.input_orientation).
+    #[arg(long)]
+    pub flip_vertical: bool,
+}
+
+impl OrientArgs {
+    /// The library's orientation.
+    pub fn orientation(self) -> Orientation {
+        if self.flip_vertical {
+            Orientation::FlipVertical
+        } else {
+            Orientation::AsStored
+        }
+    }
 }
 
 impl EnvArgs {
     /// The library's reading options.
     pub fn options(&self) -> LoadOptions {
-        LoadOptions { layout: self.layout, negative: self.negative }
+        LoadOptions { layout: self.layout, negative: self.negative, orientation: self.orient.orientation() }
     }
 
     /// The input's name in messages and documents (`<stdin>` for `-`).

@@ -2,7 +2,7 @@
 //! with the bad-pixel policy every stage shares: NaN and ±Inf are always an error, negative
 //! radiance per [`NegativePolicy`].
 
-use super::{EnvMap, EnvMapError, Layout, FACES};
+use super::{EnvMap, EnvMapError, Layout, Orientation, FACES};
 use crate::io::{self, IoError, RgbImage};
 use std::path::{Path, PathBuf};
 
@@ -25,6 +25,8 @@ pub struct LoadOptions {
     pub layout: Option<Layout>,
     /// The negative-pixel policy.
     pub negative: NegativePolicy,
+    /// How the map is turned on reading.
+    pub orientation: Orientation,
 }
 
 /// A map read, with what the policy did to it.
@@ -90,7 +92,7 @@ impl LoadOptions {
                 faces.push(image);
             }
             let map = EnvMap::from_faces(faces).map_err(|error| LoadError::Geometry { path: path.into(), error })?;
-            return Ok(Loaded { map, clamped });
+            return Ok(Loaded { map: map.oriented(self.orientation), clamped });
         }
         self.wrap(path, io::image::read_image(path)?)
     }
@@ -118,7 +120,7 @@ impl LoadOptions {
             None => EnvMap::detect(image),
         }
         .map_err(|error| LoadError::Geometry { path: path.into(), error })?;
-        Ok(Loaded { map, clamped })
+        Ok(Loaded { map: map.oriented(self.orientation), clamped })
     }
 
     /// Applies the policy to every pixel; returns how many components were clamped.

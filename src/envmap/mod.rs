@@ -6,6 +6,7 @@ pub mod bright;
 mod cube;
 mod layout;
 mod load;
+mod orient;
 mod probe;
 pub mod resample;
 pub mod stage;
@@ -14,6 +15,7 @@ pub mod zonal;
 pub use cube::{select_face, Face, FACES};
 pub use layout::Layout;
 pub use load::{LoadError, LoadOptions, Loaded, NegativePolicy};
+pub use orient::Orientation;
 pub use probe::WORLD_FROM_PROBE;
 pub use resample::resample;
 
@@ -52,6 +54,8 @@ pub struct EnvMap {
     layout: Layout,
     /// One image, or six faces in the order +X, −X, +Y, −Y, +Z, −Z for [`Layout::Faces`].
     images: Vec<RgbImage>,
+    /// How the file was turned on reading (`orient`).
+    orientation: Orientation,
 }
 
 /// One texel: its direction (unit, +Z up), its exact solid angle and its radiance.
@@ -77,7 +81,7 @@ impl EnvMap {
                 reason: "six face images are needed".into(),
             });
         }
-        Ok(EnvMap { layout, images: vec![image] })
+        Ok(EnvMap { layout, images: vec![image], orientation: Orientation::AsStored })
     }
 
     /// Wraps one image, detecting the layout from its aspect ratio.
@@ -98,7 +102,7 @@ impl EnvMap {
                 reason: "six square faces of one size are needed".into(),
             });
         }
-        Ok(EnvMap { layout: Layout::Faces, images: faces })
+        Ok(EnvMap { layout: Layout::Faces, images: faces, orientation: Orientation::AsStored })
     }
 
     /// A lat-long map.

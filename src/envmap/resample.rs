@@ -48,7 +48,7 @@ pub fn resample(
     layout.check_size(width, height)?;
     let count = if layout == Layout::Faces { 6 } else { 1 };
     let blank: Vec<RgbImage> = (0..count).map(|_| RgbImage::new(width, height)).collect();
-    let mut dst = EnvMap { layout, images: blank };
+    let mut dst = EnvMap { layout, images: blank, orientation: src.orientation };
     let k = supersample.max(1);
     let geometry = dst.clone();
     for (face, img) in dst.images.iter_mut().enumerate() {

@@ -23,6 +23,10 @@ pub const FACE_ORIENTATION: &str = "KTX2/Vulkan cube map convention (KTXorientat
 pub struct IblBody {
     /// The input environment map.
     pub source: String,
+    /// [`crate::envmap::EnvMap::content_hash`] of the map as read (after `--flip-vertical`):
+    /// readers given a map check that it is the one baked (absent in bakes before it was added).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source_hash: Option<String>,
     /// The output frame.
     pub frame: Frame,
     /// The prefiltered specular cube.
@@ -64,6 +68,10 @@ pub struct Frame {
     pub rotate_degrees: f64,
     /// Whether the environment was mirrored (prtkit's y → −y before the rotation).
     pub mirror: bool,
+    /// Whether the input was flipped vertically on reading (z → −z, before everything here):
+    /// `world_from_prtkit` takes directions of the map as read, after the flip.
+    #[serde(default)]
+    pub flip_vertical: bool,
     /// The 3×3 matrix, row-major, that takes a direction of the input (prtkit's frame, +Z up) to
     /// the output frame the cube faces and SH are in: d_out = M d_prtkit.
     pub world_from_prtkit: [[f64; 3]; 3],

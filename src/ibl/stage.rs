@@ -29,7 +29,7 @@ use super::manifest::{self, Costs, IblBody, Level, ShBody};
 use super::reference::Reference;
 use super::sh_irradiance::IrradianceSh;
 use crate::envmap::zonal::ZonalError;
-use crate::envmap::{self, EnvMap, EnvMapError, Layout};
+use crate::envmap::{self, EnvMap, EnvMapError, Layout, Orientation};
 use crate::io::gpu_format::{TexelFormat, Texture, TextureError, TextureShape};
 use crate::io::{dds, ktx2, Document, Provenance};
 use crate::progress::Progress;
@@ -331,7 +331,7 @@ impl Config {
         up * DMat3::from_rotation_z(self.rotate_degrees.to_radians()) * mirror
     }
 
-    fn frame(&self) -> manifest::Frame {
+    fn frame(&self, input: Orientation) -> manifest::Frame {
         let m = self.world_from_prtkit();
         manifest::Frame {
             up: match self.up {
@@ -340,14 +340,15 @@ impl Config {
             },
             rotate_degrees: self.rotate_degrees,
             mirror: self.mirror,
+            flip_vertical: input == Orientation::FlipVertical,
             world_from_prtkit: [0, 1, 2].map(|r| [m.x_axis[r], m.y_axis[r], m.z_axis[r]]),
             faces: manifest::FACE_ORDER.iter().map(|s| s.to_string()).collect(),
             face_orientation: manifest::FACE_ORIENTATION.into(),
         }
     }
 
-    fn frame_words(&self) -> String {
-        let turned = match (self.rotate_degrees != 0.0, self.mirror) {
+    fn frame_words(&self, input: Orientation) -> String {
+        let mut turned = match (self.rotate_degrees != 0.0, self.mirror) {
             (false, false) => String::new(),
             (r, m) => format!(
                 ", environment{}{}",
@@ -355,6 +356,9 @@ impl Config {
                 if r { format!(" rotated {} degrees about up", self.rotate_degrees) } else { String::new() }
             ),
         };
+        if input == Orientation::FlipVertical {
+            turned.push_str(", input flipped vertically on reading");
+        }
         match self.up {
             Up::Y => format!("glTF world, +Y up (prtkit +Z -> +Y, +X kept, prtkit +Y -> -Z){turned}"),
             Up::Z => format!("prtkit, +Z up{turned}"),
@@ -576,7 +580,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
         },
         dfg_format,
     )?;
-    let frame_words = config.frame_words();
+    let frame_words = config.frame_words(env.orientation());
     timings.encode = t_enc.elapsed().as_secs_f64();
     timings.bake = t0.elapsed().as_secs_f64();
 
@@ -602,7 +606,8 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     let scale = "E(n)/pi: the radiance a white Lambertian surface reflects (multiply by the albedo)".to_string();
     let body = IblBody {
         source: config.source.clone(),
-        frame: config.frame(),
+        source_hash: Some(env.content_hash()),
+        frame: config.frame(env.orientation()),
         specular: manifest::Specular {
             file: format!("specular.{ext}"),
             container: ext.into(),
@@ -639,21 +644,31 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
         },
         timings,
     };
+    // The conventions block names the frame the files are in: the output frame, not prtkit's.
+    fn in_frame<T: serde::Serialize>(mut document: Document<T>, frame: &str, input: Orientation) -> Document<T> {
+        document.conventions.frame = frame.to_string();
+        document.with_input_orientation(input.describe())
+    }
     let document = Document::new(manifest::FORMAT, manifest::VERSION, provenance.clone(), body);
-    let sh_document = Document::new(
-        manifest::SH_FORMAT,
-        manifest::VERSION,
-        provenance,
-        ShBody {
-            frame: config.frame(),
-            basis: ["1", "y", "z", "x", "x*y", "y*z", "3*z*z - 1", "x*z", "x*x - y*y"]
-                .iter()
-                .map(|s| s.to_string())
-                .collect(),
-            scale,
-            coefficients: sh.shader.to_vec(),
-            radiance: sh.radiance.rgb.clone(),
-        },
+    let document = in_frame(document, &frame_words, env.orientation());
+    let sh_document = in_frame(
+        Document::new(
+            manifest::SH_FORMAT,
+            manifest::VERSION,
+            provenance,
+            ShBody {
+                frame: config.frame(env.orientation()),
+                basis: ["1", "y", "z", "x", "x*y", "y*z", "3*z*z - 1", "x*z", "x*x - y*y"]
+                    .iter()
+                    .map(|s| s.to_string())
+                    .collect(),
+                scale,
+                coefficients: sh.shader.to_vec(),
+                radiance: sh.radiance.rgb.clone(),
+            },
+        ),
+        &frame_words,
+        env.orientation(),
     );
     let files = vec![
         (format!("specular.{ext}"), specular_bytes),

@@ -17,11 +17,15 @@ pub struct Conventions {
     pub frame: String,
     /// Spherical harmonic basis and ordering.
     pub sh: String,
+    /// How the input environment map was turned on reading (`as stored`, or flipped
+    /// vertically), in documents made from one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_orientation: Option<String>,
 }
 
 impl Default for Conventions {
     fn default() -> Self {
-        Conventions { frame: FRAME_CONVENTION.into(), sh: SH_CONVENTION.into() }
+        Conventions { frame: FRAME_CONVENTION.into(), sh: SH_CONVENTION.into(), input_orientation: None }
     }
 }
 
@@ -76,6 +80,13 @@ impl<T: Serialize> Document<T> {
     /// A document of `format` version `version` with the standard conventions.
     pub fn new(format: &str, version: u32, provenance: Provenance, body: T) -> Self {
         Document { format: format.to_string(), version, conventions: Conventions::default(), provenance, body }
+    }
+
+    /// The document of a stage that read an environment map: records how the map was turned on
+    /// reading (`envmap::Orientation::describe`).
+    pub fn with_input_orientation(mut self, words: &str) -> Self {
+        self.conventions.input_orientation = Some(words.to_string());
+        self
     }
 
     /// Pretty JSON with a trailing newline; floats are written with round-trip precision.

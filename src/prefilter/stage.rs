@@ -471,14 +471,12 @@ pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> 
         verification,
         timings,
     };
-    Ok(Output {
-        document: Document::new(FORMAT, VERSION, provenance, body),
-        maps,
-        shrm_layers,
-        kautz_mccool,
-        irradiance,
-        summary,
-    })
+    let document = Document::new(FORMAT, VERSION, provenance, body);
+    let document = match lighting {
+        Lighting::Map(env) => document.with_input_orientation(env.orientation().describe()),
+        Lighting::Coefficients(_) => document,
+    };
+    Ok(Output { document, maps, shrm_layers, kautz_mccool, irradiance, summary })
 }
 
 /// A lat-long image in the output layout (a cross is resampled at 4n × 3n, n = H/2).

@@ -224,7 +224,9 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
         project_seconds,
     };
     let (reconstruction, irradiance) = (reconstruction.map(|r| r.0), irradiance.map(|r| r.0));
-    Ok(Output { document: Document::new(FORMAT, VERSION, provenance, body), reconstruction, irradiance, summary })
+    let document =
+        Document::new(FORMAT, VERSION, provenance, body).with_input_orientation(map.orientation().describe());
+    Ok(Output { document, reconstruction, irradiance, summary })
 }
 
 /// Synthesizes `coeffs` convolved with the zonal `kernel` (Â_l for irradiance, 1 for a

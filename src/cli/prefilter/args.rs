@@ -55,6 +55,9 @@ pub struct Args {
     #[arg(long, default_value = "error")]
     pub negative: crate::envmap::NegativePolicy,
 
+    #[command(flatten)]
+    pub orient: crate::cli::options::OrientArgs,
+
     /// Lighting as a `prtkit.sh` document from sh-project (`-`: stdin) instead of a map
     /// (frequency method).
     #[arg(long, value_name = "SH.json", conflicts_with = "env")]
