@@ -936,6 +936,81 @@ fn fail_fast_outputs_are_checked_before_the_inputs_are_read() {
     }
 }
 
+#[test]
+fn fail_fast_an_output_named_for_a_format_it_cannot_hold_is_refused_before_the_inputs_are_read() {
+    let w = world();
+    let missing = text(&w.root.join("missing.exr"));
+    // Each output's name says a format the stage cannot write there; the input is missing too,
+    // so an error naming the output shows it was checked first.
+    let runs = [
+        run("render", &[&missing, "-o", "r2.jpg"]),
+        run("render", &[&missing, "--png", "r.exr"]),
+        run("render", &[&missing, "--panel", "p.exr"]),
+        run("sample-shader", &[&missing, "-o", "t.jpg"]),
+        run("sample-shader", &[&missing, "--layers", "t.png"]),
+        run("sh-project", &[&missing, "-o", "s.json", "--reconstruct", "r.tiff"]),
+        run("prefilter", &[&missing, "--brdf", "lambert", "--reflection-map", "m.jpg"]),
+        run("prefilter", &[&missing, "--brdf", "lambert", "--shrm", "s.png"]),
+        run("convert", &[&missing, "-o", "c.hdr"]),
+        run("factor-brdf", &["phong:s=8", "--resolution", "2000", "--factors", "f.png"]),
+    ];
+    for r in runs {
+        let dir = w.run_dir(&format!("format-{}-{}", r.stage, r.args.len()));
+        let out = r.output_in(&dir);
+        let stderr = common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{r:?}: {stderr}");
+        assert!(stderr.contains("unknown output format") && !stderr.contains("missing.exr"), "{r:?}: {stderr}");
+        assert!(entries(&dir).is_empty(), "{r:?} wrote {:?}", entries(&dir));
+    }
+}
+
+#[test]
+fn a_missing_output_directory_is_refused_naming_it_and_never_created() {
+    let w = world();
+    // One rule (docs/cli.md): a run creates the directory it is given as an output (ibl -o DIR,
+    // --views-dir, --maps, convert --to faces), never the path to it, and writes files only into
+    // directories that exist.
+    let runs = [
+        run("prefilter", &[&w.sky, "--brdf", "phong:s=8", "--reflection-map", "nd1/x.exr"]),
+        run("prefilter", &[&w.sky, "--brdf", "phong:s=8", "-o", "nd1/x.json"]),
+        run("prefilter", &[&w.sky, "--brdf", "phong:s=8", "--views", "2", "--views-dir", "nd1/views"]),
+        run("ibl", &[&w.sky, "-o", "nd1/deep/bake"]),
+        run("convert", &[&w.sky, "--to", "faces", "-o", "nd1/faces"]),
+        run("factor-brdf", &["phong:s=8", "--resolution", "8", "-o", "f.json", "--maps", "nd1/maps"]),
+        run("sh-project", &[&w.sky, "-o", "nd1/s.json"]),
+    ];
+    for r in runs {
+        let dir = w.run_dir(&format!("missing-dir-{}-{}", r.stage, r.args.len()));
+        let out = r.output_in(&dir);
+        let stderr = common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{r:?}: {stderr}");
+        assert!(stderr.contains("nd1") && stderr.contains("does not exist"), "{r:?}: {stderr}");
+        assert!(entries(&dir).is_empty(), "{r:?} created {:?}", entries(&dir));
+    }
+    // The directory given as the output itself is created when its parent exists.
+    let dir = w.run_dir("new-dir");
+    run("ibl", &[&w.sky, "-o", "bake", "--size", "8", "--min-size", "8", "--samples", "0", "-q"]).succeed_in(&dir);
+    assert!(dir.join("bake/ibl.json").is_file());
+}
+
+#[test]
+fn usage_errors_say_which_stage_refused_and_suggest_a_brdf_for_a_slip() {
+    for stage in STAGES {
+        let out = cmd(stage).arg("--no-such-flag").output().unwrap();
+        let stderr = common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{stage}: {stderr}");
+        assert!(stderr.starts_with(&format!("{stage}: error: ")), "{stage}: {stderr}");
+    }
+    let out =
+        cmd("render").args(["sky.exr", "--brdf", "torance-sparrow:sigma=0.2", "--png", "r.png"]).output().unwrap();
+    let stderr = common::stderr(&out);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr.starts_with("render: error: ") && stderr.contains("did you mean \"torrance-sparrow\"?"), "{stderr}");
+    // --help and --version still print to stdout with status 0.
+    let out = cmd("ibl").arg("--version").output().unwrap();
+    assert!(out.status.success() && String::from_utf8_lossy(&out.stdout).starts_with("ibl "));
+}
+
 // ---------------------------------------------------------------------------------------------
 // --json summaries are the library's types
 

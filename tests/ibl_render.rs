@@ -197,3 +197,41 @@ fn the_grid_from_the_command_line() {
         .success();
     bad(&["--shading", "ibl", "--ibl", dds.join("ibl.json").to_str().unwrap(), "--brdf", "gltf"]);
 }
+
+/// The manifest names its source map and that map's fingerprint: `--ibl DIR` finds the manifest,
+/// and a bake given with another map (or the same map read the other way up) is refused with
+/// exit 2, naming the manifest and the map it was baked from, before any pixel is shaded.
+#[test]
+fn a_bake_is_rendered_only_with_the_map_it_was_baked_from() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = sky_pfm(dir.path(), 64, 32);
+    let out = dir.path().join("ibl");
+    cmd("ibl").arg(&env).arg("-o").arg(&out).args(["--size", "16", "--min-size", "4", "-q"]).assert().success();
+    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("ibl.json")).unwrap()).unwrap();
+    let hash = manifest["source_hash"].as_str().unwrap();
+    assert_eq!(hash, common::sky(64, 32).content_hash(), "the fingerprint of the map as read");
+
+    let render = |env: &std::path::Path, extra: &[&str]| {
+        let png = dir.path().join("r.png");
+        let _ = std::fs::remove_file(&png);
+        let run = cmd("render")
+            .arg(env)
+            .args(["--shading", "ibl", "--ibl"])
+            .arg(&out) // the directory stands for DIR/ibl.json
+            .args(["--brdf", "gltf:roughness=0.5", "--res", "8x8", "-q", "--png"])
+            .arg(&png)
+            .args(extra)
+            .output()
+            .unwrap();
+        (run.status.code(), common::stderr(&run), png.exists())
+    };
+    assert_eq!(render(&env, &[]).0, Some(0));
+
+    let other = common::write_pfm(dir.path(), "other.pfm", &latlong(64, 32, |d| [1.0 + d.z as f32; 3]));
+    for (map, extra) in [(&other, &[][..]), (&env, &["--flip-vertical"][..])] {
+        let (code, stderr, wrote) = render(map, extra);
+        assert_eq!(code, Some(2), "{stderr}");
+        assert!(stderr.contains("ibl.json") && stderr.contains("baked from") && stderr.contains("sky"), "{stderr}");
+        assert!(!wrote, "nothing written");
+    }
+}

@@ -23,6 +23,22 @@ pub const ACCEPTED: &str = "lambert[:albedo=A], phong:s=S, blinn-phong:s=S, torr
 lafortune:[kd=KD,]lobe=CXY/CZ/N[,lobe=CX/CY/CZ/N...], kajiya-kay:s=S, ggx:roughness=R, \
 gltf[:base=R/G/B,metalness=M,roughness=R], merl:PATH";
 
+/// The model names a spec can start with.
+const MODELS: [&str; 9] =
+    ["lambert", "phong", "blinn-phong", "torrance-sparrow", "lafortune", "kajiya-kay", "ggx", "gltf", "merl"];
+
+/// The model a misspelled name most likely meant: the nearest by edit distance, if within a
+/// third of its length (one slip in `ggx`, three in `torrance-sparrow`).
+fn did_you_mean(name: &str) -> Option<&'static str> {
+    let name = name.to_ascii_lowercase();
+    MODELS
+        .into_iter()
+        .map(|m| (strsim::levenshtein(&name, m), m))
+        .filter(|&(d, m)| d <= m.len().div_ceil(3))
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, m)| m)
+}
+
 /// A spec that does not parse. The message says what is wrong and what is accepted.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("invalid BRDF spec {spec:?}: {reason}")]
@@ -128,7 +144,10 @@ fn parse_analytic(spec: &str, model: String, rest: &str) -> Result<Brdf, SpecErr
             Brdf::Lafortune(Lafortune { kd, lobes })
         }
         "" => return Err(err(format!("empty model name; accepted: {ACCEPTED}"))),
-        other => return Err(err(format!("unknown BRDF model {other:?}; accepted: {ACCEPTED}"))),
+        other => {
+            let hint = did_you_mean(other).map(|m| format!(" (did you mean {m:?}?)")).unwrap_or_default();
+            return Err(err(format!("unknown BRDF model {other:?}{hint}; accepted: {ACCEPTED}")));
+        }
     };
     p.finish()?;
     Ok(parsed)
@@ -363,7 +382,10 @@ mod tests {
     #[test]
     fn errors_say_what_is_wrong_and_what_is_accepted() {
         let e = |s: &str| Brdf::parse(s).unwrap_err().to_string();
-        assert!(e("glossy:s=3").contains("unknown BRDF model \"glossy\"") && e("glossy").contains("phong:s=S"));
+        assert!(e("glossy:s=3").contains("unknown BRDF model \"glossy\";") && e("glossy").contains("phong:s=S"));
+        assert!(e("torance-sparrow:sigma=0.2").contains("(did you mean \"torrance-sparrow\"?)"));
+        assert!(e("phog:s=3").contains("(did you mean \"phong\"?)"));
+        assert!(e("gg:roughness=0.5").contains("(did you mean \"ggx\"?)"));
         assert!(e("glossy").contains("ggx:roughness=R"));
         assert!(e("phong").contains("phong needs s"));
         assert!(e("phong:s=0").contains("s must be > 0"));

@@ -5,6 +5,8 @@ use super::options::Execution;
 use std::fmt::Display;
 use std::io::IsTerminal;
 use std::process::ExitCode;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
 /// Exit status is public API (`docs/cli.md`).
 pub mod exit {
@@ -47,7 +49,7 @@ pub struct Context {
 impl Context {
     /// A context for `stage`; `quiet` silences everything on stderr but errors.
     pub fn new(stage: &'static str, quiet: bool) -> Self {
-        Context { stage, quiet, bar: Bar::new(quiet) }
+        Context { stage, quiet, bar: Bar::new(stage, quiet) }
     }
 
     /// Progress for the library's long computations.
@@ -70,7 +72,23 @@ impl Context {
 
 /// Parses the process's arguments as stage `S` and runs it (the `main` of every binary).
 pub fn main<S: Stage>() -> ExitCode {
-    run(S::parse())
+    parsed(S::NAME, S::try_parse()).map_or_else(|code| code, run)
+}
+
+/// The arguments, or the exit code of a command line that does not parse: `--help` and
+/// `--version` print to stdout (status 0); a usage error prints `<stage>: error: …` (the prefix
+/// of every other error, so a Makefile's log says which stage refused) with clap's suggestion,
+/// status 2.
+pub fn parsed<T>(stage: &str, result: Result<T, clap::Error>) -> Result<T, ExitCode> {
+    result.map_err(|err| {
+        if err.use_stderr() {
+            eprint!("{stage}: {}", err.render());
+            ExitCode::from(exit::ERROR)
+        } else {
+            let _ = err.print();
+            ExitCode::from(exit::SUCCESS)
+        }
+    })
 }
 
 /// Runs a parsed stage: installs the interruption handler, sizes its thread pool, prints errors
@@ -115,30 +133,72 @@ fn is_broken_pipe(err: &anyhow::Error) -> bool {
     })
 }
 
-/// An indicatif bar behind the library's [`crate::progress::Progress`] callback, drawn on stderr
-/// only when stderr is a terminal and `--quiet` is not given.
+/// The library's [`crate::progress::Progress`] on stderr: an indicatif bar when stderr is a
+/// terminal; otherwise (a Makefile's log, CI, a pipe) a line every [`Bar::LOG_EVERY`] while a
+/// phase runs, so a long phase is never silent and a short one adds nothing; nothing with
+/// `--quiet`.
 pub struct Bar {
-    bar: Option<indicatif::ProgressBar>,
+    view: View,
+}
+
+enum View {
+    Hidden,
+    Terminal(indicatif::ProgressBar),
+    Log(Mutex<LogState>),
+}
+
+/// The phase a log is narrating.
+struct LogState {
+    stage: &'static str,
+    label: String,
+    total: u64,
+    done: u64,
+    started: Instant,
+    last_line: Instant,
 }
 
 impl Bar {
-    /// A bar that draws only when stderr is a terminal and `quiet` is false.
-    pub fn new(quiet: bool) -> Self {
-        let visible = !quiet && std::io::stderr().is_terminal();
-        Bar { bar: visible.then(indicatif::ProgressBar::hidden) }
+    /// How often a log line reports a running phase.
+    pub const LOG_EVERY: Duration = Duration::from_secs(10);
+
+    /// A bar on a terminal, a log elsewhere, nothing when `quiet`.
+    pub fn new(stage: &'static str, quiet: bool) -> Self {
+        let view = if quiet {
+            View::Hidden
+        } else if std::io::stderr().is_terminal() {
+            View::Terminal(indicatif::ProgressBar::hidden())
+        } else {
+            let now = Instant::now();
+            View::Log(Mutex::new(LogState {
+                stage,
+                label: String::new(),
+                total: 0,
+                done: 0,
+                started: now,
+                last_line: now,
+            }))
+        };
+        Bar { view }
     }
 
     fn suspend(&self, f: impl FnOnce()) {
-        match &self.bar {
-            Some(bar) => bar.suspend(f),
-            None => f(),
+        match &self.view {
+            View::Terminal(bar) => bar.suspend(f),
+            _ => f(),
+        }
+    }
+
+    fn log(&self) -> Option<std::sync::MutexGuard<'_, LogState>> {
+        match &self.view {
+            View::Log(state) => Some(state.lock().unwrap_or_else(|poisoned| poisoned.into_inner())),
+            _ => None,
         }
     }
 }
 
 impl crate::progress::Progress for Bar {
     fn start(&self, label: &str, total: u64) {
-        if let Some(bar) = &self.bar {
+        if let View::Terminal(bar) = &self.view {
             bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
             bar.reset();
             bar.set_length(total);
@@ -149,14 +209,27 @@ impl crate::progress::Progress for Bar {
             bar.set_style(style);
             bar.set_message(label.to_string());
         }
+        if let Some(mut log) = self.log() {
+            let now = Instant::now();
+            *log = LogState { label: label.to_string(), total, done: 0, started: now, last_line: now, ..*log };
+        }
     }
     fn advance(&self, n: u64) {
-        if let Some(bar) = &self.bar {
+        if let View::Terminal(bar) = &self.view {
             bar.inc(n);
+        }
+        if let Some(mut log) = self.log() {
+            log.done += n;
+            if log.last_line.elapsed() >= Self::LOG_EVERY && log.done < log.total {
+                log.last_line = Instant::now();
+                let percent = 100.0 * log.done as f64 / log.total.max(1) as f64;
+                let elapsed = log.started.elapsed().as_secs();
+                eprintln!("{}: {} {}/{} ({percent:.0} %, {elapsed} s)", log.stage, log.label, log.done, log.total);
+            }
         }
     }
     fn finish(&self) {
-        if let Some(bar) = &self.bar {
+        if let View::Terminal(bar) = &self.view {
             bar.finish_and_clear();
         }
     }

@@ -4,7 +4,7 @@ mod args;
 
 use super::common::{Context, Outcome, Stage};
 use super::options::{parse_output, Execution};
-use super::outputs::{check_writable, Outputs};
+use super::outputs::{check_output_dir, check_outputs, Holds, Outputs};
 use crate::envmap::stage::{self, Config};
 use crate::envmap::{Layout, FACES};
 use crate::io::Output;
@@ -27,9 +27,9 @@ impl Stage for Args {
         let config = Config::try_from(&self)?;
         let single = parse_output(&self.output.to_string_lossy()).map_err(anyhow::Error::msg)?;
         if self.to != Layout::Faces {
-            check_writable([&single])?;
-        } else if let Some(parent) = self.output.parent().filter(|p| !p.as_os_str().is_empty()) {
-            check_writable([&Output::File(parent.join("faces"))])?;
+            check_outputs([(&single, Holds::Image)])?;
+        } else {
+            check_output_dir(&self.output)?;
         }
         let map = self.input.load(ctx)?;
         let out = stage::run(&config, &map)?;

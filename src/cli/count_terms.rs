@@ -5,7 +5,7 @@ mod args;
 
 use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
-use super::outputs::{check_writable, Outputs};
+use super::outputs::{check_outputs, Holds, Outputs};
 use crate::brdf::Brdf;
 use crate::factor::count::{self, CountConfig, Material};
 use crate::factor::{manifest, plot};
@@ -69,7 +69,7 @@ impl Stage for Args {
             Some(Output::Stdout) => None,
             _ => Some(Output::Stdout),
         };
-        check_writable(self.plot.iter().chain(&table))?;
+        check_outputs(self.plot.iter().chain(&table).map(|o| (o, Holds::Text)))?;
         let config = CountConfig::try_from(&self)?;
         let out = count::run(&config, self.materials()?, ctx.progress())?;
 

@@ -3,7 +3,7 @@
 
 use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
-use super::outputs::Outputs;
+use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::{document::to_json_pretty, read_bytes, Output};
 use crate::normals::sources::{write_normals, NormalSource};
 use crate::normals::{decode, encode, pack::Stream, report, shader, table, Codec, NormalsError};
@@ -35,7 +35,7 @@ impl TryFrom<&Args> for Mode {
         let input = a.input.clone().context("missing INPUT (or use --table / --emit-decoder)")?;
         let output = a.output.as_deref().map(Output::parse);
         let outputs = [output, a.report.as_deref().map(Output::parse), a.decoded.clone().map(Output::File)];
-        outputs.iter().flatten().try_for_each(Output::check_writable)?;
+        check_outputs(outputs.iter().flatten().map(|o| (o, Holds::Text)))?;
         if a.decode {
             let config = match &a.header {
                 Some(path) => decode::Config::from_report(&report::read(path)?.body),

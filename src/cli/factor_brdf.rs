@@ -4,7 +4,7 @@ mod args;
 
 use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
-use super::outputs::{check_writable, Outputs};
+use super::outputs::{check_output_dir, check_outputs, Holds, Outputs};
 use crate::factor::stage::{self, Config};
 use crate::io::{self, Output};
 use anyhow::Result;
@@ -34,7 +34,10 @@ impl Stage for Args {
     fn run(self, ctx: &Context) -> Result<Outcome> {
         super::options::check_json_output(&self.output, self.json)?;
         let factors_out = self.factors.clone().map(Output::File);
-        check_writable(std::iter::once(&self.output).chain(&factors_out))?;
+        check_outputs(std::iter::once((&self.output, Holds::Text)).chain(factors_out.iter().map(|o| (o, Holds::Exr))))?;
+        if let Some(dir) = &self.maps {
+            check_output_dir(dir)?;
+        }
         let config = Config::try_from(&self)?;
         let out = stage::run(&config, &self.brdf, ctx.progress())?;
 

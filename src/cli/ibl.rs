@@ -5,7 +5,7 @@ mod args;
 
 use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
-use super::outputs::Outputs;
+use super::outputs::{check_output_dir, Outputs};
 use crate::ibl::stage::{self, Config};
 use crate::io::Output;
 use anyhow::{bail, Result};
@@ -50,10 +50,8 @@ impl Stage for Args {
                 bail!("{}: exists and is not an empty directory", self.output.display());
             }
         }
-        // Before the long work: the nearest existing ancestor (or DIR itself) must take files.
-        let existing = self.output.ancestors().find(|p| p.as_os_str().is_empty() || p.exists());
-        let existing = existing.filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-        Output::File(existing.join("ibl.json")).check_writable()?;
+        // Before the long work: DIR's parent exists (DIR is created, not the path to it).
+        check_output_dir(&self.output)?;
         let map = self.input.load(ctx)?;
         let out = stage::run(&config, &map, ctx.progress())?;
 

@@ -58,18 +58,73 @@ impl Outputs {
     }
 }
 
-/// Checks, before long work, that every output can be written (its directory exists and is
-/// writable) and that standard output is claimed at most once.
-pub fn check_writable<'a>(outputs: impl IntoIterator<Item = &'a Output>) -> Result<()> {
+/// What an output will hold, which decides the file names that fit it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Holds {
+    /// A document, a table or a plot: any name.
+    Text,
+    /// An image, in the format its extension names: `.exr`, `.pfm` or `.png` (tone-mapped);
+    /// EXR on standard output.
+    Image,
+    /// A tone-mapped picture: `.png`.
+    Png,
+    /// Linear data in layers: `.exr`.
+    Exr,
+}
+
+impl Holds {
+    /// Whether `output` can hold this.
+    fn check(self, output: &Output) -> Result<()> {
+        let Output::File(path) = output else { return Ok(()) };
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        let fits = match self {
+            Holds::Text => true,
+            Holds::Image => matches!(ext.as_deref(), Some("exr" | "pfm" | "png")),
+            Holds::Png => ext.as_deref() == Some("png"),
+            Holds::Exr => ext.as_deref() == Some("exr"),
+        };
+        if !fits {
+            let expected = match self {
+                Holds::Text => "",
+                Holds::Image => ".exr, .pfm or .png",
+                Holds::Png => ".png",
+                Holds::Exr => ".exr",
+            };
+            anyhow::bail!("{}: unknown output format: the name must end in {expected}", path.display());
+        }
+        Ok(())
+    }
+}
+
+/// Checks every output before the work starts, so that a run never computes for minutes and
+/// then fails to write: its name fits what it will hold, its directory exists (a missing one is
+/// refused, never created: `docs/cli.md`) and takes files, and standard output is claimed at
+/// most once.
+pub fn check_outputs<'a>(outputs: impl IntoIterator<Item = (&'a Output, Holds)>) -> Result<()> {
     let mut stdout = 0;
-    for output in outputs {
+    for (output, holds) in outputs {
         if *output == Output::Stdout {
             stdout += 1;
         }
+        holds.check(output)?;
         output.check_writable()?;
     }
     if stdout > 1 {
         anyhow::bail!("only one output can go to standard output (-)");
     }
+    Ok(())
+}
+
+/// Checks a directory that a run creates for its outputs (`ibl -o DIR`, `--views-dir DIR`):
+/// its parent must exist, as for every output file (one rule: a run creates the directory it
+/// is given, never the path to it), and take files.
+pub fn check_output_dir(dir: &Path) -> Result<()> {
+    if dir.is_dir() {
+        return Output::File(dir.join(".prtkit-probe")).check_writable().map_err(Into::into);
+    }
+    if dir.exists() {
+        anyhow::bail!("{}: exists and is not a directory", dir.display());
+    }
+    Output::File(dir.to_path_buf()).check_writable()?;
     Ok(())
 }

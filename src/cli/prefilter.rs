@@ -5,7 +5,7 @@ mod args;
 use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
 use super::options::{check_json_output, read_sh_document, EnvArgs};
-use super::outputs::{check_writable, Outputs};
+use super::outputs::{check_output_dir, check_outputs, Holds, Outputs};
 use crate::io::Output;
 use crate::prefilter::hybrid::MapsFrom;
 use crate::prefilter::pipeline::Lighting;
@@ -14,6 +14,7 @@ use crate::prefilter::verify::Verification;
 use crate::sh::window::Window;
 use anyhow::{bail, Result};
 pub use args::*;
+use std::path::PathBuf;
 
 impl TryFrom<&Args> for Config {
     type Error = anyhow::Error;
@@ -61,20 +62,30 @@ impl Stage for Args {
         if let Some(o) = &document {
             check_json_output(o, self.json)?;
         }
-        // Reflection maps go into directories made for them; the other files must be writable.
+        if self.sh.is_some() && self.orient.flip_vertical {
+            bail!("--flip-vertical turns an environment map as it is read; an SH document is already in its frame");
+        }
+        // --icosahedral and --views-dir are directories this run creates; every other file goes
+        // into a directory that exists.
         let map_files = self.map_files()?;
-        let files: Vec<Output> = self
-            .shrm
-            .iter()
-            .chain(&self.kautz_mccool)
-            .chain(&self.irradiance)
-            .map(|p| Output::File(p.clone()))
-            .collect();
-        check_writable(document.iter().chain(&files))?;
+        let new_dirs: Vec<&PathBuf> = self.icosahedral.iter().chain(&self.views_dir).collect();
+        new_dirs.iter().try_for_each(|dir| check_output_dir(dir))?;
+        let file = |p: &PathBuf| Output::File(p.clone());
+        let maps: Vec<Output> = self.reflection_map.iter().chain(&self.irradiance).map(file).collect();
+        let layers: Vec<Output> = self.shrm.iter().chain(&self.kautz_mccool).map(file).collect();
+        check_outputs(
+            (document.iter().map(|o| (o, Holds::Text)))
+                .chain(maps.iter().map(|o| (o, Holds::Image)))
+                .chain(layers.iter().map(|o| (o, Holds::Exr))),
+        )?;
         let config = Config::try_from(&self)?;
 
-        let env_args =
-            self.env.as_ref().map(|path| EnvArgs { path: path.clone(), layout: self.layout, negative: self.negative });
+        let env_args = self.env.as_ref().map(|path| EnvArgs {
+            path: path.clone(),
+            layout: self.layout,
+            negative: self.negative,
+            orient: self.orient,
+        });
         let map = env_args.as_ref().map(|e| e.load(ctx)).transpose()?;
         let coefficients = match &self.sh {
             Some(path) => Some(read_sh_document(path)?),
@@ -99,13 +110,10 @@ impl Stage for Args {
         }
 
         let mut outputs = Outputs::new();
-        for dir in self.icosahedral.iter().chain(&self.views_dir) {
+        for dir in new_dirs {
             outputs.create_dir(dir)?;
         }
         for ((path, _), image) in map_files.iter().zip(&out.maps) {
-            if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-                outputs.create_dir(dir)?;
-            }
             outputs.image(&Output::File(path.clone()), image, self.exposure.stops)?;
         }
         if let (Some(path), Some(image)) = (&self.irradiance, &out.irradiance) {

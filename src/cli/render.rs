@@ -5,7 +5,7 @@ mod args;
 
 use super::common::{Context, Outcome, Stage};
 use super::options::{read_sh_document, Execution};
-use super::outputs::{check_writable, Outputs};
+use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::{self, Output};
 use crate::render::grid::MaterialGrid;
 use crate::render::ibl::IblBake;
@@ -51,7 +51,10 @@ impl Args {
                 }
             }
             ShadingArg::Ibl => {
-                let doc = self.ibl.as_ref().context("--shading ibl needs --ibl DIR/ibl.json (from ibl -o DIR)")?;
+                let doc =
+                    self.ibl.as_ref().context("--shading ibl needs --ibl DIR (from ibl -o DIR) or DIR/ibl.json")?;
+                // The bake's directory stands for its manifest.
+                let doc = if doc.is_dir() { doc.join("ibl.json") } else { doc.clone() };
                 let grid = self.grid.then(|| MaterialGrid {
                     roughness: self.grid_roughness.clone(),
                     metalness: self.grid_metalness.clone(),
@@ -59,7 +62,7 @@ impl Args {
                 if let Some(g) = &grid {
                     g.check().map_err(anyhow::Error::msg)?; // before reading the bake
                 }
-                Shading::Ibl { bake: Box::new(IblBake::load(doc)?), grid }
+                Shading::Ibl { bake: Box::new(IblBake::load(&doc)?), grid }
             }
             ShadingArg::Reference => Shading::Reference { integrand: self.integrand },
         })
@@ -104,7 +107,18 @@ impl Stage for Args {
             bail!("--grid is for --shading ibl");
         }
         let json_out = self.json.then_some(Output::Stdout);
-        check_writable(self.outputs().chain(&json_out))?;
+        check_outputs(
+            [
+                (&self.output, Holds::Image),
+                (&self.png, Holds::Png),
+                (&self.error_image, Holds::Image),
+                (&self.metrics, Holds::Text),
+                (&self.panel, Holds::Png),
+                (&json_out, Holds::Text),
+            ]
+            .into_iter()
+            .filter_map(|(o, holds)| o.as_ref().map(|o| (o, holds))),
+        )?;
         let camera = Camera::look_at(self.eye, self.target, self.fov, self.res.0, self.res.1)?;
         let scene = if self.scene == "sphere" {
             Scene::unit_sphere()

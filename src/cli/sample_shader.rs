@@ -4,7 +4,7 @@ mod args;
 
 use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
-use super::outputs::{check_writable, Outputs};
+use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::{self, Output, RgbImage};
 use crate::shader::sampler::{Arith, Domain};
 use crate::shader::stage::{self, comparison_table, Config};
@@ -49,7 +49,11 @@ impl Stage for Args {
     }
     fn run(self, ctx: &Context) -> Result<Outcome> {
         let json_out = self.json.then_some(Output::Stdout);
-        check_writable(self.output.iter().chain(&self.layers).chain(&self.stats).chain(&json_out))?;
+        check_outputs(
+            (self.output.iter().map(|o| (o, Holds::Image)))
+                .chain(self.layers.iter().map(|o| (o, Holds::Exr)))
+                .chain(self.stats.iter().chain(&json_out).map(|o| (o, Holds::Text))),
+        )?;
         let config = Config::try_from(&self)?;
         let source = std::fs::read_to_string(&self.shader)
             .with_context(|| format!("cannot read shader {}", self.shader.display()))?;

@@ -4,7 +4,7 @@ mod args;
 
 use super::common::{Context, Outcome, Stage};
 use super::options::{check_json_output, Execution};
-use super::outputs::{check_writable, Outputs};
+use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::Output;
 use crate::sh::project::OrderChoice;
 use crate::sh::stage::{self, Config, MAX_EPSILON_ORDER};
@@ -40,7 +40,8 @@ impl Stage for Args {
     }
     fn run(self, ctx: &Context) -> Result<Outcome> {
         check_json_output(&self.output, self.json)?;
-        check_writable(std::iter::once(&self.output).chain(&self.reconstruct).chain(&self.irradiance))?;
+        let images = self.reconstruct.iter().chain(&self.irradiance).map(|o| (o, Holds::Image));
+        check_outputs(std::iter::once((&self.output, Holds::Text)).chain(images))?;
         let config = Config::try_from(&self)?;
         let map = self.input.load(ctx)?;
         let out = stage::run(&config, &map, ctx.progress())?;

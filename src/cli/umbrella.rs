@@ -36,7 +36,11 @@ enum StageArgs {
 
 /// Parses `prtkit <stage> …` and runs the stage.
 pub fn main() -> ExitCode {
-    match Cli::parse().stage {
+    let cli = match super::common::parsed("prtkit", Cli::try_parse()) {
+        Ok(cli) => cli,
+        Err(code) => return code,
+    };
+    match cli.stage {
         StageArgs::Convert(args) => run(args),
         StageArgs::ShProject(args) => run(args),
         StageArgs::Prefilter(args) => run(args),

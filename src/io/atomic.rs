@@ -131,18 +131,15 @@ impl OutputSet {
         OutputSet::default()
     }
 
-    /// Creates directory `dir` (and its missing parents) for outputs to go into. Dropped
-    /// without a commit, the set removes the directories it created, if they are still empty.
+    /// Creates directory `dir` for outputs to go into, unless it exists; its parent must exist
+    /// (a run creates the directory it is given, never the path to it). Dropped without a
+    /// commit, the set removes the directory it created, if it is still empty.
     pub fn create_dir(&mut self, dir: &Path) -> Result<(), IoError> {
-        let mut missing = Vec::new();
-        let mut d = Some(dir);
-        while let Some(p) = d.filter(|p| !p.as_os_str().is_empty() && !p.exists()) {
-            missing.push(p.to_path_buf());
-            d = p.parent();
+        if dir.is_dir() {
+            return Ok(());
         }
-        std::fs::create_dir_all(dir).map_err(|e| IoError::os(dir, e))?;
-        // Deepest first, so removing them in order empties each parent before it.
-        self.created_dirs.extend(missing);
+        std::fs::create_dir(dir).map_err(|e| IoError::os(dir, e))?;
+        self.created_dirs.push(dir.to_path_buf());
         Ok(())
     }
 
@@ -352,12 +349,16 @@ mod tests {
     #[test]
     fn directories_made_for_a_set_that_fails_are_removed_and_kept_when_it_commits() {
         let dir = tempfile::tempdir().unwrap();
-        let maps = dir.path().join("maps/k8");
+        let maps = dir.path().join("maps");
+        let err = OutputSet::new().create_dir(&maps.join("k8")).unwrap_err().to_string();
+        assert!(err.contains("maps/k8"), "the path to a directory is never created: {err}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+
         let mut set = OutputSet::new();
         set.create_dir(&maps).unwrap();
         set.add(&Output::File(maps.join("a.exr")), b"a".to_vec()).unwrap();
         drop(set);
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "maps/ and maps/k8/ are removed");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "maps/ is removed");
 
         let mut set = OutputSet::new();
         set.create_dir(&maps).unwrap();

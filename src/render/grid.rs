@@ -148,6 +148,15 @@ pub fn render_grid(
     Ok(GridRender { mosaic: mosaic(&mosaic_rows), rows, cells })
 }
 
+/// What the grid's labels say, for the lines under the picture (the font has no apostrophe).
+pub fn legend() -> Vec<String> {
+    vec![
+        "Split-sum spheres from the bake files, each above its reference (every environment texel)".into(),
+        "bake: relative RMS error against the split sum of the exact integrals (what the bake adds)".into(),
+        "ref: relative RMS error against the reference (the bake and the split sum together)".into(),
+    ]
+}
+
 /// Frames of one size tiled row by row, masks with them.
 fn mosaic(rows: &[Vec<Frame>]) -> Frame {
     let (w, h) = (rows[0][0].image.width, rows[0][0].image.height);

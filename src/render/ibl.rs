@@ -20,6 +20,7 @@
 
 use super::{Hit, Shade};
 use crate::brdf::models::GltfMaterial;
+use crate::envmap::EnvMap;
 use crate::ibl::cube::CubeMap;
 use crate::ibl::dfg::split_sum_terms;
 use crate::ibl::ggx::SplitSumLobe;
@@ -67,6 +68,28 @@ pub struct IblBake {
     /// E/π.
     irradiance: CubeMap,
     dfg: ScaleBias,
+    /// The manifest, the map it names as its source and that map's fingerprint (when recorded).
+    manifest: PathBuf,
+    source: String,
+    source_hash: Option<String>,
+}
+
+/// A bake given with a map other than the one it was made from.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{}: baked from {baked_from} ({baked_hash}), but the environment map given is another ({given_hash}); \
+     give the map the bake was made from, read the same way (flipped vertically or not)",
+    manifest.display()
+)]
+pub struct OtherSource {
+    /// The bake's manifest.
+    pub manifest: PathBuf,
+    /// The map the manifest names.
+    pub baked_from: String,
+    /// Its fingerprint in the manifest.
+    pub baked_hash: String,
+    /// The given map's fingerprint.
+    pub given_hash: String,
 }
 
 impl IblBake {
@@ -124,7 +147,31 @@ impl IblBake {
             "multiscatter" => pairs.map(|[b, e]| [e - b, b]).collect(),
             v => return Err(bad(format!("unknown DFG variant {v:?} (scale-bias or multiscatter)"))),
         };
-        Ok(IblBake { world_from_prtkit, specular, irradiance, dfg: ScaleBias { size: width, values } })
+        Ok(IblBake {
+            world_from_prtkit,
+            specular,
+            irradiance,
+            dfg: ScaleBias { size: width, values },
+            manifest: manifest.into(),
+            source: body.source,
+            source_hash: body.source_hash,
+        })
+    }
+
+    /// Whether the bake was made from `env` as read (its fingerprint, `EnvMap::content_hash`):
+    /// `Ok(false)` when the manifest predates fingerprints and cannot tell.
+    pub fn check_source(&self, env: &EnvMap) -> Result<bool, OtherSource> {
+        let Some(baked_hash) = &self.source_hash else { return Ok(false) };
+        let given_hash = env.content_hash();
+        if *baked_hash != given_hash {
+            return Err(OtherSource {
+                manifest: self.manifest.clone(),
+                baked_from: self.source.clone(),
+                baked_hash: baked_hash.clone(),
+                given_hash,
+            });
+        }
+        Ok(true)
     }
 
     /// Face size of the specular chain's level 0.

@@ -24,6 +24,7 @@ use crate::sh::convolve::clamped_cosine;
 use crate::sh::window::{self, Window, WindowReport};
 use crate::sh::ShCoeffs;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 use std::time::Instant;
 
 /// Grid bins n of a factorization made by `render` itself.
@@ -238,6 +239,9 @@ pub enum Error {
     /// The factorization failed.
     #[error(transparent)]
     Factor(#[from] crate::factor::FactorError),
+    /// The `ibl` bake was made from another map.
+    #[error(transparent)]
+    OtherSource(#[from] super::ibl::OtherSource),
     /// Comparing failed.
     #[error("comparing with {reference}: {error}")]
     Compare {
@@ -259,6 +263,9 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 r.width, r.height
             )));
         }
+    }
+    if let Shading::Ibl { bake, .. } = &config.shading {
+        bake.check_source(env)?;
     }
     let brdf = &config.brdf;
     let start = Instant::now();
@@ -408,7 +415,7 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                     let g =
                         render_grid(grid, material.base, bake, env, scene, &config.camera, progress).map_err(bad)?;
                     summary.grid = Some(g.cells);
-                    grid_panel = Some(layout_grid(&g.rows, config.exposure));
+                    grid_panel = Some(layout_grid(&g.rows, &super::grid::legend(), config.exposure));
                     (g.mosaic, "ibl grid".to_string())
                 }
             }
@@ -436,7 +443,9 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 metrics,
             };
             let provenance = Provenance::new("render", &config.args, vec![name.clone()]);
-            Some((Document::new(METRICS_FORMAT, METRICS_VERSION, provenance, body), error_image))
+            let document = Document::new(METRICS_FORMAT, METRICS_VERSION, provenance, body)
+                .with_input_orientation(env.orientation().describe());
+            Some((document, error_image))
         }
         None => None,
     };
@@ -482,7 +491,7 @@ fn windowed(
 fn panel(items: &[PanelItem], frame: &Frame, label: &str, config: &Config, metrics: Option<Metrics>) -> RgbImage {
     let with_error = |mut lines: Vec<String>, m: Option<Metrics>| {
         if let Some(m) = m.filter(|m| m.rel_error > 0.0) {
-            lines.push(format!("{:.2}%", 100.0 * m.rel_error));
+            lines.push(format!("err {:.2}%", 100.0 * m.rel_error));
         }
         lines
     };
@@ -501,5 +510,12 @@ fn panel(items: &[PanelItem], frame: &Frame, label: &str, config: &Config, metri
     if !items.iter().any(|item| item.image.is_none()) {
         cells.push(own(label));
     }
-    layout(&cells, config.exposure)
+    let legend = match &config.compare {
+        Some((name, _)) => {
+            let reference = Path::new(name).file_name().map_or(name.clone(), |f| f.to_string_lossy().into_owned());
+            vec![format!("err: relative RMS error against {reference}, over the object pixels")]
+        }
+        None => Vec::new(),
+    };
+    layout(&cells, &legend, config.exposure)
 }

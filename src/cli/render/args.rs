@@ -108,8 +108,9 @@ pub struct Args {
     #[arg(long, value_name = "auto|off|Y", default_value = "auto", value_parser = crate::cli::options::parse_bright)]
     pub bright: crate::envmap::bright::BrightRule,
 
-    /// ibl: the manifest `DIR/ibl.json` written by `ibl` (names the KTX2 files it reads).
-    #[arg(long, value_name = "IBL.json")]
+    /// ibl: the bake `ibl -o DIR` wrote: DIR, or its manifest DIR/ibl.json (which names the KTX2
+    /// files read). The environment map given must be the one baked (the manifest's source_hash).
+    #[arg(long, value_name = "DIR|IBL.json")]
     pub ibl: Option<PathBuf>,
 
     /// ibl: render a roughness × metalness grid of spheres (--res each), every one above its
