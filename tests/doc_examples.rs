@@ -35,10 +35,10 @@ const NOT_RUN: &[(&str, &str)] = &[
 const SLOW: &[(&str, &str, &str)] = &[
     (
         "docs/prefilter.md",
-        "--shrm micro.exr",
+        "--shrm $out/micro.exr",
         "reflection maps of views of a microfacet SHRM under the texel rule: > 2 min for one view at 256x128",
     ),
-    ("docs/prefilter.md", "--icosahedral ico/", "32 view maps of a microfacet BRDF under the texel rule: > 2 min"),
+    ("docs/prefilter.md", "--icosahedral $out/ico/", "32 view maps of a microfacet BRDF under the texel rule: > 2 min"),
 ];
 
 /// Tools an example may call that are not prtkit's: a block calling one that is missing is skipped.
