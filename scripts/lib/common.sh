@@ -93,3 +93,19 @@ json_row() {
   done
   printf '{%s}\n' "$out"
 }
+
+# json_compact: JSON on stdin onto one line on stdout. Valid JSON has no raw newline inside a
+# string, so every line break and the indentation after it lie between tokens and can go.
+json_compact() {
+  sed -e 's/^[[:space:]]*//' | tr -d '\n'
+  echo
+}
+
+# can_bench NAME: whether this run may call `cargo bench` (which builds the benchmarks). Not with
+# PRTKIT_BIN, whose point is that nothing is built; then it says what is left out.
+can_bench() {
+  if [ -n "${PRTKIT_BIN:-}" ]; then
+    echo "$(basename "$0"): not measured: $1 (cargo bench builds; PRTKIT_BIN says not to)" >&2
+    return 1
+  fi
+}
