@@ -270,3 +270,56 @@ fn reproduce_shader_table() {
     let section = run.section("shader.md");
     assert!(section.contains("verify (affine): "), "the conservativeness lines:\n{section}");
 }
+
+/// The directory of the shared test data, or `None` (having said so) when this checkout has none.
+fn shared_testdata(what: &str) -> Option<PathBuf> {
+    let dir = repo().join("../shared/testdata");
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        eprintln!("{what}: {} is absent; not checked", dir.display());
+        None
+    }
+}
+
+#[test]
+fn reproduce_terms() {
+    let run = run("reproduce-terms", &[]);
+    let tables = |name: &str| -> Vec<&Value> { run.rows.iter().filter(|r| text(r, "table") == name).collect() };
+    let measured = |table: &Value| -> Vec<f64> {
+        table["rows"].as_array().unwrap_or_else(|| panic!("{table}")).iter().map(|r| num(r, "measured_k")).collect()
+    };
+    let (sphere, hemisphere, ts) = (tables("phong-sphere"), tables("phong-hemisphere"), tables("torrance-sparrow"));
+    assert_eq!((sphere.len(), hemisphere.len(), ts.len()), (1, 2, 2), "{:?}", run.rows);
+    for table in sphere.iter().chain(&hemisphere).chain(&ts) {
+        for r in table["rows"].as_array().unwrap() {
+            assert_eq!(num(r, "energy"), 0.99, "{r}");
+            assert!(num(r, "predicted_k") >= 1.0 && num(r, "measured_k") >= 1.0, "{r}");
+        }
+    }
+    // Phong s = 1, 2, …, 50: sharper lobes need more terms, and the visible hemisphere fewer than
+    // the sphere. On the sphere s = 1 needs exactly 9 (bands 0–2, docs/results/terms.md).
+    let (on_sphere, on_hemisphere) = (measured(sphere[0]), measured(hemisphere[0]));
+    assert_eq!(on_sphere.len(), 7);
+    assert_eq!(on_sphere[0], 9.0, "{on_sphere:?}");
+    assert_monotone("Phong K on the sphere", &on_sphere, true);
+    assert_monotone("Phong K on the hemisphere", &on_hemisphere, true);
+    assert!(on_hemisphere.iter().zip(&on_sphere).all(|(h, s)| h < s), "{on_hemisphere:?} against {on_sphere:?}");
+    // Torrance-Sparrow σ = 0.1 … 0.4: wider lobes need fewer terms.
+    for table in &ts {
+        assert_monotone("Torrance-Sparrow K", &measured(table), false);
+    }
+    let merl = tables("merl-per-channel");
+    if shared_testdata("reproduce-terms: the MERL tables").is_some() {
+        assert_eq!(merl.len(), 2, "two grid sizes");
+        for table in merl {
+            let names: Vec<&str> = table["rows"].as_array().unwrap().iter().map(|r| text(r, "name")).collect();
+            assert!(["/r", "/g", "/b"].iter().all(|c| names.iter().any(|n| n.ends_with(c))), "{names:?}");
+        }
+    }
+    let section = run.section("terms.md");
+    assert!(section.contains("| phong:s=50 |") && section.contains("| torrance-sparrow:sigma=0.4 |"), "{section}");
+    for plot in ["terms-phong-sphere.svg", "terms-phong-hemisphere.svg", "terms-torrance-sparrow.svg"] {
+        assert!(run.docs.path().join("results").join(plot).is_file(), "{plot}");
+    }
+}
