@@ -323,3 +323,240 @@ fn reproduce_terms() {
         assert!(run.docs.path().join("results").join(plot).is_file(), "{plot}");
     }
 }
+
+/// `examples/NAME` as cargo built it beside the binaries, or `None` (having said why) when it is
+/// not there. `cargo test --release`, as CI runs it, builds every example with the tests;
+/// `cargo test --test scripts` alone does not, and then leaves whatever an earlier build left.
+fn example(script: &str, name: &str) -> Option<PathBuf> {
+    let path = bin_dir().join("examples").join(name);
+    if path.is_file() {
+        Some(path)
+    } else {
+        skip(script, &format!("{} is not built (cargo test --release builds the examples)", path.display()));
+        None
+    }
+}
+
+/// The rows of the first Markdown table in `section`, each a map from its column's header to the
+/// cell's text: the machine-readable part of a section written by an example.
+fn markdown_table(section: &str) -> Vec<std::collections::BTreeMap<String, String>> {
+    let cells = |line: &str| -> Vec<String> {
+        line.trim().trim_matches('|').split('|').map(|c| c.trim().to_string()).collect()
+    };
+    let mut lines = section.lines().skip_while(|l| !l.starts_with('|'));
+    let header = cells(lines.next().unwrap_or_else(|| panic!("no table in:\n{section}")));
+    lines
+        .skip(1) // | --- | --- |
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| {
+            let row = cells(l);
+            assert_eq!(row.len(), header.len(), "{l}");
+            header.iter().cloned().zip(row).collect()
+        })
+        .collect()
+}
+
+/// A percentage cell ("0.458 %") as a fraction, `None` for "—" and empty cells.
+fn percent(cell: &str) -> Option<f64> {
+    let number = cell.strip_suffix('%')?.trim();
+    Some(number.parse::<f64>().unwrap_or_else(|e| panic!("{cell:?}: {e}")) / 100.0)
+}
+
+#[test]
+fn probe_coefficients() {
+    if shared_testdata("probe-coefficients").is_none() || example("probe-coefficients", "probe_coefficients").is_none()
+    {
+        return;
+    }
+    let run = run("probe-coefficients", &[]);
+    assert!(run.rows.is_empty(), "the coefficients are in the section");
+    let section = run.section("probes.md");
+    let rows = markdown_table(&section);
+    let names: Vec<&str> = rows.iter().map(|r| r["coefficient"].as_str()).collect();
+    assert_eq!(names, ["L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22"], "order 2: nine coefficients");
+    // L00 is the map's mean radiance times 2√π: positive in every channel.
+    for channel in ["R", "G", "B"] {
+        let l00: f64 = rows[0][channel].parse().unwrap();
+        assert!(l00 > 0.0, "L00 {channel} = {l00}");
+    }
+    assert!(section.matches("### `").count() >= 3, "one table per shared probe:\n{section}");
+}
+
+#[test]
+fn ibl_accuracy() {
+    if shared_testdata("ibl-accuracy").is_none() || example("ibl-accuracy", "ibl_accuracy").is_none() {
+        return;
+    }
+    let run = run("ibl-accuracy", &[]);
+    let rows = markdown_table(&run.section("ibl-accuracy.md"));
+    let measured: Vec<_> = rows.iter().filter(|r| percent(&r["RMS rel."]).is_some()).collect();
+    assert!(measured.len() >= 6 * 2, "levels 1–5 and the irradiance of at least two bakes: {rows:?}");
+    for r in measured {
+        let (rms, max) = (percent(&r["RMS rel."]).unwrap(), percent(&r["max rel."]).unwrap());
+        let roughness: f64 = r["r"].parse().unwrap();
+        // The bake's targets (issue 12, docs/ibl.md): RMS ≤ 1 %, max ≤ 5 % for r ≥ 0.1, and no
+        // negative texel.
+        assert!(rms <= max, "{r:?}");
+        if roughness >= 0.1 {
+            assert!(rms <= 0.01 && max <= 0.05, "{r:?}");
+        }
+        assert!(r["min texel"].parse::<f64>().unwrap() >= 0.0, "{r:?}");
+    }
+}
+
+#[test]
+fn ibl_grid() {
+    skip("ibl-grid", "about a minute at its only size (examples/ibl_grid.rs has no smaller one); run it by hand");
+}
+
+#[test]
+fn ring_free_table() {
+    skip("ring-free-table", "its angular references take about 30 minutes (examples/ring_free.rs has no smaller size)");
+}
+
+#[test]
+fn windows_table() {
+    skip("windows-table", "it needs ring-free-table's references (30 minutes when not cached)");
+}
+
+#[test]
+fn bench_peers() {
+    if std::process::Command::new("sh").args(["-c", "command -v cmgen"]).output().is_ok_and(|o| o.status.success()) {
+        if shared_testdata("bench-peers").is_none() || example("bench-peers", "peers").is_none() {
+            return;
+        }
+        let run = run("bench-peers", &[]);
+        assert!(!markdown_table(&run.section("peers.md")).is_empty());
+    } else {
+        // Without cmgen the script would install it (apt-get, as root): not in a test.
+        skip("bench-peers", "Filament's cmgen is not installed (the script installs it; not part of CI)");
+    }
+}
+
+/// The benchmark scripts run `cargo bench`, which builds: under `PRTKIT_BIN` they must say so
+/// and stop with success, writing nothing.
+fn bench_script(name: &str) {
+    let run = run(name, &[]);
+    assert!(run.rows.is_empty());
+    assert!(wrote_no_section(&run), "{name} wrote a section without measuring");
+    skip(name, "a benchmark (cargo bench builds the bench profile; minutes); checked that it says so under PRTKIT_BIN");
+}
+
+/// Whether the run left no section.
+fn wrote_no_section(run: &Run) -> bool {
+    std::fs::read_dir(run.docs.path().join("results")).unwrap().next().is_none()
+}
+
+#[test]
+fn bench_render() {
+    bench_script("bench-render");
+}
+
+#[test]
+fn bench_sh_project() {
+    bench_script("bench-sh-project");
+}
+
+#[test]
+fn reproduce_table4() {
+    bench_script("reproduce-table4");
+}
+
+#[test]
+fn reproduce_table5() {
+    bench_script("reproduce-table5");
+}
+
+#[test]
+fn fuzz() {
+    let run = run("fuzz", &[]);
+    assert!(run.rows.is_empty() && wrote_no_section(&run));
+    skip("fuzz", "its harness is cargo test --test fuzz (CI runs that test itself, at its short length)");
+}
+
+#[test]
+fn check_ktx2() {
+    let dir = tempfile::tempdir().unwrap();
+    let bake = dir.path().join("bake");
+    let sky = dir.path().join("sky.exr");
+    let status = |c: &mut Command| c.status().unwrap().success();
+    assert!(status(
+        Command::new(bin_dir().join("sample-shader"))
+            .arg(repo().join("testdata/shaders/sky.sl"))
+            .args(["--latlong", "64x32", "-q", "-o"])
+            .arg(&sky)
+    ));
+    assert!(status(
+        Command::new(bin_dir().join("ibl"))
+            .arg(&sky)
+            .args(["--size", "16", "--min-size", "4", "--irradiance-size", "8", "--samples", "16", "-q", "-o"])
+            .arg(&bake)
+    ));
+    // A file a parser reads but the layout rules reject: level 0's offset moved off its alignment.
+    let mut broken = std::fs::read(bake.join("specular.ktx2")).unwrap();
+    broken[80] += 1;
+    std::fs::write(dir.path().join("broken.ktx2"), broken).unwrap();
+    let check = |files: &[&str]| {
+        let output = Command::new("bash")
+            .arg(repo().join("scripts/check-ktx2.sh"))
+            .args(files)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        (
+            output.status.code(),
+            String::from_utf8_lossy(&output.stdout).into_owned(),
+            String::from_utf8_lossy(&output.stderr).into_owned(),
+        )
+    };
+    let (code, stdout, stderr) = check(&["bake/specular.ktx2", "bake/irradiance.ktx2", "bake/dfg.ktx2"]);
+    if code == Some(2) {
+        // node, npm or the npm registry missing: a setup error, not a finding.
+        return skip("check-ktx2", &format!("it could not set up: {}", stderr.trim()));
+    }
+    assert_eq!(code, Some(0), "{stdout}{stderr}");
+    // One line per file: "ok   PATH: vkFormat N, cube|2-D WxH, L level(s), …".
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 3, "{stdout}");
+    for (line, (file, layout)) in lines.iter().zip([
+        ("specular.ktx2", "cube 16x16, 3 level(s)"), // 16² down to 4²
+        ("irradiance.ktx2", "cube 8x8, 1 level(s)"),
+        ("dfg.ktx2", "2-D "),
+    ]) {
+        assert!(line.starts_with("ok ") && line.contains(file) && line.contains(layout), "{line:?}: {file}, {layout}");
+    }
+    let (code, stdout, _) = check(&["bake/dfg.ktx2", "broken.ktx2"]);
+    assert_eq!(code, Some(1), "a broken file fails the check: {stdout}");
+    assert!(stdout.lines().any(|l| l.starts_with("FAIL") && l.contains("broken.ktx2")), "{stdout}");
+}
+
+#[test]
+fn update_results() {
+    // Assembling docs/results.md from the sections (the runs are the other tests'), on a copy of
+    // the repository's sections.
+    let docs = tempfile::tempdir().unwrap();
+    let results = docs.path().join("results");
+    std::fs::create_dir(&results).unwrap();
+    for entry in std::fs::read_dir(repo().join("docs/results")).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, results.join(path.file_name().unwrap())).unwrap();
+    }
+    let output = Command::new("bash")
+        .arg(repo().join("scripts/update-results.sh"))
+        .arg("--assemble")
+        .env("PRTKIT_RESULTS", docs.path())
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let page = std::fs::read_to_string(docs.path().join("results.md")).unwrap();
+    assert!(page.starts_with("# Results\n"), "{page}");
+    for section in ["render.md", "terms.md", "normals.md", "shader.md"] {
+        let heading = std::fs::read_to_string(results.join(section)).unwrap().lines().next().unwrap().to_string();
+        assert!(page.contains(&heading), "{section}'s heading {heading:?} is not in results.md");
+    }
+    // Links are rewritten for results.md's place, one directory up from the sections.
+    assert!(
+        page.contains("](render-fig6.png)") && page.contains("](results/terms-phong-sphere.svg)"),
+        "links in:\n{page}"
+    );
+}

@@ -10,6 +10,9 @@
 #                      no build at all, bin=DIR (the examples are then DIR/examples/NAME).
 #   json_get FILE KEY  one value of a JSON document, pretty or compact (see below).
 #   json_row K=V...    a compact JSON object on stdout, one line: a script's machine-readable row.
+#   json_compact       JSON on stdin onto one line.
+#   can_bench WHAT     whether `cargo bench` may run (not with PRTKIT_BIN); says what is left out.
+#   require_shared DIR stops the script, saying why, when ../shared/testdata/DIR is absent.
 
 # A script's own arguments are resolved before moving; PRTKIT_RESULTS is made absolute too.
 caller_dir=$PWD
@@ -107,5 +110,14 @@ can_bench() {
   if [ -n "${PRTKIT_BIN:-}" ]; then
     echo "$(basename "$0"): not measured: $1 (cargo bench builds; PRTKIT_BIN says not to)" >&2
     return 1
+  fi
+}
+
+# require_shared SUBDIR: the script reads ../shared/testdata/SUBDIR; without it, it says so and
+# stops with success (a checkout without the shared data has nothing to measure there).
+require_shared() {
+  if [ ! -d "../shared/testdata/$1" ]; then
+    echo "$(basename "$0"): skipped: ../shared/testdata/$1 is absent" >&2
+    exit 0
   fi
 }
