@@ -17,7 +17,7 @@ fi
 DEPTH=${DEPTH:-8}
 TOL=${TOL:-0.05}
 ADAPTIVE_DEPTH=${ADAPTIVE_DEPTH:-8}
-VERIFY=${VERIFY:-100000}
+VERIFY=${VERIFY:-4096} # points per leaf: sample-shader --verify takes at most 4096
 REPEAT=${REPEAT:-3}
 SHADERS=(screen wood marble bumpmap eroded)
 build --bin sample-shader
