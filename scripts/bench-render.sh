@@ -2,11 +2,12 @@
 # Times render's real-time and relighting paths (`cargo bench --bench render`: SHRM frames on a
 # 512x512 sphere; factored K = 75 on a ~10^4-vertex mesh) and writes docs/results/render-bench.md.
 # Usage: scripts/bench-render.sh
+# Knobs (scripts/README.md): PRTKIT_RESULTS; it is a benchmark, so with PRTKIT_BIN it only says so.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+source "$(dirname "$0")/lib/common.sh"
+if ! can_bench "the frame times (cargo bench --bench render)"; then exit 0; fi
 lines="$(cargo bench --quiet --bench render 2>/dev/null)"
-echo "$lines"
-mkdir -p docs/results
+echo "$lines" >&2
 {
     echo "## render: frame and relighting times"
     echo
@@ -17,4 +18,4 @@ mkdir -p docs/results
     echo '```'
     echo "$lines"
     echo '```'
-} >docs/results/render-bench.md
+} >"$docs/results/render-bench.md"

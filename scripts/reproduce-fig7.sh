@@ -2,17 +2,18 @@
 # Ramamoorthi & Hanrahan 2002, Fig. 7: the simplified microfacet BRDF (eq. 11, σ = 0.2) rendered
 # from SHRMs with P = 0, 1, 2, 3 (F_B = 30, as in the paper) for two views, next to the exact
 # image: a full hemispherical integral per pixel (every probe texel, L ρ cos θ_i). Prints one
-# JSON line per (view, P) with at least {"view", "p", "rel_error", "brdf_energy"}; writes
+# JSON line per (view, P), {"view", "p", "brdf_energy", "rel_error", "psnr"}; writes
 # docs/render-fig7-{top,side}.png and docs/results/render-fig7.md.
 # Usage: scripts/reproduce-fig7.sh [RES]   (default 128: 128x128 pixels)
+# Knobs (scripts/README.md): PRTKIT_BIN, PRTKIT_RESULTS, PRTKIT_SMALL=1 (16x16 pixels).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+source "$(dirname "$0")/lib/common.sh"
 res="${1:-128}"
-cargo build --release --quiet --bin render --bin prefilter --bin sample-shader
-bin=target/release
+if [ "$small" = 1 ]; then res=16; fi
+build --bin render --bin prefilter --bin sample-shader
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-. scripts/light-probe.sh
+source scripts/lib/light-probe.sh
 brdf=torrance-sparrow:sigma=0.2
 # Two views, each with one view direction for the whole image as in the paper (its (θ̄_o, φ̄_o)):
 # a distant camera with a narrow field, so the global SHRM's single reflection map per view
@@ -22,7 +23,7 @@ for p in 0 1 2 3; do
     "$bin/prefilter" "$env" --brdf "$brdf" --order "30,$p" --global --shrm "$tmp/p$p.shrm.exr" \
         -o "$tmp/p$p.shrm.json" -q
 done
-lines=()
+table=()
 for v in "${views[@]}"; do
     name="${v%%=*}"
     eye="${v#*=}"
@@ -32,20 +33,24 @@ for v in "${views[@]}"; do
     for p in 0 1 2 3; do
         extra=()
         if [ "$p" = 3 ]; then
-            extra=(--panel "docs/render-fig7-$name.png" --exposure 2 "${items[@]}" --panel-item "P=3=-"
+            extra=(--panel "$docs/render-fig7-$name.png" --exposure 2 "${items[@]}" --panel-item "P=3=-"
                 --panel-item "exact=$tmp/$name-ref.exr")
         fi
-        line="$("$bin/render" "$env" "${common[@]}" --shading shrm --shrm "$tmp/p$p.shrm.json" \
-            --compare "$tmp/$name-ref.exr" --json -o "$tmp/$name-p$p.exr" --label "P=$p" "${extra[@]}")"
-        line="{\"view\":\"$name\",\"p\":$p,${line#\{}"
-        echo "$line"
-        lines+=("$line")
+        "$bin/render" "$env" "${common[@]}" --shading shrm --shrm "$tmp/p$p.shrm.json" \
+            --compare "$tmp/$name-ref.exr" --json -o "$tmp/$name-p$p.exr" --label "P=$p" "${extra[@]}" \
+            >"$tmp/$name-p$p.json"
+        # Plain assignments, so that a field missing from render's summary stops the script.
+        summary="$tmp/$name-p$p.json"
+        epsilon="$(json_get "$summary" epsilon_achieved)"
+        rel_error="$(json_get "$summary" metrics.rel_error)"
+        psnr="$(json_get "$summary" metrics.psnr)"
+        energy="$(awk -v e="$epsilon" 'BEGIN { printf "%.6f", 1 - e }')"
+        json_row view="$name" p="$p" brdf_energy="$energy" rel_error="$rel_error" psnr="$psnr"
+        table+=("$(printf '| %s | %s | %.4f | %.4f | %.2f |' "$name" "$p" "$energy" "$rel_error" "$psnr")")
         items+=(--panel-item "P=$p=$tmp/$name-p$p.exr")
     done
 done
 
-field() { sed -n "s/.*\"$2\":\([^,}]*\).*/\1/p" <<<"$1"; }
-mkdir -p docs/results
 {
     echo "## Microfacet SHRMs against the exact image (Ramamoorthi & Hanrahan 2002, Fig. 7)"
     echo
@@ -59,13 +64,9 @@ mkdir -p docs/results
     echo
     echo "| view | P | BRDF energy 1 − ε | relative L² error vs exact | PSNR (dB) |"
     echo "| --- | ---: | ---: | ---: | ---: |"
-    for l in "${lines[@]}"; do
-        printf '| %s | %s | %.4f | %.4f | %.2f |\n' "$(field "$l" view | tr -d '"')" "$(field "$l" p)" \
-            "$(awk -v e="$(field "$l" epsilon_achieved)" 'BEGIN { print 1 - e }')" \
-            "$(field "$l" rel_error)" "$(field "$l" psnr)"
-    done
+    printf '%s\n' "${table[@]}"
     echo
     echo "![P = 0…3 and the exact image, side view](../render-fig7-side.png)"
     echo
     echo "![P = 0…3 and the exact image, top view](../render-fig7-top.png)"
-} >docs/results/render-fig7.md
+} >"$docs/results/render-fig7.md"

@@ -4,23 +4,35 @@
 # `sample-shader --compare`; this script only runs it and concatenates the output.
 #   DEPTH=8 (equal-depth comparison, 256x256 leaves)  TOL=0.05 (adaptive comparison)
 #   REPEAT=3 (each sampling is timed REPEAT times, the arithmetics alternating; fastest counts)
+# Prints one JSON line per table and shader, {"table": "depth" or "tolerance", "shader",
+# "rows": [sample-shader --compare --json's rows]}, and one per conservativeness check,
+# {"table": "verify", "shader", "arith", "leaves", "points", "violations"}.
+# Knobs (scripts/README.md): PRTKIT_BIN, PRTKIT_RESULTS, PRTKIT_SMALL=1 (depth 4, 1000 points,
+# one timing), each overridden by the variables above.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+source "$(dirname "$0")/lib/common.sh"
+if [ "$small" = 1 ]; then
+  DEPTH=${DEPTH:-4} ADAPTIVE_DEPTH=${ADAPTIVE_DEPTH:-4} VERIFY=${VERIFY:-1000} REPEAT=${REPEAT:-1}
+fi
 DEPTH=${DEPTH:-8}
 TOL=${TOL:-0.05}
 ADAPTIVE_DEPTH=${ADAPTIVE_DEPTH:-8}
-VERIFY=${VERIFY:-100000}
+VERIFY=${VERIFY:-4096} # points per leaf: sample-shader --verify takes at most 4096
 REPEAT=${REPEAT:-3}
 SHADERS=(screen wood marble bumpmap eroded)
-cargo build --release --bins -q
-BIN=target/release/sample-shader
+build --bin sample-shader
+BIN=$bin/sample-shader
 RES=$((1 << DEPTH))
-OUT=docs/results/shader.md
+OUT=$docs/results/shader.md
 TMP=$(mktemp)
-trap 'rm -f "$TMP"' EXIT
+trap 'rm -f "$TMP" "$TMP.json"' EXIT
 
-table() { # runs --compare for every shader; prints one header, then all rows
-  local first=1
+# table NAME ARGS...: runs --compare for every shader; prints one header, then all rows, and the
+# rows as JSON on fd 3 (a second run: the Markdown and the JSON are both sample-shader's; the
+# timings differ between the runs, the widths do not).
+table() {
+  local name=$1 first=1
+  shift
   for s in "${SHADERS[@]}"; do
     if [ $first = 1 ]; then
       "$BIN" "testdata/shaders/$s.sl" "$@" --compare -q --threads 1 --repeat "$REPEAT"
@@ -28,6 +40,8 @@ table() { # runs --compare for every shader; prints one header, then all rows
     else
       "$BIN" "testdata/shaders/$s.sl" "$@" --compare -q --threads 1 --repeat "$REPEAT" | tail -n +3
     fi
+    printf '{"table":"%s","shader":"%s","rows":%s}\n' "$name" "$s" \
+      "$("$BIN" "testdata/shaders/$s.sl" "$@" --compare -q --threads 1 --repeat 1 --json | json_compact)" >&3
   done
 }
 
@@ -44,11 +58,11 @@ table() { # runs --compare for every shader; prints one header, then all rows
   echo
   echo "### Equal depth: every node subdivided to depth $DEPTH (${RES}x${RES} leaves, tolerance 0)"
   echo
-  table --res "${RES}x${RES}" --max-depth "$DEPTH" --tolerance 0
+  table depth --res "${RES}x${RES}" --max-depth "$DEPTH" --tolerance 0
   echo
   echo "### Same tolerance: nodes needed for a bound width of $TOL (max depth $ADAPTIVE_DEPTH)"
   echo
-  table --res "${RES}x${RES}" --max-depth "$ADAPTIVE_DEPTH" --tolerance "$TOL"
+  table tolerance --res "${RES}x${RES}" --max-depth "$ADAPTIVE_DEPTH" --tolerance "$TOL"
   echo
   echo "### Conservativeness: $VERIFY random points in every leaf of a depth-2 tree"
   echo
@@ -57,13 +71,18 @@ table() { # runs --compare for every shader; prints one header, then all rows
     extra=()
     if [ "$s" = sky ]; then extra=(--latlong 64x32); fi
     for a in affine interval; do
-      printf '%-8s ' "$s"
-      "$BIN" "testdata/shaders/$s.sl" "${extra[@]}" --max-depth 2 --tolerance 0 --arith "$a" --verify "$VERIFY" -q 2>&1 \
-        | sed 's/^sample-shader: //'
+      "$BIN" "testdata/shaders/$s.sl" "${extra[@]}" --max-depth 2 --tolerance 0 --arith "$a" --verify "$VERIFY" \
+        --json -q >"$TMP.json"
+      leaves="$(json_get "$TMP.json" verify.leaves)"
+      points="$(json_get "$TMP.json" verify.points)"
+      violations="$(json_get "$TMP.json" verify.violations)"
+      printf '%-8s verify (%s): %s points in %s leaves, %s outside their bounds\n' "$s" "$a" "$points" "$leaves" "$violations"
+      json_row table=verify shader="$s" arith="$a" leaves="$leaves" points="$points" violations="$violations" >&3
     done
   done
   echo '```'
-} > "$TMP"
+} 3>&1 > "$TMP"
+rm -f "$TMP.json"
 mv "$TMP" "$OUT"
 trap - EXIT
-echo "wrote $OUT"
+echo "wrote $OUT" >&2

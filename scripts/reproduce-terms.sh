@@ -7,17 +7,34 @@
 #   SKIP_DENSE_64=1 scripts/reproduce-terms.sh
 #
 # All numbers come from the Rust binaries; this script only runs them and pastes their tables.
+# Prints one JSON line per table, {"table", "resolution", "rows": [count-terms --json's rows]}
+# (tables phong-sphere, phong-hemisphere, torrance-sparrow, merl-per-channel, merl-mean).
+# Knobs (scripts/README.md): PRTKIT_BIN (and then no SVD benchmark), PRTKIT_RESULTS,
+# PRTKIT_SMALL=1 (n = 16, 24 and 32 in place of 40, 80 and 160; 16 and 24 for MERL's 40 and 100).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+source "$(dirname "$0")/lib/common.sh"
 
-cargo build --release --quiet --bins
-count=target/release/count-terms
-results=docs/results
+# The grid sizes: the paper's, a finer one, the converged one for Torrance-Sparrow; MERL's two.
+n_paper=40 n_fine=80 n_converged=160 merl_sizes=(40 100)
+if [ "$small" = 1 ]; then n_paper=16 n_fine=24 n_converged=32 merl_sizes=(16 24); fi
+build --bin count-terms
+count=$bin/count-terms
+results=$docs/results
 out=$results/terms.md
 merl_dir=../shared/testdata/merl
-mkdir -p "$results"
 tmp=$(mktemp "$results/.terms.md.XXXXXX")
 trap 'rm -f "$tmp"' EXIT
+
+# terms NAME N [--plot FILE] ARGS...: count-terms' table for ARGS at resolution N, and its rows as
+# one JSON line on fd 3 (a second run, without the plot: the counts are deterministic).
+terms() {
+  local name=$1 n=$2 plot=()
+  shift 2
+  if [ "${1:-}" = --plot ]; then plot=(--plot "$2"); shift 2; fi
+  "$count" "$@" --resolution "$n" "${plot[@]}" --quiet
+  printf '{"table":"%s","resolution":%s,"rows":%s}\n' "$name" "$n" \
+    "$("$count" "$@" --resolution "$n" --quiet --json | json_compact)" >&3
+}
 
 phong=()
 for s in 1 2 5 10 20 30 50; do phong+=(--brdf "phong:s=$s"); done
@@ -38,34 +55,30 @@ K = (l*)²/4 with l* the first l whose normalized half-angle transform F_l drops
 eq. 13); for Torrance-Sparrow the column shows the paper's printed shortcut l* ≈ 1/(2σ²),
 K = (l*)²/4, which contradicts the paper's own K values (see below).
 
-### Phong, full sphere (n = 40)
-
 MD
-"$count" "${phong[@]}" --domain sphere --resolution 40 --plot "$results/terms-phong-sphere.svg" --quiet
+echo "### Phong, full sphere (n = $n_paper)"
+echo
+terms phong-sphere "$n_paper" --plot "$results/terms-phong-sphere.svg" "${phong[@]}" --domain sphere
 cat <<'MD'
 
 ![Phong on the sphere: singular values against F_l, K against (l*+1)²](terms-phong-sphere.svg)
 
-### Phong, visible hemispheres (n = 40)
-
 MD
-"$count" "${phong[@]}" --domain hemisphere --resolution 40 --plot "$results/terms-phong-hemisphere.svg" --quiet
-cat <<'MD'
-
-![Phong on the hemisphere](terms-phong-hemisphere.svg)
-
-The same on the hemisphere at n = 80 (the counts are converged in n):
-
-MD
-"$count" "${phong[@]}" --domain hemisphere --resolution 80 --quiet
-cat <<'MD'
-
-### Torrance-Sparrow (eq. 14), visible hemispheres, at the paper's n = 40 and at n = 160
-
-MD
-"$count" "${ts[@]}" --domain hemisphere --resolution 40 --quiet
+echo "### Phong, visible hemispheres (n = $n_paper)"
 echo
-"$count" "${ts[@]}" --domain hemisphere --resolution 160 --plot "$results/terms-torrance-sparrow.svg" --quiet
+terms phong-hemisphere "$n_paper" --plot "$results/terms-phong-hemisphere.svg" "${phong[@]}" --domain hemisphere
+echo
+echo "![Phong on the hemisphere](terms-phong-hemisphere.svg)"
+echo
+echo "The same on the hemisphere at n = $n_fine (the counts are converged in n):"
+echo
+terms phong-hemisphere "$n_fine" "${phong[@]}" --domain hemisphere
+echo
+echo "### Torrance-Sparrow (eq. 14), visible hemispheres, at the paper's n = $n_paper and at n = $n_converged"
+echo
+terms torrance-sparrow "$n_paper" "${ts[@]}" --domain hemisphere
+echo
+terms torrance-sparrow "$n_converged" --plot "$results/terms-torrance-sparrow.svg" "${ts[@]}" --domain hemisphere
 cat <<'MD'
 
 ![Torrance-Sparrow: K against (l*)² with the line K = (l*)²/4](terms-torrance-sparrow.svg)
@@ -85,13 +98,14 @@ if [ ${#merl_files[@]} -eq 0 ]; then
 else
     merl_args=()
     for f in "${merl_files[@]}"; do merl_args+=(--brdf "merl:$f"); done
-    for n in 40 100; do
+    for n in "${merl_sizes[@]}"; do
         echo "n = $n:"
         echo
-        "$count" "${merl_args[@]}" --per-channel --domain hemisphere --resolution "$n" --quiet \
-            $([ "$n" = 100 ] && echo --plot "$results/terms-merl.svg")
+        plot=()
+        if [ "$n" = "${merl_sizes[1]}" ]; then plot=(--plot "$results/terms-merl.svg"); fi
+        terms merl-per-channel "$n" "${plot[@]}" "${merl_args[@]}" --per-channel --domain hemisphere
         echo
-        "$count" "${merl_args[@]}" --channel mean --domain hemisphere --resolution "$n" --quiet
+        terms merl-mean "$n" "${merl_args[@]}" --channel mean --domain hemisphere
         echo
     done
     echo "![MERL-format files against the Torrance-Sparrow line](terms-merl.svg)"
@@ -138,12 +152,14 @@ results are bit-identical for any thread count. Times on this shared 2-core mach
 other builds were running:
 
 MD
-if [ -n "${SKIP_DENSE_64:-}" ]; then
+if ! can_bench "the SVD timings (cargo bench --bench factor)"; then
+    echo "(Not measured in this run.)"
+elif [ -n "${SKIP_DENSE_64:-}" ]; then
     PRTKIT_BENCH_SKIP_DENSE_64=1 cargo bench --quiet --bench factor 2>/dev/null
 else
     cargo bench --quiet --bench factor 2>/dev/null
 fi
-} > "$tmp"
+} 3>&1 > "$tmp"
 mv "$tmp" "$out"
 trap - EXIT
-echo "wrote $out"
+echo "wrote $out" >&2

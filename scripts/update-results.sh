@@ -3,8 +3,10 @@
 # writes its section into docs/results/), then assembles docs/results.md from the sections.
 #   scripts/update-results.sh            # run everything (about an hour on 2 cores), assemble
 #   scripts/update-results.sh --assemble # only assemble docs/results.md from the sections
+# Knobs (scripts/README.md): all three are passed on to the scripts it runs; with PRTKIT_RESULTS
+# the sections are read from, and results.md written into, that directory.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+source "$(dirname "$0")/lib/common.sh"
 if [ "${1:-}" != "--assemble" ]; then
   scripts/bench-sh-project.sh
   scripts/probe-coefficients.sh
@@ -33,12 +35,12 @@ fi
   echo "noisy); absolute times are for orientation only."
   echo
   for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader render render-bright render-fig7 render-bench ibl-accuracy ibl-grid peers ring-free windows fuzz; do
-    f="docs/results/$section.md"
+    f="$docs/results/$section.md"
     if [ -f "$f" ]; then
       # Sections link their figures relative to docs/results/; this file lives in docs/.
       sed -E -e 's#\]\(([A-Za-z0-9_.-]+\.(svg|png))\)#](results/\1)#g' -e 's#\]\(\.\./#](#g' "$f"
       echo
     fi
   done
-} > docs/results.md
-echo "wrote docs/results.md" >&2
+} > "$docs/results.md"
+echo "wrote $docs/results.md" >&2
