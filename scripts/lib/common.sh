@@ -8,7 +8,8 @@
 # and defines
 #   build ARGS...      `cargo build --release ARGS` and bin=target/release; with PRTKIT_BIN=DIR
 #                      no build at all, bin=DIR (the examples are then DIR/examples/NAME).
-#   json_get FILE KEY  one value of a JSON document, pretty or compact (see below).
+#   json_get FILE KEY  one value of a JSON document, pretty or compact (see below; needs jq,
+#                      which .ci/run installs).
 #   json_row K=V...    a compact JSON object on stdout, one line: a script's machine-readable row.
 #   json_compact       JSON on stdin onto one line.
 #   can_bench WHAT     whether `cargo bench` may run (not with PRTKIT_BIN); says what is left out.
@@ -29,6 +30,10 @@ if [ "${PRTKIT_SMALL:-0}" = 1 ]; then small=1; fi
 # Tables print numbers with a decimal point whatever the locale.
 export LC_NUMERIC=C
 export CARGO_BUILD_JOBS="${CARGO_BUILD_JOBS:-1}"
+if ! command -v jq >/dev/null; then
+  echo "$(basename "$0"): needs jq to read the stages' --json summaries (Debian: apt-get install jq)" >&2
+  exit 2
+fi
 
 # build ARGS...: what the script runs, as cargo build's target selection (--bin NAME, --example
 # NAME, --bins). With PRTKIT_BIN the binaries are taken as they are: the tests pass the ones cargo
@@ -46,41 +51,14 @@ build() {
 
 # json_get FILE KEY: prints the scalar at KEY in the JSON document FILE, KEY being the object keys
 # and array indices from the top joined by dots (metrics.rel_error, terms.0); strings without their
-# quotes. Fails, naming the key, when it is absent or not a scalar. A tokenizer rather than a
-# pattern over lines: the stages' --json summaries are pretty-printed, and their layout is theirs to
-# change (a sed over one-line JSON broke reproduce-fig6.sh silently once).
+# quotes. Fails, naming the key, when it is absent or not a scalar. jq reads the document, so its
+# layout (the stages pretty-print --json) is theirs to change: a sed over one-line JSON broke
+# reproduce-fig6.sh silently once.
 json_get() {
-  awk -v want="$2" -v file="$1" '
-    { text = text $0 "\n" }
-    function path(   p, i) {
-      p = ""
-      for (i = 1; i <= depth; i++) p = p (i > 1 ? "." : "") key[i]
-      return p
-    }
-    function value(v) { if (path() == want) { print v; found = 1; exit 0 } }
-    END {
-      n = length(text); i = 1
-      while (i <= n) {
-        c = substr(text, i, 1)
-        if (c ~ /[ \t\r\n]/) { i++; continue }
-        if (c == "{" || c == "[") { depth++; type[depth] = c; key[depth] = (c == "[") ? 0 : ""; expect_key[depth] = (c == "{"); i++; continue }
-        if (c == "}" || c == "]") { depth--; i++; continue }
-        if (c == ",") { if (type[depth] == "[") key[depth]++; else expect_key[depth] = 1; i++; continue }
-        if (c == ":") { expect_key[depth] = 0; i++; continue }
-        if (c == "\"") {
-          j = i + 1
-          while (j <= n && substr(text, j, 1) != "\"") j += (substr(text, j, 1) == "\\") ? 2 : 1
-          s = substr(text, i + 1, j - i - 1); i = j + 1
-          if (type[depth] == "{" && expect_key[depth]) key[depth] = s; else value(s)
-          continue
-        }
-        j = i
-        while (j <= n && substr(text, j, 1) !~ /[ \t\r\n,:\]\}]/) j++
-        value(substr(text, i, j - i)); i = j
-      }
-      printf "json_get: %s: no scalar at \"%s\"\n", file, want > "/dev/stderr"
-      exit 1
-    }' "$1"
+  jq -er --arg key "$2" --arg file "$1" '
+    getpath($key | split(".") | map(tonumber? // .)) as $v
+    | if ($v | type) == "object" or ($v | type) == "array" or $v == null
+      then error("json_get: \($file): no scalar at \"\($key)\"") else $v end' "$1"
 }
 
 # json_row K=V...: prints {"K":V,...} on one line. V is written as given when it is a JSON number
@@ -97,11 +75,9 @@ json_row() {
   printf '{%s}\n' "$out"
 }
 
-# json_compact: JSON on stdin onto one line on stdout. Valid JSON has no raw newline inside a
-# string, so every line break and the indentation after it lie between tokens and can go.
+# json_compact: JSON on stdin onto one line on stdout.
 json_compact() {
-  sed -e 's/^[[:space:]]*//' | tr -d '\n'
-  echo
+  jq -c .
 }
 
 # can_bench NAME: whether this run may call `cargo bench` (which builds the benchmarks). Not with
