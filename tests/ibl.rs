@@ -247,6 +247,11 @@ fn files_read_back_with_independent_readers() {
     let text = std::fs::read_to_string(out.join("ibl.json")).unwrap();
     let doc = parse_document::<IblBody>(&text, "prtkit.ibl", 1).unwrap();
     let b = &doc.body;
+    // The conventions block names the frame the files are in, as frame.up does.
+    assert_eq!(b.frame.up, "y");
+    assert!(doc.conventions.frame.starts_with("glTF world, +Y up"), "{}", doc.conventions.frame);
+    assert_eq!(doc.conventions.input_orientation.as_deref(), Some("as stored"));
+    assert!(!b.frame.flip_vertical);
     assert_eq!(b.frame.faces, ["+X", "-X", "+Y", "-Y", "+Z", "-Z"]);
     assert_eq!(b.frame.world_from_prtkit, [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]);
     let levels = &b.specular.levels;

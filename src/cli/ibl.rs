@@ -25,7 +25,7 @@ impl From<&Args> for Config {
             mirror: args.mirror,
             clamp: args.clamp,
             dfg: args.dfg.variant(),
-            samples: args.samples,
+            samples: args.samples as usize,
             source: args.input.name(),
             args: std::env::args().collect(),
             ..Config::default()

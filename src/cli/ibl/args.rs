@@ -109,9 +109,10 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = DfgArg::ScaleBias)]
     pub dfg: DfgArg,
 
-    /// Texels per level measured against the angular integral for the manifest (0: skip).
-    #[arg(long, default_value_t = 64)]
-    pub samples: usize,
+    /// Texels per level measured against the angular integral for the manifest (0: skip; at most
+    /// 4096: each is a cone sum over the input map).
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(0..=4096))]
+    pub samples: u64,
 
     #[command(flatten)]
     pub run: Execution,
