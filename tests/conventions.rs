@@ -697,7 +697,7 @@ fn signals_exit_130_leaving_outputs_untouched_and_no_temporary_file() {
     let big = w.run_dir("big");
     let big_sky = text(&common::sky_pfm(&big, 512, 256));
     let normals = big.join("normals.raw");
-    std::fs::write(&normals, raw_normals(6_000_000)).unwrap();
+    std::fs::write(&normals, raw_normals(12_000_000)).unwrap();
     let eroded = testdata("shaders/eroded.sl");
     // Runs of several seconds each (on 2 cores), the existing output first.
     let runs =
