@@ -65,8 +65,15 @@ impl Run {
 }
 
 /// Runs `bash scripts/NAME.sh` at the small size, with this test's binaries and a temporary
-/// results directory; it must exit 0. Every line of its stdout must be a JSON object.
-fn run(name: &str) -> Run {
+/// results directory; it must exit 0. Every line of its stdout must be a JSON object. `None`
+/// (having said so) without `jq`, which the scripts read the stages' summaries with (`.ci/run`
+/// installs it; a newcomer's `cargo test` should not fail for want of it).
+fn run(name: &str) -> Option<Run> {
+    static JQ: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    if !*JQ.get_or_init(|| Command::new("jq").arg("--version").output().is_ok_and(|o| o.status.success())) {
+        skip(name, "jq is not installed (Debian: apt-get install jq)");
+        return None;
+    }
     let docs = tempfile::tempdir().unwrap();
     let start = Instant::now();
     let output = Command::new("bash")
@@ -84,7 +91,7 @@ fn run(name: &str) -> Run {
         .filter(|l| !l.trim().is_empty())
         .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("scripts/{name}.sh: stdout line {l:?}: {e}")))
         .collect();
-    Run { rows, stderr: stderr.into_owned(), docs }
+    Some(Run { rows, stderr: stderr.into_owned(), docs })
 }
 
 /// Says why the script is not run here; the test then passes having said so.
@@ -176,7 +183,7 @@ fn wrote_no_section(run: &Run) -> bool {
 
 #[test]
 fn reproduce_fig6() {
-    let run = run("reproduce-fig6");
+    let Some(run) = run("reproduce-fig6") else { return };
     let ks: Vec<f64> = run.rows.iter().map(|r| num(r, "k")).collect();
     assert_eq!(ks, [4.0, 12.0, 75.0], "one row per K: {:?}", run.rows);
     let energy: Vec<f64> = run.rows.iter().map(|r| num(r, "energy")).collect();
@@ -199,7 +206,7 @@ fn reproduce_fig6() {
 
 #[test]
 fn reproduce_fig7() {
-    let run = run("reproduce-fig7");
+    let Some(run) = run("reproduce-fig7") else { return };
     assert_eq!(run.rows.len(), 8, "two views × P = 0…3: {:?}", run.rows);
     for view in ["side", "top"] {
         let rows: Vec<&Value> = run.rows.iter().filter(|r| text(r, "view") == view).collect();
@@ -227,7 +234,7 @@ fn reproduce_fig7() {
 
 #[test]
 fn factored_bright() {
-    let run = run("factored-bright");
+    let Some(run) = run("factored-bright") else { return };
     let modes: Vec<&str> = run.rows.iter().map(|r| text(r, "bright")).collect();
     assert_eq!(modes, ["off", "auto"]);
     let (off, auto) = (&run.rows[0], &run.rows[1]);
@@ -251,7 +258,7 @@ fn factored_bright() {
 
 #[test]
 fn reproduce_normals_table() {
-    let run = run("reproduce-normals-table");
+    let Some(run) = run("reproduce-normals-table") else { return };
     let bits: Vec<f64> = run.rows.iter().map(|r| num(r, "bits")).collect();
     assert_eq!(bits, [48.0, 16.0, 24.0, 32.0], "Table 1 at 48 bits, then 16, 24, 32");
     let section = run.section("normals.md");
@@ -285,7 +292,7 @@ fn reproduce_normals_table() {
 
 #[test]
 fn reproduce_shader_table() {
-    let run = run("reproduce-shader-table");
+    let Some(run) = run("reproduce-shader-table") else { return };
     let shaders = ["screen", "wood", "marble", "bumpmap", "eroded"];
     for table in ["depth", "tolerance"] {
         let rows: Vec<&Value> = run.rows.iter().filter(|r| text(r, "table") == table).collect();
@@ -329,7 +336,7 @@ fn reproduce_shader_table() {
 
 #[test]
 fn reproduce_terms() {
-    let run = run("reproduce-terms");
+    let Some(run) = run("reproduce-terms") else { return };
     let tables = |name: &str| -> Vec<&Value> { run.rows.iter().filter(|r| text(r, "table") == name).collect() };
     let measured = |table: &Value| -> Vec<f64> {
         table["rows"].as_array().unwrap_or_else(|| panic!("{table}")).iter().map(|r| num(r, "measured_k")).collect()
@@ -375,7 +382,7 @@ fn probe_coefficients() {
     {
         return;
     }
-    let run = run("probe-coefficients");
+    let Some(run) = run("probe-coefficients") else { return };
     assert!(run.rows.is_empty(), "the coefficients are in the section");
     let section = run.section("probes.md");
     let rows = markdown_table(&section);
@@ -394,7 +401,7 @@ fn ibl_accuracy() {
     if shared_testdata("ibl-accuracy").is_none() || example("ibl-accuracy", "ibl_accuracy").is_none() {
         return;
     }
-    let run = run("ibl-accuracy");
+    let Some(run) = run("ibl-accuracy") else { return };
     let rows = markdown_table(&run.section("ibl-accuracy.md"));
     let measured: Vec<_> = rows.iter().filter(|r| percent(&r["RMS rel."]).is_some()).collect();
     assert!(measured.len() >= 6 * 2, "levels 1–5 and the irradiance of at least two bakes: {rows:?}");
@@ -417,7 +424,7 @@ fn ibl_grid() {
     if shared_testdata("ibl-grid").is_none() || example("ibl-grid", "ibl_grid").is_none() {
         return;
     }
-    let run = run("ibl-grid");
+    let Some(run) = run("ibl-grid") else { return };
     let rows = markdown_table(&run.section("ibl-grid.md"));
     assert!(rows.len() >= 2 * 5, "r = 0.2 … 1 on at least two probes: {rows:?}");
     for r in &rows {
@@ -449,7 +456,7 @@ fn bench_peers() {
         if shared_testdata("bench-peers").is_none() || example("bench-peers", "peers").is_none() {
             return;
         }
-        let run = run("bench-peers");
+        let Some(run) = run("bench-peers") else { return };
         assert!(!markdown_table(&run.section("peers.md")).is_empty());
     } else {
         // Without cmgen the script would install it (apt-get, as root): not in a test.
@@ -460,7 +467,7 @@ fn bench_peers() {
 /// The benchmark scripts run `cargo bench`, which builds: under `PRTKIT_BIN` they must say so
 /// and stop with success, writing nothing.
 fn bench_script(name: &str) {
-    let run = run(name);
+    let Some(run) = run(name) else { return };
     assert!(run.rows.is_empty());
     assert!(wrote_no_section(&run), "{name} wrote a section without measuring");
     assert!(run.stderr.contains("not measured"), "{name} does not say what it left out: {}", run.stderr);
@@ -489,7 +496,7 @@ fn reproduce_table5() {
 
 #[test]
 fn fuzz() {
-    let run = run("fuzz");
+    let Some(run) = run("fuzz") else { return };
     assert!(run.rows.is_empty() && wrote_no_section(&run));
     assert!(run.stderr.contains("not run"), "fuzz.sh does not say it did not run: {}", run.stderr);
     skip("fuzz", "its harness is cargo test --test fuzz (CI runs that test itself, at its short length)");
