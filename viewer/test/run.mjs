@@ -225,8 +225,11 @@ try {
       writePng(join(out, `sphere-${v.name}-diff-${frame}-x8.png`), diffImage(img, ref));
       const s = compare(img, ref, mask), all = compare(img, ref);
       figures[`sphere_${v.name}_${frame}`] = { psnr_sphere: s.psnr, mean_sphere: s.mean, psnr_frame: all.psnr, pixels: s.pixels };
-      check(`IBL sphere ${v.name} (${frame} frame) vs render --shading ibl`, s.psnr >= 35,
-        `PSNR ${s.psnr.toFixed(2)} dB over ${s.pixels} sphere pixels (≥ 35), mean |Δ| ${s.mean.toFixed(3)} codes; whole frame ${all.psnr.toFixed(2)} dB`);
+      // The issue asks ≥ 35 dB. This test asks 45: an environment mirrored in x (the frame bug
+      // this test exists for) still scores 37–39 dB on the rough spheres here, 26–32 dB on the
+      // glossy ones; the right frame scores 53–64 dB.
+      check(`IBL sphere ${v.name} (${frame} frame) vs render --shading ibl`, s.psnr >= 45,
+        `PSNR ${s.psnr.toFixed(2)} dB over ${s.pixels} sphere pixels (≥ 45; the issue's bar is 35), mean |Δ| ${s.mean.toFixed(3)} codes; whole frame ${all.psnr.toFixed(2)} dB`);
       if (frame === 'gl') {
         // Raw WebGL row of the conventions table: the skybox sampled with the unchanged world
         // direction is render's background (the source map in prtkit's frame) — off the sphere.
