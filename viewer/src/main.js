@@ -57,12 +57,12 @@ renderer.debug.onShaderError = (gl, program, vs, fs) =>
 document.body.appendChild(renderer.domElement);
 const gl = renderer.getContext();
 
-const camera = new THREE.PerspectiveCamera(num('fov', 32), W / H, 0.05, 200);
+const camera = new THREE.PerspectiveCamera(num('fov', 45), W / H, 0.05, 200);
 const scene = new THREE.Scene();
 
 function placeCamera() {
   const grid = state.mode === 'grid';
-  camera.position.fromArray(vec('eye', grid ? [0, 0, 17] : [0, 0, 4]));
+  camera.position.fromArray(vec('eye', grid ? [0, 0, 11.5] : [0, 0, 3.6]));
   camera.up.set(0, 1, 0);
   camera.lookAt(new THREE.Vector3().fromArray(vec('target', [0, 0, 0])));
 }
@@ -280,6 +280,7 @@ if (!test) {
     last = now;
     controls.update();
     draw();
-    stats.textContent = `${avg.toFixed(1)} ms/frame (${(1000 / avg).toFixed(0)} fps), ${renderer.info.render.calls} draws · ${window.prtkit.gpu()}`;
+    stats.textContent = `${avg.toFixed(1)} ms/frame (${(1000 / avg).toFixed(0)} fps), ${renderer.info.render.calls} draws`;
+    stats.title = window.prtkit.gpu();
   });
 }

@@ -230,6 +230,17 @@ try {
       // glossy ones; the right frame scores 53–64 dB.
       check(`IBL sphere ${v.name} (${frame} frame) vs render --shading ibl`, s.psnr >= 45,
         `PSNR ${s.psnr.toFixed(2)} dB over ${s.pixels} sphere pixels (≥ 45; the issue's bar is 35), mean |Δ| ${s.mean.toFixed(3)} codes; whole frame ${all.psnr.toFixed(2)} dB`);
+      if (frame === 'three' && v.m === 0) {
+        // The SH path (sh.json, same frame matrix) against render's irradiance cube: what differs
+        // is the order-2 truncation of E/π, so the bar is looser; a frame error in the SH lookup
+        // would show as a mirrored diffuse gradient.
+        let shImg = mirrorX((await view({ ...params, diffuse: 'sh' })).image);
+        writePng(join(out, `sphere-${v.name}-viewer-three-sh.png`), shImg);
+        const t = compare(shImg, ref, mask);
+        figures[`sphere_${v.name}_three_sh`] = { psnr_sphere: t.psnr, mean_sphere: t.mean };
+        check(`IBL sphere ${v.name} (three frame, SH diffuse) vs render (irradiance cube)`, t.psnr >= 35,
+          `PSNR ${t.psnr.toFixed(2)} dB (≥ 35), mean |Δ| ${t.mean.toFixed(3)} codes`);
+      }
       if (frame === 'gl') {
         // Raw WebGL row of the conventions table: the skybox sampled with the unchanged world
         // direction is render's background (the source map in prtkit's frame) — off the sphere.
