@@ -1,0 +1,283 @@
+// Browser tests of the viewer against prtkit's own outputs, in headless Chromium (SwiftShader).
+//   node viewer/test/run.mjs [BIN_DIR]      (or PRTKIT_BIN=...; default target/release)
+// Environment: CHROMIUM (default /usr/bin/chromium), PRTKIT_VIEWER_MAP (a lat-long .hdr/.exr;
+// default ../shared/testdata/envmaps/uffizi_ict_latlong_256x128.hdr, else a synthetic sky made
+// with sample-shader). Screenshots and figures go to out/viewer/. Last line: "N passed, M failed".
+import { execFileSync } from 'node:child_process';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, relative, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { PNG } from 'pngjs';
+import puppeteer from 'puppeteer-core';
+import { serve } from '../serve.mjs';
+
+const repo = resolve(fileURLToPath(new URL('../..', import.meta.url)));
+const bin = resolve(repo, process.argv[2] ?? process.env.PRTKIT_BIN ?? 'target/release');
+const out = join(repo, 'out/viewer');
+const chromium = process.env.CHROMIUM ?? '/usr/bin/chromium';
+const t0 = Date.now();
+mkdirSync(out, { recursive: true });
+
+let passed = 0, failed = 0;
+const figures = {};
+function check(name, ok, detail) {
+  if (ok) passed++; else failed++;
+  console.log(`${ok ? 'ok  ' : 'FAIL'} ${name}: ${detail}`);
+}
+function run(exe, args) {
+  return execFileSync(join(bin, exe), args, { cwd: repo, stdio: ['ignore', 'pipe', 'pipe'] }).toString();
+}
+const url = (p) => '/' + relative(repo, p).split('\\').join('/');
+
+// ---- the bake -------------------------------------------------------------------------------
+for (const exe of ['ibl', 'render']) {
+  if (!existsSync(join(bin, exe))) { console.error(`viewer tests: ${join(bin, exe)} missing (cargo build --release)`); process.exit(2); }
+}
+let map = process.env.PRTKIT_VIEWER_MAP ?? resolve(repo, '../shared/testdata/envmaps/uffizi_ict_latlong_256x128.hdr');
+if (!existsSync(map)) {
+  map = join(out, 'sky.exr');
+  run('sample-shader', ['testdata/shaders/sky.sl', '--latlong', '256x128', '-o', map, '-q']);
+}
+if (!map.startsWith(repo + '/')) { // the server serves the repository: copy the map in
+  const copy = join(out, 'source' + map.slice(map.lastIndexOf('.')));
+  writeFileSync(copy, readFileSync(map));
+  map = copy;
+}
+const bake = join(out, 'bake');
+rmSync(bake, { recursive: true, force: true });
+run('ibl', [map, '-o', bake, '--size', '128', '--samples', '0', '-q']);
+const manifest = JSON.parse(readFileSync(join(bake, 'ibl.json'), 'utf8'));
+const M = manifest.frame.world_from_prtkit; // rows: d_out = M d_prtkit
+const mul = (A, v) => A.map((row) => row[0] * v[0] + row[1] * v[1] + row[2] * v[2]);
+const THREE_FROM_GL = [[-1, 0, 0], [0, 1, 0], [0, 0, 1]];
+
+// ---- images ---------------------------------------------------------------------------------
+function readPng(path) {
+  const png = PNG.sync.read(readFileSync(path));
+  return { width: png.width, height: png.height, rgba: png.data };
+}
+function writePng(path, img) {
+  const png = new PNG({ width: img.width, height: img.height });
+  img.rgba.copy ? img.rgba.copy(png.data) : png.data.set(img.rgba);
+  writeFileSync(path, PNG.sync.write(png));
+}
+function fromPage(p) { // bottom-up RGBA from readPixels → top-down
+  const src = Buffer.from(p.rgbaBottomUp, 'base64');
+  const rgba = Buffer.alloc(src.length);
+  const row = p.width * 4;
+  for (let y = 0; y < p.height; y++) src.copy(rgba, y * row, (p.height - 1 - y) * row, (p.height - y) * row);
+  return { width: p.width, height: p.height, rgba };
+}
+function mirrorX(img) {
+  const rgba = Buffer.alloc(img.rgba.length);
+  for (let y = 0; y < img.height; y++) {
+    for (let x = 0; x < img.width; x++) {
+      const a = (y * img.width + x) * 4, b = (y * img.width + img.width - 1 - x) * 4;
+      for (let c = 0; c < 4; c++) rgba[a + c] = img.rgba[b + c];
+    }
+  }
+  return { ...img, rgba };
+}
+// Mean |a − b| in sRGB codes and PSNR (peak 255) over the RGB of the pixels where mask is true.
+function compare(a, b, mask = null) {
+  let sum = 0, sq = 0, n = 0;
+  for (let i = 0; i < a.width * a.height; i++) {
+    if (mask && !mask[i]) continue;
+    for (let c = 0; c < 3; c++) {
+      const d = a.rgba[4 * i + c] - b.rgba[4 * i + c];
+      sum += Math.abs(d); sq += d * d; n++;
+    }
+  }
+  const mse = sq / n;
+  return { mean: sum / n, psnr: mse === 0 ? Infinity : 10 * Math.log10((255 * 255) / mse), pixels: n / 3 };
+}
+function diffImage(a, b, gain = 8) {
+  const rgba = Buffer.alloc(a.rgba.length);
+  for (let i = 0; i < a.rgba.length; i += 4) {
+    for (let c = 0; c < 3; c++) rgba[i + c] = Math.min(255, gain * Math.abs(a.rgba[i + c] - b.rgba[i + c]));
+    rgba[i + 3] = 255;
+  }
+  return { ...a, rgba };
+}
+
+// prtkit render's camera (src/render/camera.rs): +Z up hint, ray through each pixel centre.
+const sub = (a, b) => a.map((x, i) => x - b[i]);
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const norm = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
+function sphereMask(eye, target, fov, w, h) {
+  const f = norm(sub(target, eye));
+  const right = norm(cross(f, [0, 0, 1]));
+  const up = cross(right, f);
+  const t = Math.tan((fov * Math.PI) / 360);
+  const mask = new Uint8Array(w * h);
+  for (let y = 0; y < h; y++) {
+    for (let x = 0; x < w; x++) {
+      const sx = (2 * (x + 0.5) / w - 1) * t * (w / h), sy = (1 - 2 * (y + 0.5) / h) * t;
+      const d = norm([0, 1, 2].map((i) => f[i] + sx * right[i] + sy * up[i]));
+      const b = dot(eye, d), c = dot(eye, eye) - 1;
+      // Strictly inside the silhouette (one pixel of margin: a pixel whose centre grazes the rim
+      // is the same pixel in both renders, but its neighbours mix sphere and sky differently).
+      mask[y * w + x] = b * b - c > 0.02 ? 1 : 0;
+    }
+  }
+  return mask;
+}
+
+// ---- the browser ----------------------------------------------------------------------------
+const server = await serve({ root: repo });
+const origin = `http://127.0.0.1:${server.address().port}`;
+const profile = mkdtempSync(join(tmpdir(), 'prtkit-viewer-chromium-'));
+const browser = await puppeteer.launch({
+  executablePath: chromium,
+  headless: true,
+  userDataDir: profile,
+  args: ['--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run',
+    '--disable-quic', '--disable-dev-shm-usage'],
+});
+const pageErrors = [];
+let gpuName = '';
+async function view(params, { bench = 0 } = {}) {
+  const page = await browser.newPage();
+  const logs = [];
+  page.on('console', (m) => {
+    const text = m.text();
+    // Driver performance notes ("GPU stall due to ReadPixels") are not errors.
+    if (/GL Driver Message \(OpenGL, Performance/.test(text)) return;
+    if (m.type() === 'error' || /WebGL|GL_INVALID|GL ERROR/i.test(text)) logs.push(`${m.type()}: ${text}`);
+  });
+  page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
+  const [w, h] = params.res.split('x').map(Number);
+  await page.setViewport({ width: w, height: h, deviceScaleFactor: 1 });
+  const query = new URLSearchParams({ test: '1', ...params }).toString();
+  await page.goto(`${origin}/viewer/?${query}`, { waitUntil: 'load' });
+  const ok = await page.evaluate(() => window.prtkit.ready);
+  const pixels = ok ? await page.evaluate(() => window.prtkit.pixels()) : null;
+  const ms = ok && bench ? await page.evaluate((n) => window.prtkit.bench(n), bench) : null;
+  if (!gpuName && ok) gpuName = await page.evaluate(() => window.prtkit.gpu());
+  const errors = await page.evaluate(() => window.prtkit.errors.slice());
+  await page.close();
+  const all = [...logs, ...errors];
+  if (all.length) pageErrors.push({ query, errors: all });
+  if (!ok) throw new Error(`page failed: ${query}\n${all.join('\n')}`);
+  return { image: fromPage(pixels), ms };
+}
+
+// Cameras are given in prtkit's frame (+Z up), as to `render`; the page gets them in three.js's
+// world: M e (glTF frame), then x negated when the page shows three.js's convention.
+const toPage = (e, frame) => (frame === 'three' ? mul(THREE_FROM_GL, mul(M, e)) : mul(M, e)).map((x) => +x.toFixed(6)).join(',');
+const FOV = 32, RES = '160x160';
+
+try {
+  // 1. Skybox (specular.ktx2 level 0 in the viewer) against three.js's own view of the source map.
+  const skyViews = [
+    { name: 'front', eye: [0, -4, 0.3], fov: 60 },
+    { name: 'side', eye: [4, 1.5, -0.5], fov: 60 },
+    { name: 'up', eye: [-1, -1.5, -3.5], fov: 75 },
+  ];
+  const exposure = '0';
+  for (const v of skyViews) {
+    const cam = (frame) => ({ eye: toPage(v.eye, frame), target: '0,0,0', fov: String(v.fov), res: '192x192', exposure });
+    const ref = (await view({ mode: 'equirect', src: url(map), ...cam('three') })).image;
+    const sky = (await view({ mode: 'sky', ibl: url(bake) + '/', ...cam('three') })).image;
+    const builtin = (await view({ mode: 'sky', sky: 'builtin', ibl: url(bake) + '/', ...cam('three') })).image;
+    const raw = (await view({ mode: 'sky', frame: 'gl', ibl: url(bake) + '/', ...cam('three') })).image;
+    writePng(join(out, `sky-${v.name}-three-equirect.png`), ref);
+    writePng(join(out, `sky-${v.name}-viewer.png`), sky);
+    writePng(join(out, `sky-${v.name}-diff-x8.png`), diffImage(sky, ref));
+    const a = compare(sky, ref), b = compare(builtin, ref), c = compare(raw, ref);
+    figures[`sky_${v.name}`] = { viewer_vs_three_equirect: a.mean, builtin_vs_three_equirect: b.mean, raw_gl_vs_three_equirect: c.mean };
+    check(`skybox ${v.name}: viewer (specular.ktx2 level 0, x negated) vs three.js EquirectangularReflectionMapping`, a.mean <= 1,
+      `mean |Δ| = ${a.mean.toFixed(3)} sRGB codes (≤ 1)`);
+    check(`skybox ${v.name}: three's built-in scene.background with the loader's cube vs three's equirect`, b.mean <= 1,
+      `mean |Δ| = ${b.mean.toFixed(3)} sRGB codes (≤ 1): three negates x itself`);
+    check(`skybox ${v.name}: raw GL direction (no x negation) differs from three's view`, c.mean > 4 * Math.max(a.mean, 0.5),
+      `mean |Δ| = ${c.mean.toFixed(3)} sRGB codes (must be far above the ${a.mean.toFixed(3)} of the negated lookup)`);
+  }
+
+  // 2. IBL spheres against prtkit render --shading ibl, same camera, no tone mapping, sRGB PNG.
+  const sphereViews = [
+    { name: 'gold-r0.3', m: 1, r: 0.3, eye: [0, -4, 0.6] },
+    { name: 'plastic-r0.5', m: 0, r: 0.5, eye: [3, -2.5, 1.2], base: [0.8, 0.2, 0.15] },
+    { name: 'metal-r0.8', m: 1, r: 0.8, eye: [-2.6, 2.8, -1], base: [0.95, 0.93, 0.88] },
+    { name: 'mirror-r0.05', m: 1, r: 0.05, eye: [1.5, 3.6, 1], base: [0.95, 0.95, 0.95] },
+  ];
+  for (const v of sphereViews) {
+    const base = v.base ?? [1, 0.78, 0.34];
+    const refPng = join(out, `sphere-${v.name}-render.png`);
+    run('render', [map, '--shading', 'ibl', '--ibl', join(bake, 'ibl.json'),
+      '--brdf', `gltf:base=${base.join('/')},metalness=${v.m},roughness=${v.r}`,
+      '--eye', v.eye.join(','), '--target', '0,0,0', '--fov', String(FOV), '--res', RES,
+      '--png', refPng, '--exposure', exposure, '-q']);
+    const ref = readPng(refPng);
+    const [w, h] = RES.split('x').map(Number);
+    const mask = sphereMask(v.eye, [0, 0, 0], FOV, w, h);
+    for (const frame of ['three', 'gl']) {
+      const params = { mode: 'sphere', ibl: url(bake) + '/', frame, m: String(v.m), r: String(v.r), base: base.join(','),
+        eye: toPage(v.eye, frame), target: '0,0,0', fov: String(FOV), res: RES, exposure };
+      let img = (await view(params)).image;
+      // In three.js's convention the world is prtkit's mirrored in x: the same camera, mirrored,
+      // sees the mirror image of render's picture.
+      if (frame === 'three') img = mirrorX(img);
+      writePng(join(out, `sphere-${v.name}-viewer-${frame}.png`), img);
+      writePng(join(out, `sphere-${v.name}-diff-${frame}-x8.png`), diffImage(img, ref));
+      const s = compare(img, ref, mask), all = compare(img, ref);
+      figures[`sphere_${v.name}_${frame}`] = { psnr_sphere: s.psnr, mean_sphere: s.mean, psnr_frame: all.psnr, pixels: s.pixels };
+      // The issue asks ≥ 35 dB. This test asks 45: an environment mirrored in x (the frame bug
+      // this test exists for) still scores 37–39 dB on the rough spheres here, 26–32 dB on the
+      // glossy ones; the right frame scores 53–64 dB.
+      check(`IBL sphere ${v.name} (${frame} frame) vs render --shading ibl`, s.psnr >= 45,
+        `PSNR ${s.psnr.toFixed(2)} dB over ${s.pixels} sphere pixels (≥ 45; the issue's bar is 35), mean |Δ| ${s.mean.toFixed(3)} codes; whole frame ${all.psnr.toFixed(2)} dB`);
+      if (frame === 'three' && v.m === 0) {
+        // The SH path (sh.json, same frame matrix) against render's irradiance cube: what differs
+        // is the order-2 truncation of E/π, so the bar is looser; a frame error in the SH lookup
+        // would show as a mirrored diffuse gradient.
+        let shImg = mirrorX((await view({ ...params, diffuse: 'sh' })).image);
+        writePng(join(out, `sphere-${v.name}-viewer-three-sh.png`), shImg);
+        const t = compare(shImg, ref, mask);
+        figures[`sphere_${v.name}_three_sh`] = { psnr_sphere: t.psnr, mean_sphere: t.mean };
+        check(`IBL sphere ${v.name} (three frame, SH diffuse) vs render (irradiance cube)`, t.psnr >= 35,
+          `PSNR ${t.psnr.toFixed(2)} dB (≥ 35), mean |Δ| ${t.mean.toFixed(3)} codes`);
+      }
+      if (frame === 'gl') {
+        // Raw WebGL row of the conventions table: the skybox sampled with the unchanged world
+        // direction is render's background (the source map in prtkit's frame) — off the sphere.
+        const bg = mask.map((_, i) => (mask[i] ? 0 : 1));
+        const grown = bg.map((x, i) => (x && !mask[i - 1] && !mask[i + 1] && !mask[i - w] && !mask[i + w] && !mask[i - 2] && !mask[i + 2] ? 1 : 0));
+        const b = compare(img, ref, grown);
+        figures[`background_${v.name}_gl`] = { mean: b.mean };
+        check(`background ${v.name}: raw GL lookup of specular.ktx2 vs render's background`, b.mean <= 1.5,
+          `mean |Δ| ${b.mean.toFixed(3)} codes (≤ 1.5: the cube level 0 against render's direct lat-long lookup)`);
+      }
+    }
+  }
+
+  // 3. Frame time per mode (SwiftShader: the CPU), and a grid screenshot.
+  const times = {};
+  for (const [mode, extra] of [['sky', {}], ['sphere', { m: '1', r: '0.3' }], ['grid', {}], ['grid', { diffuse: 'sh' }]]) {
+    const key = mode + (extra.diffuse ? '+sh' : '');
+    const eye = mode === 'grid' ? '0,0,17' : '0,0,4';
+    const r = await view({ mode, ibl: url(bake) + '/', eye, target: '0,0,0', fov: '32', res: '640x360', exposure, ...extra }, { bench: 20 });
+    times[key] = r.ms;
+    writePng(join(out, `mode-${key}.png`), r.image);
+    console.log(`     frame time ${key} 640×360: ${r.ms.toFixed(1)} ms (CPU, SwiftShader)`);
+  }
+  figures.frame_ms_640x360 = times;
+} catch (e) {
+  check('viewer pages', false, e.stack ?? String(e));
+} finally {
+  await browser.close();
+  server.close();
+  rmSync(profile, { recursive: true, force: true });
+}
+
+check('no WebGL or page errors', pageErrors.length === 0,
+  pageErrors.length ? JSON.stringify(pageErrors, null, 1).slice(0, 2000) : `none in any page (${gpuName})`);
+figures.gpu = gpuName;
+figures.seconds = (Date.now() - t0) / 1000;
+writeFileSync(join(out, 'figures.json'), JSON.stringify(figures, null, 2) + '\n');
+console.log(`viewer tests: ${figures.seconds.toFixed(1)} s; screenshots and figures.json in ${relative(repo, out)}/`);
+console.log(`${passed} passed, ${failed} failed`);
+process.exit(failed ? 1 : 0);
