@@ -27,6 +27,10 @@ pub struct IblBody {
     /// readers given a map check that it is the one baked (absent in bakes before it was added).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source_hash: Option<String>,
+    /// What the levels' errors were measured against when it is not the input itself (a large
+    /// input box-filtered, `ibl::reference`); absent when it is the input.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measured_against: Option<String>,
     /// The output frame.
     pub frame: Frame,
     /// The prefiltered specular cube.
@@ -110,6 +114,11 @@ pub struct Level {
     pub rms_rel_error: Option<f64>,
     /// Texels sampled for the errors.
     pub samples: usize,
+    /// When the reference is the input box-filtered (`measured_against`): max over the sampled
+    /// texels of the bound on what the filtering changes, relative like the errors; the error
+    /// against the input itself is within this of the stated one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_bound: Option<f64>,
     /// The most negative texel component before packing (0 when none).
     pub min_value: f64,
     /// Seconds to compute the level (measurement excluded); not written (see `timings`).

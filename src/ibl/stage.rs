@@ -482,6 +482,7 @@ fn bake_level(
         estimated_cost: Some(costs),
         max_rel_error: None,
         rms_rel_error: None,
+        reference_bound: None,
         samples: 0,
         min_value: 0.0,
         seconds: start.elapsed().as_secs_f64(),
@@ -532,6 +533,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
                     estimated_cost: None,
                     max_rel_error: None,
                     rms_rel_error: None,
+                    reference_bound: None,
                     samples: 0,
                     min_value: base.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64,
                     seconds: t_spec.elapsed().as_secs_f64(),
@@ -586,6 +588,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
 
     // Measure.
     let t_measure = Instant::now();
+    let mut measured_against = None;
     if config.samples > 0 {
         let reference = Reference::new(&latlong)?;
         for b in baked.iter_mut().chain(std::iter::once(&mut irradiance)) {
@@ -597,8 +600,10 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
             let m = reference.measure(&b.cube, &lobe, env_from_cube, config.samples);
             b.level.max_rel_error = Some(m.max_rel_error);
             b.level.rms_rel_error = Some(m.rms_rel_error);
+            b.level.reference_bound = reference.is_filtered().then_some(m.reference_bound);
             b.level.samples = m.samples;
         }
+        measured_against = reference.is_filtered().then(|| reference.describe());
     }
     timings.measure = t_measure.elapsed().as_secs_f64();
 
@@ -607,6 +612,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     let body = IblBody {
         source: config.source.clone(),
         source_hash: Some(env.content_hash()),
+        measured_against,
         frame: config.frame(env.orientation()),
         specular: manifest::Specular {
             file: format!("specular.{ext}"),

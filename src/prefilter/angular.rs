@@ -51,6 +51,9 @@ pub enum AngularError {
     /// The zonal filter refused the request.
     #[error(transparent)]
     Zonal(#[from] ZonalError),
+    /// A grid made for the integral does not fit its layout.
+    #[error(transparent)]
+    Geometry(#[from] crate::envmap::EnvMapError),
 }
 
 /// The map a [`ConeIntegrator`] reads, shared between rules.
