@@ -1,16 +1,34 @@
 #!/usr/bin/env bash
-# Opens an `ibl` bake in the browser viewer (viewer/README.md): serves the repository and DIR on
-# 127.0.0.1 and prints the URL to open.
-#   scripts/view.sh DIR [PORT]     DIR holds ibl.json (the -o of `ibl`); PORT defaults to 8333
+# Opens a prtkit output in the browser viewer (viewer/README.md): serves the repository and the
+# output's folder on 127.0.0.1 and prints the URL to open.
+#   scripts/view.sh DIR [PORT]          DIR holds ibl.json (the -o of `ibl`)
+#   scripts/view.sh FILE.json [PORT]    sh-project's prtkit.sh document (mode=irradiance) or
+#                                       prefilter's prtkit.shrm document (mode=shrm; its EXR beside it)
+# PORT defaults to 8333.
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
-if [ $# -lt 1 ] || [ ! -f "$1/ibl.json" ]; then
-  echo "usage: scripts/view.sh DIR [PORT]   (DIR: an ibl output folder holding ibl.json)" >&2
-  exit 2
+usage() { echo "usage: scripts/view.sh DIR|FILE.json [PORT]   (DIR: an ibl output folder holding ibl.json; FILE: a prtkit.sh or prtkit.shrm document)" >&2; exit 2; }
+[ $# -ge 1 ] || usage
+port="${2:-8333}"
+query=""
+if [ -d "$1" ]; then
+  [ -f "$1/ibl.json" ] || usage
+  dir="$(cd "$1" && pwd)"
+  query="?ibl=/bake/"
+elif [ -f "$1" ]; then
+  dir="$(cd "$(dirname "$1")" && pwd)"
+  name="$(basename "$1")"
+  format="$(grep -o '"format": *"[^"]*"' "$1" | head -1 | sed 's/.*"\([^"]*\)"$/\1/')"
+  case "$format" in
+    prtkit.sh) query="?mode=irradiance&sh=/bake/$name" ;;
+    prtkit.shrm) query="?mode=shrm&shrm=/bake/$name" ;;
+    *) echo "view: $1 is a '$format' document; give a prtkit.sh or prtkit.shrm document, or an ibl folder" >&2; exit 2 ;;
+  esac
+else
+  usage
 fi
-dir="$(cd "$1" && pwd)"
 if [ ! -d "$repo/viewer/node_modules/three" ]; then
   echo "view: installing the viewer's npm packages (npm ci in viewer/)" >&2
   (cd "$repo/viewer" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
 fi
-exec node "$repo/viewer/serve.mjs" --bake "$dir" --port "${2:-8333}"
+exec node "$repo/viewer/serve.mjs" --bake "$dir" --port "$port" --query "$query"

@@ -1,5 +1,5 @@
 // A tiny static server for the viewer, on 127.0.0.1 only.
-//   node viewer/serve.mjs [--port N] [--bake DIR]
+//   node viewer/serve.mjs [--port N] [--bake DIR] [--query '?mode=…']
 // Serves the repository root (the page is /viewer/, its modules under /viewer/node_modules/) and,
 // with --bake, DIR under /bake/. Prints the URL. Exported as serve() for the tests.
 import { createServer } from 'node:http';
@@ -40,7 +40,7 @@ if (process.argv[1] && resolve(process.argv[1]) === fileURLToPath(import.meta.ur
   const bake = opt('--bake');
   const server = await serve({ root, bake, port: Number(opt('--port') ?? 8333), quiet: false });
   const { port } = server.address();
-  const query = bake ? '?ibl=/bake/' : '';
+  const query = opt('--query') ?? (bake ? '?ibl=/bake/' : ''); // what to open: view.sh says
   console.log(`prtkit viewer: http://127.0.0.1:${port}/viewer/${query}`);
   console.log('(Ctrl-C to stop)');
 }

@@ -10,12 +10,19 @@
 //   rotate=DEG        environment turn about +Y
 //   diffuse=cube|sh   E/π from irradiance.ktx2 or sh.json
 //   eye=x,y,z target=x,y,z fov=DEG res=WxH   camera in three.js world coordinates (+Y up)
+//   mode=irradiance   sh=URL (sh-project's prtkit.sh): a Lambert sphere lit by E(n) (albedo=A, default 1)
+//   mode=shrm         shrm=URL (prefilter's prtkit.shrm; its EXR beside it): per-pixel SHRM sphere
+//   mode=normals      codes=URL report=URL decoder=URL (encode-normals' codes, report, --emit-decoder
+//                     glsl) size=WxH: a lat-long table of normals decoded in the shader, lit by sh=URL
+//   (these three: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
+//    rotate=DEG turns the lighting about the up axis: SH coefficients rotated every frame)
 //   test=1            no UI, no animation loop: the test script drives window.prtkit
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
 import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import { loadPrtkitIbl, PRTKIT_IBL_GLSL, prtkitUniforms } from './prtkit-loader.js';
+import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, loadPrtkitShrm, SHRM_GLSL, loadNormalCodes } from './prtkit-sh.js';
 
 const q = new URLSearchParams(location.search);
 const num = (k, d) => (q.has(k) ? Number(q.get(k)) : d);
@@ -162,7 +169,148 @@ function buildSpheres() {
   }
 }
 
+
+// --- SH irradiance, SHRM and encoded-normal spheres (prtkit-sh.js) ---------------------------
+// Ray-cast like the split-sum spheres; each mode's shading works in prtkit's frame
+// (prtkitFromWorld: see prtkit-sh.js's header).
+const SH_MODES = ['irradiance', 'shrm', 'normals'];
+const docs = {}; // what each mode loaded: sh, shrm, codes, decoder
+const shadeBody = {
+  irradiance: 'c = prtkitShLambert(prtkitFromWorld * n);',
+  shrm: `vec3 np = prtkitFromWorld * n, wo = prtkitFromWorld * (-d);
+         c = prtkitShrm(reflect(-wo, np), wo);`,
+  normals: 'c = prtkitShLambert(decodedNormal(prtkitFromWorld * n));',
+};
+const NORMALS_GLSL = /* glsl */ `
+precision highp usampler2D;
+uniform usampler2D codes;
+// The lat-long table of normals, texel (x, y) at φ = 2π(x + ½)/W, θ = π(y + ½)/H: the four
+// nearest codes decoded and blended bilinearly (wrapping in φ), then normalized.
+vec3 decodedAt(ivec2 t, ivec2 size) {
+  t.x = (t.x + size.x) % size.x;
+  t.y = clamp(t.y, 0, size.y - 1);
+  return prtkit_decode_normal(texelFetch(codes, t, 0).r);
+}
+vec3 decodedNormal(vec3 g) {
+  ivec2 size = textureSize(codes, 0);
+  float phi = atan(g.y, g.x);
+  vec2 f = vec2((phi < 0.0 ? phi + 6.283185307179586 : phi) / 6.283185307179586, acos(clamp(g.z, -1.0, 1.0)) / 3.141592653589793) * vec2(size) - 0.5;
+  ivec2 i = ivec2(floor(f));
+  vec2 w = f - floor(f);
+  vec3 n = mix(mix(decodedAt(i, size), decodedAt(i + ivec2(1, 0), size), w.x),
+               mix(decodedAt(i + ivec2(0, 1), size), decodedAt(i + ivec2(1, 1), size), w.x), w.y);
+  return normalize(n);
+}`;
+function shFragment(mode) {
+  const head = mode === 'shrm' ? `uniform mat3 prtkitFromWorld;\n${SHRM_GLSL}`
+    : SH_GLSL + (mode === 'normals' ? docs.decoder + NORMALS_GLSL : '');
+  return /* glsl */ `
+  ${head}
+  uniform mat4 projectionMatrix;
+  uniform vec3 center;
+  uniform float radius;
+  uniform float exposureScale;
+  varying vec3 vWorld;
+  void main() {
+    vec3 d = normalize(vWorld - cameraPosition);
+    vec3 oc = cameraPosition - center;
+    float b = dot(oc, d);
+    float h = b * b - (dot(oc, oc) - radius * radius);
+    if (h < 0.0) discard;
+    float t = -b - sqrt(h);
+    if (t < 0.0) discard;
+    vec3 hit = cameraPosition + t * d;
+    vec3 n = normalize(hit - center);
+    vec3 c = vec3(0.0);
+    ${shadeBody[mode]}
+    vec4 clip = projectionMatrix * viewMatrix * vec4(hit, 1.0);
+    gl_FragDepth = 0.5 * clip.z / clip.w + 0.5;
+    gl_FragColor = linearToOutputTexel(vec4(c * exposureScale, 1.0));
+  }`;
+}
+let shMaterial = null;
+async function setupShMode() {
+  const mode = state.mode;
+  if (mode === 'irradiance' || mode === 'normals') {
+    const url = q.get('sh');
+    if (!url) throw new Error(`mode=${mode} needs sh=URL (a prtkit.sh document from sh-project)`);
+    docs.sh ??= await loadPrtkitSh(url);
+  }
+  if (mode === 'shrm') {
+    const url = q.get('shrm');
+    if (!url) throw new Error('mode=shrm needs shrm=URL (a prtkit.shrm document from prefilter --shrm)');
+    docs.shrm ??= await loadPrtkitShrm(url);
+    document.getElementById('source').textContent = docs.shrm.doc.brdf;
+  }
+  if (mode === 'normals') {
+    for (const k of ['codes', 'report', 'decoder', 'size']) if (!q.get(k)) throw new Error(`mode=normals needs ${k}=`);
+    const [w, h] = q.get('size').split('x').map(Number);
+    docs.codes ??= await loadNormalCodes(q.get('codes'), q.get('report'), w, h);
+    docs.decoder ??= await (await fetch(q.get('decoder'))).text();
+  }
+  const uniforms = {
+    center: { value: new THREE.Vector3(0, 0, 0) },
+    radius: { value: 1 },
+    exposureScale: { value: exposureScale() },
+    prtkitFromWorld: { value: prtkitFromWorld(state.frame) },
+    shIrradiance: { value: irradianceUniform([], 1) },
+    shrmLayers: { value: docs.shrm?.texture ?? null },
+    shrmPB: { value: docs.shrm?.pb ?? 0 },
+    shrmGlobal: { value: docs.shrm?.global ? 1 : 0 },
+    envTurn: { value: 0 },
+    codes: { value: docs.codes?.texture ?? null },
+  };
+  shMaterial = new THREE.ShaderMaterial({ uniforms, vertexShader: sphereVertex, fragmentShader: shFragment(mode), side: THREE.BackSide });
+  spheres.clear();
+  spheres.add(new THREE.Mesh(sphereBox, shMaterial));
+  scene.add(spheres);
+  if (q.get('src')) scene.background = await loadEquirect(q.get('src'));
+}
+// Every frame: the lighting turned by state.rotate about the up axis. For SH lighting the
+// coefficients themselves are rotated (rotateShZ, any order); the SHRM's lookup turns (β − γ).
+function updateShUniforms() {
+  const u = shMaterial.uniforms;
+  const turn = rotation();
+  u.exposureScale.value = exposureScale();
+  u.prtkitFromWorld.value = prtkitFromWorld(state.frame);
+  if (docs.sh) u.shIrradiance.value = irradianceUniform(rotateShZ(docs.sh.coefficients, turn), num('albedo', 1));
+  u.envTurn.value = turn;
+  scene.backgroundIntensity = exposureScale();
+  // three's equirect background turns the map by +angle about +Y; prtkit's +Z turn by γ is a turn
+  // by −γ about three's +Y in the mirrored (three) frame.
+  scene.backgroundRotation.set(0, state.frame === 'three' ? -turn : turn, 0);
+}
+// Test hook: the code table decoded on the GPU by the emitted decoder, one texel per code,
+// into an RGBA32F target; returns the xyz as a flat array (row 0 = the first W codes).
+function decodedNormals() {
+  const tex = docs.codes.texture;
+  const { width, height } = tex.image;
+  const target = new THREE.WebGLRenderTarget(width, height, { type: THREE.FloatType, format: THREE.RGBAFormat, depthBuffer: false });
+  const material = new THREE.ShaderMaterial({
+    uniforms: { codes: { value: tex } },
+    vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
+    fragmentShader: `${docs.decoder}
+      precision highp usampler2D;
+      uniform usampler2D codes;
+      void main() { gl_FragColor = vec4(prtkit_decode_normal(texelFetch(codes, ivec2(gl_FragCoord.xy), 0).r), 1.0); }`,
+  });
+  const quad = new THREE.Mesh(skyGeometry, material);
+  quad.frustumCulled = false;
+  const s = new THREE.Scene();
+  s.add(quad);
+  renderer.setRenderTarget(target);
+  renderer.render(s, camera);
+  const buf = new Float32Array(width * height * 4);
+  renderer.readRenderTargetPixels(target, 0, 0, width, height, buf);
+  renderer.setRenderTarget(null);
+  target.dispose();
+  const xyz = new Array(width * height * 3);
+  for (let i = 0; i < width * height; i++) for (let c = 0; c < 3; c++) xyz[3 * i + c] = buf[4 * i + c];
+  return xyz;
+}
+
 function updateUniforms() {
+  if (SH_MODES.includes(state.mode)) { updateShUniforms(); return; }
   const common = prtkitUniforms(ibl, rotation());
   for (const material of [skyMaterial, ...spheres.children.map((s) => s.material)]) {
     for (const [k, v] of Object.entries(common)) {
@@ -197,6 +345,11 @@ async function setup() {
     scene.background = await loadEquirect(q.get('src'));
     scene.backgroundIntensity = exposureScale();
     scene.backgroundRotation.set(0, rotation(), 0);
+    return;
+  }
+  if (SH_MODES.includes(state.mode)) {
+    await setupShMode();
+    updateUniforms();
     return;
   }
   if (!ibl || ibl.frame !== state.frame) {
@@ -251,6 +404,9 @@ window.prtkit = {
   ready: setup().then(() => { draw(); return true; }).catch((e) => { report(e.stack ?? e); return false; }),
   pixels,
   bench,
+  decodedNormals,
+  rotateShZ,
+  sh: () => docs.sh?.coefficients,
   gpu: () => {
     const ext = gl.getExtension('WEBGL_debug_renderer_info');
     return ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER);

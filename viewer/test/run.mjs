@@ -139,7 +139,7 @@ const browser = await puppeteer.launch({
 });
 const pageErrors = [];
 let gpuName = '';
-async function view(params, { bench = 0 } = {}) {
+async function view(params, { bench = 0, evaluate = null } = {}) {
   const page = await browser.newPage();
   const logs = [];
   page.on('console', (m) => {
@@ -156,13 +156,14 @@ async function view(params, { bench = 0 } = {}) {
   const ok = await page.evaluate(() => window.prtkit.ready);
   const pixels = ok ? await page.evaluate(() => window.prtkit.pixels()) : null;
   const ms = ok && bench ? await page.evaluate((n) => window.prtkit.bench(n), bench) : null;
+  const value = ok && evaluate ? await page.evaluate(evaluate) : null;
   if (!gpuName && ok) gpuName = await page.evaluate(() => window.prtkit.gpu());
   const errors = await page.evaluate(() => window.prtkit.errors.slice());
   await page.close();
   const all = [...logs, ...errors];
   if (all.length) pageErrors.push({ query, errors: all });
   if (!ok) throw new Error(`page failed: ${query}\n${all.join('\n')}`);
-  return { image: fromPage(pixels), ms };
+  return { image: fromPage(pixels), ms, value };
 }
 
 // Cameras are given in prtkit's frame (+Z up), as to `render`; the page gets them in three.js's
@@ -170,7 +171,175 @@ async function view(params, { bench = 0 } = {}) {
 const toPage = (e, frame) => (frame === 'three' ? mul(THREE_FROM_GL, mul(M, e)) : mul(M, e)).map((x) => +x.toFixed(6)).join(',');
 const FOV = 32, RES = '160x160';
 
+
+// ---- SH irradiance, SHRMs, encoded normals (mode=irradiance|shrm|normals) ----------------------
+// The map: sample-shader's sky (a sun at (0.45, 0.25, 0.6), nothing symmetric in x or y, so a
+// mirrored or turned frame shows), 256×128, made here.
+async function shTests() {
+  const dir = join(out, 'sh');
+  rmSync(dir, { recursive: true, force: true });
+  mkdirSync(dir, { recursive: true });
+  const sky = join(dir, 'sky.exr');
+  run('sample-shader', ['testdata/shaders/sky.sl', '--latlong', '256x128', '-o', sky, '-q']);
+  // The SH document is projected from convert's PFM copy of the map, the file the rotation test
+  // turns (the EXR's and the PFM's projections differ by 5e-4 relative; the turn itself is exact).
+  run('convert', [sky, '-o', join(dir, 'sky.pfm'), '-q']);
+  run('sh-project', [join(dir, 'sky.pfm'), '-F', '2', '-o', join(dir, 'sky.sh.json'), '-q']);
+  // −3 EV keeps the Lambert spheres below white (the sun's E/π is about 3); the SHRM highlights clip.
+  let EXPOSURE = '-3';
+  const [w, h] = RES.split('x').map(Number);
+  const cams = [[3, -2.5, 1.2], [-1.5, 3.6, -1]];
+  const pageCam = (eye, frame) => ({ eye: toPage(eye, frame), target: '0,0,0', fov: String(FOV), res: RES, exposure: EXPOSURE });
+  // One scene in the page (both frames) against render's PNG: PSNR over the sphere; the other
+  // frame's x convention with this frame's camera (the frame fix dropped) must fail the bar.
+  async function against(name, refPng, eye, params, bar) {
+    const ref = readPng(refPng);
+    const mask = sphereMask(eye, [0, 0, 0], FOV, w, h);
+    const fig = {};
+    for (const frame of ['three', 'gl']) {
+      let img = (await view({ ...params, frame, ...pageCam(eye, frame) })).image;
+      if (frame === 'three') img = mirrorX(img);
+      writePng(join(out, `${name}-viewer-${frame}.png`), img);
+      writePng(join(out, `${name}-diff-${frame}-x8.png`), diffImage(img, ref));
+      const c = compare(img, ref, mask);
+      fig[frame] = c.psnr;
+      check(`${name} (${frame} frame) vs render`, c.psnr >= bar, `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} sphere pixels (≥ ${bar}), mean |Δ| ${c.mean.toFixed(3)} codes`);
+    }
+    const wrong = mirrorX((await view({ ...params, frame: 'gl', ...pageCam(eye, 'three') })).image);
+    const c = compare(wrong, ref, mask);
+    fig.x_flipped = c.psnr;
+    check(`${name}: the x flip dropped (gl frame, three's camera) fails`, c.psnr < bar - 5,
+      `PSNR ${c.psnr.toFixed(2)} dB (must stay under ${bar - 5})`);
+    figures[name] = fig;
+    return fig;
+  }
+  const renderPng = (args, png, eye) => run('render', [...args, '--eye', eye.join(','), '--target', '0,0,0',
+    '--fov', String(FOV), '--res', RES, '--png', png, '--exposure', EXPOSURE, '-q']);
+
+  // 1. SH irradiance (sh-project's prtkit.sh) against render --shading irradiance --sh.
+  const shUrl = url(join(dir, 'sky.sh.json'));
+  for (const [i, eye] of cams.entries()) {
+    const png = join(out, `irradiance-${i}-render.png`);
+    renderPng([sky, '--shading', 'irradiance', '--sh', join(dir, 'sky.sh.json'), '--window', 'none'], png, eye);
+    await against(`irradiance-${i}`, png, eye, { mode: 'irradiance', sh: shUrl, src: url(sky) }, 45);
+  }
+  // Rotation: the lighting turned 90° about +Z in the page (its SH coefficients rotated) against
+  // render of the map itself turned 90° (its columns shifted by W/4: L'(φ) = L(φ − 90°)),
+  // projected again by sh-project: an independent rotation.
+  const pfm = readFileSync(join(dir, 'sky.pfm'));
+  let nl = 0, hdr = 0;
+  while (nl < 3) if (pfm[hdr++] === 0x0a) nl++;
+  const turned = Buffer.from(pfm);
+  const [PW, PH] = pfm.subarray(0, hdr).toString().split(/\s+/).slice(1, 3).map(Number);
+  for (let y = 0; y < PH; y++) {
+    for (let x = 0; x < PW; x++) {
+      const from = hdr + 12 * (y * PW + ((x - PW / 4 + PW) % PW));
+      pfm.copy(turned, hdr + 12 * (y * PW + x), from, from + 12);
+    }
+  }
+  writeFileSync(join(dir, 'sky-turned90.pfm'), turned);
+  run('sh-project', [join(dir, 'sky-turned90.pfm'), '-F', '2', '-o', join(dir, 'sky-turned90.sh.json'), '-q']);
+  {
+    const eye = cams[0];
+    const png = join(out, 'irradiance-turned90-render.png');
+    renderPng([join(dir, 'sky-turned90.pfm'), '--shading', 'irradiance', '--sh', join(dir, 'sky-turned90.sh.json'), '--window', 'none'], png, eye);
+    const ref = readPng(png);
+    const mask = sphereMask(eye, [0, 0, 0], FOV, w, h);
+    const r = await view({ mode: 'irradiance', sh: shUrl, src: url(sky), rotate: '90', ...pageCam(eye, 'three') }, {
+      evaluate: () => {
+        const c = window.prtkit.sh(), rot = window.prtkit.rotateShZ;
+        const err = (a, b) => Math.max(...a.flatMap((x, i) => x.map((v, k) => Math.abs(v - b[i][k]))));
+        return { c, turned: rot(c, Math.PI / 2), full: err(rot(c, 2 * Math.PI), c), back: err(rot(rot(c, 0.7), -0.7), c),
+          compose: err(rot(rot(c, 0.3), 0.4), rot(c, 0.7)) };
+      },
+    });
+    const img = mirrorX(r.image);
+    writePng(join(out, 'irradiance-turned90-viewer-three.png'), img);
+    const c = compare(img, ref, mask);
+    const bg = mask.map((x) => (x ? 0 : 1));
+    const b = compare(img, ref, bg);
+    const prt = JSON.parse(readFileSync(join(dir, 'sky-turned90.sh.json'), 'utf8')).coefficients;
+    const scale = Math.max(...prt.flat().map(Math.abs));
+    const coefErr = Math.max(...r.value.turned.flatMap((x, i) => x.map((v, k) => Math.abs(v - prt[i][k])))) / scale;
+    figures.irradiance_turned90 = { psnr: c.psnr, background_mean: b.mean, coefficient_rel_error: coefErr, identity: r.value };
+    delete figures.irradiance_turned90.identity.c; delete figures.irradiance_turned90.identity.turned;
+    check('irradiance turned 90° in the page (SH rotation) vs render of the map turned 90°', c.psnr >= 45,
+      `PSNR ${c.psnr.toFixed(2)} dB (≥ 45); coefficients vs sh-project of the turned map: max rel. error ${coefErr.toExponential(2)}; background (three's equirect, turned) mean |Δ| ${b.mean.toFixed(2)} codes`);
+    check('irradiance turned: three\'s equirect background turned with it vs render\'s background of the turned map', b.mean <= 1.5,
+      `mean |Δ| ${b.mean.toFixed(3)} codes (≤ 1.5)`);
+    check('SH rotation identities (360°, +θ then −θ, 0.3 then 0.4 = 0.7)', Math.max(r.value.full, r.value.back, r.value.compose) <= 1e-6,
+      `max |Δ| ${r.value.full.toExponential(1)}, ${r.value.back.toExponential(1)}, ${r.value.compose.toExponential(1)} (≤ 1e-6)`);
+    check('irradiance turned: coefficients match sh-project of the turned map', coefErr <= 1e-6, `max rel. error ${coefErr.toExponential(2)} (≤ 1e-6)`);
+    // The turn's direction reversed must fail.
+    const wrong = mirrorX((await view({ mode: 'irradiance', sh: shUrl, rotate: '-90', ...pageCam(eye, 'three') })).image);
+    const cw = compare(wrong, ref, mask);
+    figures.irradiance_turned90.reversed_psnr = cw.psnr;
+    check('irradiance turned the other way (−90°) fails', cw.psnr < 40, `PSNR ${cw.psnr.toFixed(2)} dB (< 40)`);
+  }
+
+  EXPOSURE = '-2';
+  // 2. SHRMs (prefilter --shrm) against render --shading shrm: Phong s = 16 (P_B = 0) and a
+  // Torrance–Sparrow σ = 0.3 (P_B = 6: the view bands, eq. 6, per pixel).
+  for (const [name, brdf, extra] of [['shrm-phong16', 'phong:s=16', []], ['shrm-ts0.3', 'torrance-sparrow:sigma=0.3', ['--size', '128x64']]]) {
+    const json = join(dir, `${name}.json`);
+    run('prefilter', [sky, '--brdf', brdf, ...extra, '--shrm', join(dir, `${name}.exr`), '-o', json, '-q']);
+    const eye = cams[0];
+    const png = join(out, `${name}-render.png`);
+    renderPng([sky, '--shading', 'shrm', '--shrm', json, '--brdf', brdf, '--window', 'none'], png, eye);
+    await against(name, png, eye, { mode: 'shrm', shrm: url(json), src: url(sky) }, 35);
+  }
+
+  // 3. Normals from encode-normals: a 256×128 lat-long table of the sphere's own normals (prtkit's
+  // frame), 32-bit onv-range codes, decoded in the shader by the emitted GLSL decoder.
+  const NW = 256, NH = 128;
+  const normals = new Float32Array(NW * NH * 3);
+  for (let y = 0; y < NH; y++) {
+    for (let x = 0; x < NW; x++) {
+      const t = (Math.PI * (y + 0.5)) / NH, p = (2 * Math.PI * (x + 0.5)) / NW, i = 3 * (y * NW + x);
+      normals[i] = Math.sin(t) * Math.cos(p); normals[i + 1] = Math.sin(t) * Math.sin(p); normals[i + 2] = Math.cos(t);
+    }
+  }
+  writeFileSync(join(dir, 'sphere.f32'), Buffer.from(normals.buffer));
+  run('encode-normals', [join(dir, 'sphere.f32'), '--scheme', 'onv-range', '--bits', '32', '-o', join(dir, 'sphere.codes'), '--report', join(dir, 'sphere.codes.json'), '-q']);
+  writeFileSync(join(dir, 'decoder.glsl'), run('encode-normals', ['--emit-decoder', 'glsl', '--scheme', 'onv-range', '--bits', '32']));
+  const report = JSON.parse(readFileSync(join(dir, 'sphere.codes.json'), 'utf8'));
+  const nParams = { mode: 'normals', sh: shUrl, src: url(sky), codes: url(join(dir, 'sphere.codes')), report: url(join(dir, 'sphere.codes.json')),
+    decoder: url(join(dir, 'decoder.glsl')), size: `${NW}x${NH}` };
+  {
+    const r = await view({ ...nParams, ...pageCam(cams[0], 'three') }, { evaluate: () => window.prtkit.decodedNormals() });
+    let worst = 0;
+    for (let i = 0; i < NW * NH; i++) {
+      const a = [normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]], b = r.value.slice(3 * i, 3 * i + 3);
+      const na = norm(a);
+      worst = Math.max(worst, Math.atan2(Math.hypot(...cross(na, b)), dot(na, b)));
+    }
+    figures.normals_decode = { max_angle: worst, bound: report.bound, cpu_max: report.error.max };
+    check('normals decoded on the GPU by the emitted GLSL decoder vs the source normals', worst <= report.bound,
+      `max angle ${worst.toExponential(3)} rad over ${NW * NH} codes (≤ the report's bound ${report.bound.toExponential(3)}; encode-normals' own max ${report.error.max.toExponential(3)})`);
+  }
+  EXPOSURE = '-3';
+  for (const [i, eye] of cams.entries()) {
+    const png = join(out, `irradiance-${i}-render.png`); // the same scene: E(n) of the decoded normal
+    await against(`normals-${i}`, png, eye, nParams, 45);
+  }
+
+  // 4. Frame time of each mode at 640×360 (SwiftShader: the CPU), the lighting turning 1° a frame
+  // (SH modes: the 9 coefficients rotated in JS and uploaded every frame).
+  const times = {};
+  for (const [key, params] of [['irradiance', { mode: 'irradiance', sh: shUrl }], ['shrm-phong16', { mode: 'shrm', shrm: url(join(dir, 'shrm-phong16.json')) }],
+    ['shrm-ts0.3', { mode: 'shrm', shrm: url(join(dir, 'shrm-ts0.3.json')) }], ['normals', nParams]]) {
+    const r = await view({ ...params, src: url(sky), eye: '0,0,4', target: '0,0,0', fov: '32', res: '640x360', exposure: '-2.5' }, { bench: 10 });
+    times[key] = r.ms;
+    writePng(join(out, `mode-${key}.png`), r.image);
+    console.log(`     frame time ${key} 640×360: ${r.ms.toFixed(1)} ms (CPU, SwiftShader)`);
+  }
+  figures.frame_ms_640x360_sh = times;
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|sh runs one group (development); both by default.
+const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
+  if (only !== 'sh') {
   // 1. Skybox (specular.ktx2 level 0 in the viewer) against three.js's own view of the source map.
   const skyViews = [
     { name: 'front', eye: [0, -4, 0.3], fov: 60 },
@@ -265,6 +434,8 @@ try {
     console.log(`     frame time ${key} 640×360: ${r.ms.toFixed(1)} ms (CPU, SwiftShader)`);
   }
   figures.frame_ms_640x360 = times;
+  }
+  if (only !== 'ibl') await shTests();
 } catch (e) {
   check('viewer pages', false, e.stack ?? String(e));
 } finally {
