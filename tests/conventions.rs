@@ -272,6 +272,57 @@ fn dash_reads_the_environment_map_or_the_sh_document_from_stdin() {
     assert_eq!(std::fs::read(a.join("m.exr")).unwrap(), std::fs::read(b.join("m.exr")).unwrap());
 }
 
+/// `-` reads stdin for every input docs/cli.md lists (the same bytes out as from the file), and
+/// a document that names files beside it is refused from stdin, saying why (issue 34).
+#[test]
+fn dash_reads_every_input_cli_md_promises_and_refuses_documents_that_name_files() {
+    let w = world();
+    let manifest = w.root.join("materials.txt");
+    std::fs::write(&manifest, "shiny phong:s=30 80\nmatte lambert -\n").unwrap();
+    let codes = w.root.join("codes.bin");
+    cmd("encode-normals").arg(&w.normals).arg("-o").arg(&codes).arg("-q").assert().success();
+    // (stage, arguments with "IN" for the input, the input, the output compared; "" is stdout).
+    let wood = testdata("shaders/wood.sl");
+    let cases: [(&str, &[&str], &str, &str); 4] = [
+        ("sample-shader", &["IN", "--res", "8x8", "-o", "t.exr"], &wood, "t.exr"),
+        ("encode-normals", &["IN", "-o", "c.bin"], &w.normals, "c.bin"),
+        ("encode-normals", &["--decode", "IN", "-o", "n.f32"], codes.to_str().unwrap(), "n.f32"),
+        ("count-terms", &["--manifest", "IN", "--predict-only", "--json"], manifest.to_str().unwrap(), ""),
+    ];
+    for (i, (stage, args, input, output)) in cases.into_iter().enumerate() {
+        let with = |arg: &str| -> Vec<String> {
+            args.iter().map(|a| if *a == "IN" { arg.to_string() } else { a.to_string() }).collect()
+        };
+        let (a, b) = (w.run_dir(&format!("in-{i}-file")), w.run_dir(&format!("in-{i}-stdin")));
+        let from_file = cmd(stage).args(with(input)).current_dir(&a).assert().success().get_output().stdout.clone();
+        let bytes = std::fs::read(input).unwrap();
+        let run = cmd(stage).args(with("-")).current_dir(&b).write_stdin(bytes).assert().success();
+        let from_stdin = run.get_output().stdout.clone();
+        if output.is_empty() {
+            assert_eq!(from_file, from_stdin, "{stage} {args:?}");
+        } else {
+            assert_eq!(std::fs::read(a.join(output)).unwrap(), std::fs::read(b.join(output)).unwrap(), "{stage} -");
+        }
+    }
+    // Documents that name files beside them: no directory to find those in on stdin.
+    for (shading, option, brdf) in
+        [("shrm", "--shrm", "phong:s=8"), ("factored", "--factors", "lambert"), ("ibl", "--ibl", "gltf")]
+    {
+        let dir = w.run_dir(&format!("refuse-{shading}"));
+        let out = cmd("render")
+            .arg(&w.sky)
+            .args(["--shading", shading, "--brdf", brdf, option, "-", "--res", "8x8", "-o", "r.exr"])
+            .current_dir(&dir)
+            .write_stdin(std::fs::read(&w.shrm).unwrap())
+            .output()
+            .unwrap();
+        let stderr = common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{option} -: {stderr}");
+        assert!(stderr.contains("<stdin>") && stderr.contains("names files beside it"), "{option} -: {stderr}");
+        assert!(entries(&dir).is_empty(), "{option} -: wrote {:?}", entries(&dir));
+    }
+}
+
 #[test]
 fn dash_writes_each_output_to_stdout_and_only_one_may_claim_it() {
     let w = world();

@@ -266,7 +266,7 @@ pub enum BundleError {
 /// Reads a JSON document's text: at most [`crate::limits::max_document_bytes`], refused at
 /// once when it does not start with `{` (after white space), and UTF-8.
 pub fn read_text(path: &std::path::Path) -> Result<String, BundleError> {
-    let text = crate::limits::read_text(path, "JSON", crate::limits::max_document_bytes(), |start| {
+    let text = super::read_text(path, "JSON", crate::limits::max_document_bytes(), |start| {
         match start.iter().find(|b| !b.is_ascii_whitespace()) {
             Some(b'{') | None => Ok(()),
             Some(_) => Err("does not start with '{': not a JSON document".into()),
@@ -283,7 +283,8 @@ pub fn read_document<T: for<'de> Deserialize<'de> + Validate>(
     max_version: u32,
 ) -> Result<Document<T>, BundleError> {
     let text = read_text(path)?;
-    parse_validated(&text, format, max_version).map_err(|error| BundleError::Parse { path: path.into(), error })
+    parse_validated(&text, format, max_version)
+        .map_err(|error| BundleError::Parse { path: super::read::display_path(path), error })
 }
 
 /// The file a document names: as written when that exists (or is absolute), else the file of

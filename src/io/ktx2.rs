@@ -28,6 +28,16 @@ use super::gpu_format::{TexelFormat, Texture, TextureError, TextureShape};
 /// The KTX 2.0 file identifier «KTX 20»\r\n\x1A\n.
 pub const IDENTIFIER: [u8; 12] = [0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A];
 
+/// Whether `start` (the first bytes of a file) is the start of a KTX 2.0 file: checked before
+/// the rest is read, so a device or a file of another kind costs 64 bytes of reading.
+pub fn check_identifier(start: &[u8]) -> Result<(), String> {
+    if start.starts_with(&IDENTIFIER) {
+        Ok(())
+    } else {
+        Err(format!("does not start with the KTX 2.0 identifier (found {:02x?})", &start[..start.len().min(12)]))
+    }
+}
+
 /// Rounds `n` up to a multiple of `align`.
 fn align_up(n: usize, align: usize) -> usize {
     n.div_ceil(align) * align

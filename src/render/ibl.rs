@@ -95,6 +95,7 @@ pub struct OtherSource {
 impl IblBake {
     /// Reads `DIR/ibl.json` and the KTX2 files it names, checking them against it.
     pub fn load(manifest: &Path) -> Result<Self, IblLoadError> {
+        crate::io::read::refuse_stdin(manifest, "a bake's ibl.json")?;
         let body = read_document::<IblBody>(manifest, FORMAT, VERSION)?.body;
         let bad = |reason: String| IblLoadError::Document { path: manifest.into(), reason };
         if body.specular.container != "ktx2" {
@@ -187,7 +188,8 @@ fn mismatch(manifest: &Path, file: &str, reason: String) -> IblLoadError {
 fn read_texture(manifest: &Path, file: &str, what: &'static str) -> Result<DecodedTexture, IblLoadError> {
     let path: PathBuf = named_file(manifest, file);
     let bytes =
-        crate::io::read_bytes(&path).map_err(|error| IblLoadError::Named { doc: manifest.into(), what, error })?;
+        crate::io::read_bytes(&path, "KTX2", crate::limits::max_file_bytes(), crate::io::ktx2::check_identifier)
+            .map_err(|error| IblLoadError::Named { doc: manifest.into(), what, error })?;
     decode(&bytes).map_err(|e| mismatch(manifest, file, e.to_string()))
 }
 
