@@ -8,7 +8,7 @@
 //! - Lambert SHRMs (`parameterization: normal`) are indexed by n and view-independent.
 
 use super::{Hit, Shade};
-use crate::io::document::{named_file, read_document, BundleError};
+use crate::io::document::{read_document, read_named_layers, BundleError};
 use crate::io::RgbImage;
 use crate::prefilter::document::{layer_name, ShrmBody, FORMAT, VERSION};
 use crate::prefilter::shrm::{reflection_map, Shrm};
@@ -38,8 +38,7 @@ pub fn load(doc_path: &Path) -> Result<(Shrm, ShrmBody), ShrmLoadError> {
         return Err(bad(format!("unknown parameterization {:?}", body.parameterization)));
     }
     let file = body.shrm_file.clone().ok_or_else(|| bad("the document names no shrm_file".into()))?;
-    let exr = named_file(doc_path, &file);
-    let layers = crate::io::exr::read_layers(&exr)?;
+    let (exr, layers) = read_named_layers(doc_path, &file, "SHRM file")?;
     let mismatch = |reason: String| ShrmLoadError::Mismatch { exr: exr.clone(), doc: doc_path.into(), reason };
     let n = count(body.p_b);
     let mut ordered = Vec::with_capacity(n);
