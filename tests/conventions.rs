@@ -1248,7 +1248,7 @@ const BAD_INPUTS: &[(&str, &str)] = &[
     ("error-nan-pixel.pfm", "pixel (3, 4) channel G is NaN"),
     ("error-negative-pixel.pfm", "pixel (5, 6) channel R is -1: negative radiance"),
     ("error-no-factor-file.factor.json", "names no factor file"),
-    ("error-not-json.sh.json", "error-not-json.sh.json: line 5, column 30"),
+    ("error-not-json.sh.json", "error-not-json.sh.json:5:30:"),
     ("error-order-overflow.sh.json", "above the ceiling of 2000"),
     ("error-reference-size.exr", "the reference is 8x8"),
     ("error-syntax.sl", "error-syntax.sl:2:15: expected an expression"),
