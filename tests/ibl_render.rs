@@ -236,6 +236,9 @@ fn a_bake_is_rendered_only_with_the_map_it_was_baked_from() {
     }
 }
 
+/// A change to a copy of a bake: to its directory and to its manifest.
+type Edit = dyn Fn(&std::path::Path, &mut serde_json::Value);
+
 /// A bake whose files contradict its manifest is refused with exit 2, naming the file and the
 /// manifest, before anything is rendered (issue 34): every field that describes a file (format,
 /// face size, levels, face order) is checked, and a level offset into the KTX2 header is refused.
@@ -262,7 +265,7 @@ fn a_bake_whose_files_contradict_the_manifest_is_refused_naming_both() {
     assert_eq!(render(&good).0, Some(0), "the good bake renders");
 
     // A copy of the good bake, broken by `edit` (on the directory and the manifest).
-    let broken = |name: &str, edit: &dyn Fn(&std::path::Path, &mut serde_json::Value)| {
+    let broken = |name: &str, edit: &Edit| {
         let bake = dir.path().join(name);
         std::fs::create_dir(&bake).unwrap();
         for entry in std::fs::read_dir(&good).unwrap() {
@@ -280,7 +283,7 @@ fn a_bake_whose_files_contradict_the_manifest_is_refused_naming_both() {
         bytes[80..88].copy_from_slice(&16u64.to_le_bytes()); // level 0's byteOffset
         std::fs::write(&path, bytes).unwrap();
     };
-    let cases: [(&str, &dyn Fn(&std::path::Path, &mut serde_json::Value), &str, &str); 7] = [
+    let cases: [(&str, &Edit, &str, &str); 7] = [
         (
             "specular-as-irradiance",
             &|bake, _| {
