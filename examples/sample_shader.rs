@@ -9,7 +9,6 @@
 //!
 //! `cargo run --release --example sample_shader [OUT_DIR]` (default `out/examples`).
 
-use anyhow::Context;
 use prtkit::progress::NoProgress;
 use prtkit::shader::sampler::{Arith, Domain};
 use prtkit::shader::stage::{self, Config};
@@ -24,7 +23,7 @@ fn main() -> anyhow::Result<()> {
 /// layers `width` and `depth`.
 pub fn run(out: &Path) -> anyhow::Result<()> {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/shaders/sky.sl");
-    let source = std::fs::read_to_string(&file).with_context(|| format!("cannot read {}", file.display()))?;
+    let source = prtkit::shader::read_source(&file)?;
     let shader = Shader::compile(&source, &file.display().to_string())?;
     // The command line's defaults, over directions instead of a texture.
     let config = Config {

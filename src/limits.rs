@@ -1,6 +1,7 @@
 //! Ceilings on what prtkit accepts from files, documents and shaders, each derived from memory
 //! or time, in one place (the table is `docs/limits.md`). Every reader checks its input against
-//! them with a `check_*` helper *before* allocating, so a hostile or garbled file ends with a
+//! them with a `check_*` helper *before* allocating (files and standard input are read through
+//! [`crate::io::read_bytes`], which stops at the ceiling it is given), so a hostile or garbled file ends with a
 //! clear error naming the file instead of an allocation failure, a panic or an endless loop.
 //!
 //! Memory ceilings scale with the machine: [`memory_budget`] is half of the memory the process
@@ -8,9 +9,6 @@
 //! `ulimit -v`). Everything else is a fixed number, so that what a file means does not depend
 //! on the machine that reads it.
 
-use crate::io::IoError;
-use std::io::Read;
-use std::path::Path;
 use std::sync::OnceLock;
 
 /// A value above its ceiling. The message says what, how much, the ceiling and why it exists.
@@ -217,55 +215,8 @@ pub const MAX_OPERATIONS: u64 = 1_000_000;
 pub const MAX_OCTAVES: usize = 16;
 
 // ---------------------------------------------------------------------------------------------
-// Reading files within a ceiling
+// Messages
 // ---------------------------------------------------------------------------------------------
-
-/// Reads the file at `path` whole, refusing it once it exceeds `ceiling` bytes (so `/dev/zero`
-/// or a growing pipe costs at most `ceiling` bytes of reading). `format` names the expected
-/// format in the messages; `check_start` sees the first bytes (up to 64) before the rest is
-/// read, so a file of the wrong kind is refused at once.
-pub fn read_file(
-    path: &Path,
-    format: &'static str,
-    ceiling: u64,
-    check_start: impl FnOnce(&[u8]) -> Result<(), String>,
-) -> Result<Vec<u8>, IoError> {
-    let mut file = std::fs::File::open(path).map_err(|e| IoError::os(path, e))?;
-    // The size on disk sizes the buffer when it is a regular file within the ceiling.
-    let hint = file.metadata().ok().filter(|m| m.is_file()).map_or(0, |m| m.len()).min(ceiling);
-    let mut bytes = Vec::with_capacity(hint as usize + 1);
-    let mut head = (&mut file).take(64);
-    head.read_to_end(&mut bytes).map_err(|e| IoError::os(path, e))?;
-    check_start(&bytes).map_err(|reason| IoError::invalid(path, format, reason))?;
-    let rest = (ceiling + 1).saturating_sub(bytes.len() as u64);
-    file.take(rest).read_to_end(&mut bytes).map_err(|e| IoError::os(path, e))?;
-    if bytes.len() as u64 > ceiling {
-        let e = LimitError {
-            what: "the file".into(),
-            value: format!("more than {}", human_bytes(ceiling as u128)),
-            ceiling: human_bytes(ceiling as u128),
-            reason: "files are read whole into memory",
-        };
-        return Err(IoError::invalid(path, format, e.to_string()));
-    }
-    Ok(bytes)
-}
-
-/// [`read_file`] for text: bytes that are not UTF-8 are an error at their line and column.
-pub fn read_text(
-    path: &Path,
-    format: &'static str,
-    ceiling: u64,
-    check_start: impl FnOnce(&[u8]) -> Result<(), String>,
-) -> Result<String, IoError> {
-    String::from_utf8(read_file(path, format, ceiling, check_start)?).map_err(|e| {
-        let before = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-        let column =
-            before.rsplit(|&b| b == b'\n').next().map_or(0, |l| String::from_utf8_lossy(l).chars().count()) + 1;
-        IoError::invalid(path, format, format!("line {line}, column {column}: not UTF-8 text"))
-    })
-}
 
 /// A byte count in binary units (KiB, MiB, …, one decimal).
 pub fn human_bytes(b: u128) -> String {
@@ -309,25 +260,5 @@ mod tests {
         assert!(check_sh_order("order", MAX_SH_ORDER).is_ok());
         let e = check_sh_order("\"order\"", 4_294_967_295).unwrap_err().to_string();
         assert!(e.contains("4294967295") && e.contains("2000"), "{e}");
-    }
-
-    #[test]
-    fn read_file_stops_at_the_ceiling_and_checks_the_start_first() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("f.bin");
-        std::fs::write(&p, vec![7u8; 1000]).unwrap();
-        assert_eq!(read_file(&p, "test", 1000, |_| Ok(())).unwrap().len(), 1000);
-        let e = read_file(&p, "test", 999, |_| Ok(())).unwrap_err().to_string();
-        assert!(e.contains("f.bin") && e.contains("ceiling"), "{e}");
-        let e = read_file(&p, "test", 1000, |b| Err(format!("starts with {}", b[0]))).unwrap_err().to_string();
-        assert!(e.contains("starts with 7"), "{e}");
-        std::fs::write(&p, b"ok\nab\xffc").unwrap();
-        let e = read_text(&p, "test", 100, |_| Ok(())).unwrap_err().to_string();
-        assert!(e.contains("line 2, column 3: not UTF-8"), "{e}");
-        // An endless file is read only up to the ceiling.
-        if Path::new("/dev/zero").exists() {
-            let e = read_file(Path::new("/dev/zero"), "test", 1 << 20, |_| Ok(())).unwrap_err().to_string();
-            assert!(e.contains("/dev/zero") && e.contains("1.0 MiB"), "{e}");
-        }
     }
 }

@@ -344,4 +344,38 @@ fn bad_input_exits_2_and_writes_nothing() {
         .code(2)
         .stderr(predicates::str::contains("not an empty directory"));
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
+    // `-o -`: a bake is a directory, never a directory named `-` (issue 34).
+    cmd("ibl")
+        .arg(&env)
+        .args(["-o", "-"])
+        .current_dir(dir.path())
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("a bake is a directory"));
+    assert!(!dir.path().join("-").exists(), "made a directory named -");
+}
+
+/// Radiance above 65504 saturates in rgba16f: said on stderr with the count, the maximum and the
+/// remedies; not said when the format holds it or --clamp brings it under (issue 34).
+#[test]
+fn values_a_format_cannot_hold_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let sun = DVec3::new(0.3, 0.2, 0.9).normalize();
+    let image = latlong(64, 32, |d| if d.dot(sun) > 0.99 { [1e6; 3] } else { [1.0; 3] });
+    let env = common::write_pfm(dir.path(), "sun.pfm", &image);
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut run = cmd("ibl");
+        run.arg(&env).arg("-o").arg(&out).args(["--size", "16", "--min-size", "4", "--samples", "0"]).args(extra);
+        common::stderr(run.assert().success().get_output())
+    };
+    let stderr = run("half", &[]);
+    let note = stderr.lines().find(|l| l.contains("were saturated")).unwrap_or_else(|| panic!("no note: {stderr}"));
+    let count: usize = note.split_whitespace().nth(1).and_then(|n| n.parse().ok()).unwrap_or(0);
+    assert!(count > 0 && note.contains("above 65504, the largest rgba16f holds"), "{note}");
+    assert!(note.contains("--clamp") && note.contains("--format rgba32f"), "{note}");
+    for (name, extra) in [("full", &["--format", "rgba32f"][..]), ("clamped", &["--clamp", "60000"][..])] {
+        let stderr = run(name, extra);
+        assert!(!stderr.contains("saturated"), "{extra:?}: {stderr}");
+    }
 }

@@ -235,3 +235,90 @@ fn a_bake_is_rendered_only_with_the_map_it_was_baked_from() {
         assert!(!wrote, "nothing written");
     }
 }
+
+/// A change to a copy of a bake: to its directory and to its manifest.
+type Edit = dyn Fn(&std::path::Path, &mut serde_json::Value);
+
+/// A bake whose files contradict its manifest is refused with exit 2, naming the file and the
+/// manifest, before anything is rendered (issue 34): every field that describes a file (format,
+/// face size, levels, face order) is checked, and a level offset into the KTX2 header is refused.
+#[test]
+fn a_bake_whose_files_contradict_the_manifest_is_refused_naming_both() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = sky_pfm(dir.path(), 64, 32);
+    let good = dir.path().join("good");
+    cmd("ibl").arg(&env).arg("-o").arg(&good).args(["--size", "16", "--min-size", "4", "-q"]).assert().success();
+    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(good.join("ibl.json")).unwrap()).unwrap();
+    let render = |bake: &std::path::Path| {
+        let png = dir.path().join("r.png");
+        let _ = std::fs::remove_file(&png);
+        let out = cmd("render")
+            .arg(&env)
+            .args(["--shading", "ibl", "--ibl"])
+            .arg(bake)
+            .args(["--brdf", "gltf:roughness=0.5", "--res", "8x8", "-q", "--png"])
+            .arg(&png)
+            .output()
+            .unwrap();
+        (out.status.code(), common::stderr(&out), png.exists())
+    };
+    assert_eq!(render(&good).0, Some(0), "the good bake renders");
+
+    // A copy of the good bake, broken by `edit` (on the directory and the manifest).
+    let broken = |name: &str, edit: &Edit| {
+        let bake = dir.path().join(name);
+        std::fs::create_dir(&bake).unwrap();
+        for entry in std::fs::read_dir(&good).unwrap() {
+            let entry = entry.unwrap();
+            std::fs::copy(entry.path(), bake.join(entry.file_name())).unwrap();
+        }
+        let mut m = manifest.clone();
+        edit(&bake, &mut m);
+        std::fs::write(bake.join("ibl.json"), serde_json::to_vec_pretty(&m).unwrap()).unwrap();
+        bake
+    };
+    let level_offset_into_header = |bake: &std::path::Path, _: &mut serde_json::Value| {
+        let path = bake.join("specular.ktx2");
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[80..88].copy_from_slice(&16u64.to_le_bytes()); // level 0's byteOffset
+        std::fs::write(&path, bytes).unwrap();
+    };
+    let cases: [(&str, &Edit, &str, &str); 7] = [
+        (
+            "specular-as-irradiance",
+            &|bake, _| {
+                std::fs::copy(bake.join("specular.ktx2"), bake.join("irradiance.ktx2")).unwrap();
+            },
+            "irradiance.ktx2",
+            "levels are [16, 8, 4] texels wide, the manifest says [32]",
+        ),
+        (
+            "offset-into-header",
+            &level_offset_into_header,
+            "specular.ktx2",
+            "level 0 starts at byte 16, inside the header",
+        ),
+        (
+            "size",
+            &|_, m| m["specular"]["levels"][0]["size"] = 32.into(),
+            "specular.ktx2",
+            "the manifest says [32, 8, 4]",
+        ),
+        ("format", &|_, m| m["specular"]["format"] = "rgba32f".into(), "specular.ktx2", "the manifest says rgba32f"),
+        ("dfg-size", &|_, m| m["dfg"]["size"] = 64.into(), "dfg.ktx2", "the manifest says [64]"),
+        ("irradiance-format", &|_, m| m["irradiance"]["format"] = "e5b9g9r9".into(), "irradiance.ktx2", "e5b9g9r9"),
+        (
+            "faces",
+            &|_, m| m["frame"]["faces"] = serde_json::json!(["+X", "+Y", "+Z", "-X", "-Y", "-Z"]),
+            "ibl.json",
+            "frame.faces",
+        ),
+    ];
+    for (name, edit, file, says) in cases {
+        let bake = broken(name, edit);
+        let (code, stderr, wrote) = render(&bake);
+        assert_eq!(code, Some(2), "{name}: {stderr}");
+        assert!(stderr.contains(file) && stderr.contains("ibl.json") && stderr.contains(says), "{name}: {stderr}");
+        assert!(!wrote, "{name}: an image was written");
+    }
+}

@@ -11,9 +11,9 @@
 
 use super::halfdiff::{self, HalfDiff};
 use super::BrdfError;
+use crate::io::IoError;
 use glam::DVec3;
 use std::f64::consts::PI;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// Samples along θ_h.
@@ -115,14 +115,16 @@ fn check_header(bytes: &[u8]) -> Result<(), String> {
 impl MerlBrdf {
     /// Reads and validates a MERL `.binary` file.
     pub fn read(path: &Path) -> Result<Self, BrdfError> {
-        // At most one byte more than a MERL file has is read: `/dev/zero` or a huge file is
-        // refused after 35 MB ("too long"), not after filling memory.
-        let cannot =
-            |e: std::io::Error| BrdfError::Merl { path: path.to_path_buf(), reason: format!("cannot read: {e}") };
-        let mut bytes = Vec::new();
-        std::fs::File::open(path)
-            .and_then(|f| f.take(FILE_BYTES as u64 + 1).read_to_end(&mut bytes))
-            .map_err(cannot)?;
+        // The ceiling is the size of every MERL file: `/dev/zero` or a huge file is refused
+        // after 35 MB, not after filling memory.
+        let bytes = crate::io::read_bytes(path, "MERL", FILE_BYTES as u64, |_| Ok(())).map_err(|e| {
+            let reason = match e {
+                IoError::Os { error, .. } => format!("cannot read: {error}"),
+                IoError::Invalid { reason, .. } => format!("{reason}, expected exactly {FILE_BYTES} bytes"),
+                other => other.to_string(),
+            };
+            BrdfError::Merl { path: path.to_path_buf(), reason }
+        })?;
         Self::from_bytes(path, &bytes)
     }
 

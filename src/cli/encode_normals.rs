@@ -84,7 +84,8 @@ impl Stage for Args {
             }
             Mode::Decode(config, input, output) => {
                 let named = |e| anyhow!("{}: {e}", input.display());
-                let normals = decode::run(&config, &read_bytes(&input)?, bar).map_err(named)?;
+                let codes = read_bytes(&input, "normal codes", crate::limits::max_file_bytes(), |_| Ok(()))?;
+                let normals = decode::run(&config, &codes, bar).map_err(named)?;
                 let target = if let Output::File(p) = &output { p.clone() } else { PathBuf::from("stdout.raw") };
                 out_set.bytes(&output, write_normals(&target, &normals, args.size, args.unorm)?)?;
                 Some(format!("decoded {} codes to {}", normals.len(), output.display()))

@@ -39,6 +39,9 @@ impl Stage for Args {
         &self.run
     }
     fn run(self, ctx: &Context) -> Result<Outcome> {
+        if crate::io::read::is_stdin(&self.output) {
+            bail!("-o -: a bake is a directory of files (ibl.json, the textures, the SH), not one stream; give a directory");
+        }
         let config = Config::from(&self);
         config.check()?;
         // DIR is created by the commit's output set (and removed if anything fails); an
@@ -80,6 +83,18 @@ impl Stage for Args {
             "baked in {:.3} s (prepare {:.3}, specular {:.3}, irradiance and SH {:.3}, DFG {:.3} beside them, encode {:.3}), measured in {:.3} s",
             t.bake, t.prepare, t.specular, t.irradiance, t.dfg, t.encode, t.measure
         ));
+
+        // Values above what the format holds are saturated by its encoding: said, with the remedy.
+        let cubes = out.specular.levels().iter().chain(std::iter::once(&out.irradiance));
+        let saturated: usize = cubes.map(|cube| config.format.saturated_texels(cube.texels(), 3)).sum();
+        if let (true, Some(max)) = (saturated > 0, config.format.max_value()) {
+            let format = clap::ValueEnum::to_possible_value(&self.format).map(|v| v.get_name().to_string());
+            ctx.note(format!(
+                "{saturated} texels of the specular and irradiance cubes are above {max}, the largest {} holds, \
+                 and were saturated to it; pass --clamp to choose the ceiling, or --format rgba32f to keep them",
+                format.unwrap_or_default()
+            ));
+        }
 
         let mut outputs = Outputs::new();
         outputs.create_dir(&self.output)?;

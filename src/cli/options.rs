@@ -11,7 +11,6 @@ use crate::io::Output;
 use anyhow::{Context as _, Result};
 use clap::builder::PossibleValue;
 use clap::ValueEnum;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// The options every stage has for how it runs (flattened into each stage's `Args`).
@@ -95,26 +94,12 @@ impl EnvArgs {
 
     /// The input's name in messages and documents (`<stdin>` for `-`).
     pub fn name(&self) -> String {
-        if self.is_stdin() {
-            "<stdin>".into()
-        } else {
-            self.path.display().to_string()
-        }
-    }
-
-    fn is_stdin(&self) -> bool {
-        self.path.as_os_str() == "-"
+        crate::io::read::display_path(&self.path).display().to_string()
     }
 
     /// Reads the map, saying how many negative components were clamped.
     pub fn load(&self, ctx: &Context) -> Result<EnvMap> {
-        let loaded = if self.is_stdin() {
-            let mut bytes = Vec::new();
-            std::io::stdin().lock().read_to_end(&mut bytes).context("cannot read standard input")?;
-            self.options().load_bytes(Path::new("<stdin>"), &bytes)?
-        } else {
-            self.options().load(&self.path)?
-        };
+        let loaded = self.options().load(&self.path)?;
         if loaded.clamped > 0 {
             ctx.note(format!("{}: clamped {} negative pixel components to 0", self.name(), loaded.clamped));
         }
@@ -269,15 +254,7 @@ pub fn parse_memory(s: &str) -> Result<u128, String> {
 
 /// Reads the SH coefficients of a `prtkit.sh` document (`-`: standard input).
 pub fn read_sh_document(path: &Path) -> Result<crate::sh::ShCoeffs> {
-    let stdin = path.as_os_str() == "-";
-    let text = if stdin {
-        std::io::read_to_string(std::io::stdin().lock()).context("cannot read standard input")?
-    } else {
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?
-    };
-    let name = if stdin { "<stdin>".to_string() } else { path.display().to_string() };
-    let doc = crate::sh::document::parse(&text).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    Ok(doc.body.coeffs())
+    Ok(crate::sh::document::read(path)?.body.coeffs())
 }
 
 /// `auto`, `off` or a luminance threshold.

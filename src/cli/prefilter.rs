@@ -43,8 +43,7 @@ impl TryFrom<&Args> for Config {
             irradiance: args.irradiance.is_some(),
             verify: args.verify.map(|n| n as usize),
             source: match (&args.env, &args.sh) {
-                (Some(p), _) | (None, Some(p)) if p.as_os_str() == "-" => "<stdin>".into(),
-                (Some(p), _) | (None, Some(p)) => p.display().to_string(),
+                (Some(p), _) | (None, Some(p)) => crate::io::read::display_path(p).display().to_string(),
                 (None, None) => String::new(),
             },
             args: std::env::args().collect(),

@@ -9,7 +9,7 @@ use crate::io::{self, Output, RgbImage};
 use crate::shader::sampler::{Arith, Domain};
 use crate::shader::stage::{self, comparison_table, Config};
 use crate::shader::Shader;
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 pub use args::*;
 
 use std::path::Path;
@@ -55,8 +55,7 @@ impl Stage for Args {
                 .chain(self.stats.iter().chain(&json_out).map(|o| (o, Holds::Text))),
         )?;
         let config = Config::try_from(&self)?;
-        let source = std::fs::read_to_string(&self.shader)
-            .with_context(|| format!("cannot read shader {}", self.shader.display()))?;
+        let source = crate::shader::read_source(&self.shader)?;
         let mut shader = Shader::compile(&source, &config.file)?;
         shader.set_params(&self.params)?;
         let out = stage::run(&config, &shader, ctx.progress())?;

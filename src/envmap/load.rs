@@ -84,10 +84,25 @@ impl LoadOptions {
     pub fn load(&self, path: &Path) -> Result<Loaded, LoadError> {
         let mut clamped = 0;
         if path.is_dir() || self.layout == Some(Layout::Faces) {
-            let mut faces = Vec::with_capacity(6);
+            let mut faces: Vec<RgbImage> = Vec::with_capacity(6);
+            let mut first = PathBuf::new();
             for face in FACES {
                 let file = find_face(path, face.short_name())?;
                 let mut image = io::image::read_image(&file)?;
+                // The face that differs is named, beside the first face it differs from.
+                let n = faces.first().map_or(image.width, |f| f.width);
+                if image.width != image.height || image.width != n {
+                    let reason = match faces.is_empty() {
+                        true => "a face must be square".to_string(),
+                        false => format!("the faces must be one size: {} is {n}x{n}", first.display()),
+                    };
+                    let error =
+                        EnvMapError::BadSize { layout: "cube face", width: image.width, height: image.height, reason };
+                    return Err(LoadError::Geometry { path: file, error });
+                }
+                if faces.is_empty() {
+                    first = file.clone();
+                }
                 clamped += self.check_pixels(&file, &mut image)?;
                 faces.push(image);
             }
@@ -172,6 +187,20 @@ mod tests {
 
     fn image_with(v: f32) -> RgbImage {
         RgbImage::from_fn(8, 4, |x, y| if (x, y) == (3, 2) { [1.0, v, 1.0] } else { [1.0; 3] })
+    }
+
+    #[test]
+    fn a_face_of_another_size_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        for (i, face) in FACES.iter().enumerate() {
+            let n = if i == 3 { 4 } else { 8 };
+            let image = RgbImage::from_fn(n, n, |_, _| [1.0; 3]);
+            std::fs::write(dir.path().join(format!("{}.pfm", face.short_name())), io::pfm::encode(&image)).unwrap();
+        }
+        let e = LoadOptions::default().load(dir.path()).unwrap_err().to_string();
+        let (bad, first) = (FACES[3].short_name(), FACES[0].short_name());
+        assert!(e.contains(&format!("{bad}.pfm: cannot use")) && e.contains("4x4"), "{e}");
+        assert!(e.contains(&format!("{first}.pfm is 8x8")), "{e}");
     }
 
     #[test]

@@ -142,6 +142,7 @@ pub fn write_factors(path: &Path, f: &Factorization, terms: usize) -> Result<Fac
 /// directory when the recorded path does not exist as given), checking the tile size against
 /// the document's resolution. The factors come back as f64 (they were stored as f32).
 pub fn load(doc_path: &Path) -> Result<(FactorBody, Factorization), FactorLoadError> {
+    io::read::refuse_stdin(doc_path, "a factor document")?;
     let bad = |reason: String| FactorLoadError::Document { path: doc_path.into(), reason };
     let body = read_document::<FactorBody>(doc_path, FORMAT, VERSION)?.body;
     let entry = body.factors.clone().ok_or_else(|| {

@@ -92,9 +92,9 @@ fn fields(line: &str) -> Result<Vec<(usize, String)>, (usize, String)> {
 /// Reads and parses the manifest at `path` (at most [`crate::limits::max_document_bytes`]);
 /// relative MERL paths are relative to its directory.
 pub fn read(path: &Path) -> Result<Vec<Entry>, ManifestError> {
-    let file = path.display().to_string();
+    let file = crate::io::read::display_path(path).display().to_string();
     let whole = |reason: String| ManifestError { file: file.clone(), line: 0, column: 0, reason };
-    let text = crate::limits::read_text(path, "manifest", crate::limits::max_document_bytes(), |_| Ok(())).map_err(
+    let text = crate::io::read_text(path, "manifest", crate::limits::max_document_bytes(), |_| Ok(())).map_err(
         |e| match e {
             IoError::Os { error, .. } => whole(error.to_string()),
             IoError::Invalid { reason, .. } | IoError::Unsupported { reason, .. } => whole(reason),

@@ -76,18 +76,27 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-/// Temporary files written but not yet renamed into place, removed by [`remove_pending_and_hold`] when
-/// the process is interrupted. Held locked while a set of outputs is renamed, so an interruption
-/// waits until all of them are in place: outputs appear all together or not at all.
-static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Temporary files written but not yet renamed into place, and directories created for outputs
+/// not yet committed, removed by [`remove_pending_and_hold`] when the process is interrupted.
+/// Held locked while a set of outputs is renamed, so an interruption waits until all of them are
+/// in place: outputs appear all together or not at all.
+static PENDING: Mutex<Pending> = Mutex::new(Pending { files: Vec::new(), dirs: Vec::new() });
 
-fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+struct Pending {
+    /// Temporary files.
+    files: Vec<PathBuf>,
+    /// Directories created for outputs, in order of creation.
+    dirs: Vec<PathBuf>,
+}
+
+fn pending() -> std::sync::MutexGuard<'static, Pending> {
     PENDING.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// Removes every temporary output file not yet renamed into place and keeps the list locked for
-/// the rest of the process: for a signal handler, just before the process exits. An interrupted
-/// run leaves no partial or temporary file.
+/// Removes every temporary output file not yet renamed into place, then the directories created
+/// for outputs not yet committed (those left empty), and keeps the list locked for the rest of
+/// the process: for a signal handler, just before the process exits. An interrupted run leaves
+/// no partial or temporary file, and no directory it made.
 ///
 /// Every temporary file is created under this lock, so holding it until the exit is what makes
 /// the cleanup final: released, it would let a thread waiting to stage its next output create a
@@ -95,8 +104,12 @@ fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
 /// `encode-normals` interrupted between its outputs).
 pub fn remove_pending_and_hold() {
     let mut list = pending();
-    for path in list.drain(..) {
+    for path in list.files.drain(..) {
         let _ = std::fs::remove_file(path);
+    }
+    // Innermost first; `remove_dir` leaves a directory that holds anything.
+    for dir in list.dirs.drain(..).rev() {
+        let _ = std::fs::remove_dir(dir);
     }
     std::mem::forget(list);
 }
@@ -106,9 +119,9 @@ fn temp_file_in(dir: &Path) -> std::io::Result<tempfile::NamedTempFile> {
 }
 
 /// The outputs of one run, written all or none: [`OutputSet::add`] writes each file's bytes to
-/// a temporary file beside it, [`OutputSet::commit`] renames them all into place and then writes
-/// standard output. Dropped without a commit (an error part-way), it removes its temporary files
-/// and no destination is touched.
+/// a temporary file beside it, [`OutputSet::commit`] writes standard output and then renames the
+/// files into place. Dropped without a commit (an error part-way), it removes its temporary files
+/// and the directories it created, and no destination is touched.
 #[derive(Default)]
 pub struct OutputSet {
     staged: Vec<Staged>,
@@ -138,7 +151,11 @@ impl OutputSet {
         if dir.is_dir() {
             return Ok(());
         }
+        // Created and registered under one lock, as temporary files are: an interruption in
+        // between would leave it behind.
+        let mut list = pending();
         std::fs::create_dir(dir).map_err(|e| IoError::os(dir, e))?;
+        list.dirs.push(dir.to_path_buf());
         self.created_dirs.push(dir.to_path_buf());
         Ok(())
     }
@@ -167,37 +184,48 @@ impl OutputSet {
     }
 
     /// Writes the in-place destinations (devices, FIFOs: a full disk fails here, before any
-    /// file is replaced), renames every staged file into place, then writes standard output
-    /// (last, so that a reader of the summary finds the files it names). An interruption during
-    /// the renames waits for them to finish.
+    /// file is replaced), then standard output, then renames every staged file into place. An
+    /// interruption during the renames waits for them to finish.
+    ///
+    /// Standard output comes before the renames so that a failure to write it (`/dev/full`, an
+    /// I/O error) leaves every file output untouched: all or nothing includes stdout. A reader of
+    /// stdout that needs the files waits for the process to exit. A broken pipe is not such a
+    /// failure: the reader chose to stop reading (`head`), the outputs are complete, so the
+    /// files are put in place and the broken pipe returned after, for the CLI to end quietly.
     pub fn commit(mut self) -> Result<(), IoError> {
-        let staged = std::mem::take(&mut self.staged);
-        let (mut renames, mut stdout) = (Vec::new(), Vec::new());
-        for item in staged {
-            match item {
-                Staged::InPlace { dest, bytes } => {
-                    let mut file =
-                        std::fs::OpenOptions::new().write(true).open(&dest).map_err(|e| IoError::os(&dest, e))?;
-                    file.write_all(&bytes).and_then(|_| file.flush()).map_err(|e| IoError::os(&dest, e))?;
-                }
-                Staged::Renamed { temp, dest } => renames.push((temp, dest)),
-                Staged::Stdout(bytes) => stdout.push(bytes),
+        for item in &self.staged {
+            if let Staged::InPlace { dest, bytes } = item {
+                let mut file = std::fs::OpenOptions::new().write(true).open(dest).map_err(|e| IoError::os(dest, e))?;
+                file.write_all(bytes).and_then(|_| file.flush()).map_err(|e| IoError::os(dest, e))?;
             }
         }
-        // From here on the outputs are in place: directories made for them stay.
-        self.created_dirs.clear();
+        let mut broken_pipe = None;
+        for item in &self.staged {
+            if let Staged::Stdout(bytes) = item {
+                match write_stdout(bytes) {
+                    Err(IoError::Os { error, path }) if error.kind() == std::io::ErrorKind::BrokenPipe => {
+                        broken_pipe = Some(IoError::Os { error, path });
+                        break;
+                    }
+                    result => result?,
+                }
+            }
+        }
+        let staged = std::mem::take(&mut self.staged);
         {
             let mut list = pending();
-            for (temp, dest) in renames {
-                let path: PathBuf = temp.to_path_buf();
-                list.retain(|p| *p != path);
-                temp.persist(&dest).map_err(|e| IoError::os(&dest, e.error))?;
+            // From here on the outputs are in place: directories made for them stay.
+            let created = std::mem::take(&mut self.created_dirs);
+            list.dirs.retain(|d| !created.contains(d));
+            for item in staged {
+                if let Staged::Renamed { temp, dest } = item {
+                    let path: PathBuf = temp.to_path_buf();
+                    list.files.retain(|p| *p != path);
+                    temp.persist(&dest).map_err(|e| IoError::os(&dest, e.error))?;
+                }
             }
         }
-        for bytes in stdout {
-            write_stdout(&bytes)?;
-        }
-        Ok(())
+        broken_pipe.map_or(Ok(()), Err)
     }
 }
 
@@ -217,10 +245,12 @@ impl Drop for OutputSet {
                 _ => None,
             })
             .collect();
-        pending().retain(|p| !temps.contains(p));
-        for dir in &self.created_dirs {
+        let mut list = pending();
+        list.files.retain(|p| !temps.contains(p));
+        for dir in self.created_dirs.iter().rev() {
             let _ = std::fs::remove_dir(dir);
         }
+        list.dirs.retain(|d| !self.created_dirs.contains(d));
     }
 }
 
@@ -239,7 +269,7 @@ fn stage_file(dest: &Path, bytes: &[u8]) -> Result<tempfile::TempPath, IoError> 
     let mut tmp = {
         let mut list = pending();
         let tmp = temp_file_in(parent_dir(dest)).map_err(|e| IoError::os(dest, e))?;
-        list.push(tmp.path().to_path_buf());
+        list.files.push(tmp.path().to_path_buf());
         tmp
     };
     let temp = (|| {
@@ -261,7 +291,7 @@ fn stage_file(dest: &Path, bytes: &[u8]) -> Result<tempfile::TempPath, IoError> 
         Err(e) => {
             // Removed before it leaves the list, for the same reason.
             drop(tmp);
-            pending().retain(|p| *p != path);
+            pending().files.retain(|p| *p != path);
             Err(IoError::os(dest, e))
         }
     }
@@ -312,14 +342,14 @@ mod tests {
         std::fs::write(&a, b"old").unwrap();
         let mut set = OutputSet::new();
         set.add(&Output::File(a.clone()), b"new".to_vec()).unwrap();
-        assert_eq!(pending().iter().filter(|p| p.starts_with(dir.path())).count(), 1);
+        assert_eq!(pending().files.iter().filter(|p| p.starts_with(dir.path())).count(), 1);
         let bad = Output::File(dir.path().join("missing-dir/c.txt"));
         assert!(set.add(&bad, b"x".to_vec()).is_err());
         drop(set);
         assert_eq!(std::fs::read(&a).unwrap(), b"old");
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names, vec![std::ffi::OsString::from("a.txt")]);
-        assert!(pending().iter().all(|p| !p.starts_with(dir.path())));
+        assert!(pending().files.iter().all(|p| !p.starts_with(dir.path())));
 
         let mut set = OutputSet::new();
         set.add(&Output::File(a.clone()), b"new".to_vec()).unwrap();
@@ -356,8 +386,10 @@ mod tests {
 
         let mut set = OutputSet::new();
         set.create_dir(&maps).unwrap();
+        assert!(pending().dirs.contains(&maps), "an interruption would remove it");
         set.add(&Output::File(maps.join("a.exr")), b"a".to_vec()).unwrap();
         drop(set);
+        assert!(!pending().dirs.contains(&maps));
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "maps/ is removed");
 
         let mut set = OutputSet::new();
@@ -365,6 +397,7 @@ mod tests {
         set.add(&Output::File(maps.join("a.exr")), b"a".to_vec()).unwrap();
         set.commit().unwrap();
         assert_eq!(std::fs::read(maps.join("a.exr")).unwrap(), b"a");
+        assert!(!pending().dirs.contains(&maps), "committed: an interruption now leaves it");
     }
 
     #[cfg(unix)]

@@ -43,13 +43,33 @@ pub struct Provenance {
     pub inputs: Vec<String>,
 }
 
+/// Options that change how a run goes but never what it writes (`docs/cli.md`: the bytes are the
+/// same for any thread count, and narration is on stderr), left out of [`Provenance::args`] so
+/// that a document's bytes do not depend on them: (option, whether it takes a value).
+const NOT_RECORDED: [(&str, bool); 3] = [("--threads", true), ("--quiet", false), ("-q", false)];
+
 impl Provenance {
-    /// Provenance of `stage` run with the command line `args` on `inputs`.
+    /// Provenance of `stage` run with the command line `args` on `inputs`; the options that do
+    /// not change the result ([`NOT_RECORDED`]: `--threads N`, `-q`) are left out of it.
     pub fn new(stage: &str, args: &[String], inputs: Vec<String>) -> Self {
+        let mut recorded = Vec::with_capacity(args.len());
+        let mut iter = args.iter();
+        while let Some(arg) = iter.next() {
+            let option = NOT_RECORDED.iter().find(|(name, takes_value)| {
+                arg == name || (*takes_value && arg.strip_prefix(name).is_some_and(|rest| rest.starts_with('=')))
+            });
+            match option {
+                Some((name, true)) if arg == name => {
+                    iter.next();
+                }
+                Some(_) => {}
+                None => recorded.push(arg.clone()),
+            }
+        }
         Provenance {
             tool: format!("prtkit {}", env!("CARGO_PKG_VERSION")),
             stage: stage.to_string(),
-            args: args.to_vec(),
+            args: recorded,
             inputs,
         }
     }
@@ -266,7 +286,7 @@ pub enum BundleError {
 /// Reads a JSON document's text: at most [`crate::limits::max_document_bytes`], refused at
 /// once when it does not start with `{` (after white space), and UTF-8.
 pub fn read_text(path: &std::path::Path) -> Result<String, BundleError> {
-    let text = crate::limits::read_text(path, "JSON", crate::limits::max_document_bytes(), |start| {
+    let text = super::read_text(path, "JSON", crate::limits::max_document_bytes(), |start| {
         match start.iter().find(|b| !b.is_ascii_whitespace()) {
             Some(b'{') | None => Ok(()),
             Some(_) => Err("does not start with '{': not a JSON document".into()),
@@ -283,7 +303,8 @@ pub fn read_document<T: for<'de> Deserialize<'de> + Validate>(
     max_version: u32,
 ) -> Result<Document<T>, BundleError> {
     let text = read_text(path)?;
-    parse_validated(&text, format, max_version).map_err(|error| BundleError::Parse { path: path.into(), error })
+    parse_validated(&text, format, max_version)
+        .map_err(|error| BundleError::Parse { path: super::read::display_path(path), error })
 }
 
 /// The file a document names: as written when that exists (or is absolute), else the file of
@@ -308,4 +329,22 @@ pub fn read_named_layers(
     let exr = named_file(doc, file);
     let layers = super::exr::read_layers(&exr).map_err(|error| BundleError::Named { doc: doc.into(), what, error })?;
     Ok((exr, layers))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn provenance_leaves_out_the_options_that_do_not_change_the_result() {
+        let args: Vec<String> =
+            ["ibl", "sky.exr", "--threads", "4", "-o", "bake", "-q", "--threads=2", "--quiet", "--size", "16"]
+                .map(String::from)
+                .to_vec();
+        let recorded = Provenance::new("ibl", &args, vec![]).args;
+        assert_eq!(recorded, ["ibl", "sky.exr", "-o", "bake", "--size", "16"]);
+        // Only the options themselves: a file named like one's prefix stays.
+        let args: Vec<String> = ["x", "--threadsafe.exr", "-qq"].map(String::from).to_vec();
+        assert_eq!(Provenance::new("x", &args, vec![]).args, args);
+    }
 }

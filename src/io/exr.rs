@@ -21,7 +21,7 @@ pub const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 /// Reads an EXR file (at most [`limits::max_file_bytes`], refused at once when it does not
 /// start like one) and decodes every RGB or grey layer, as [`decode_layers`].
 pub fn read_layers(path: &Path) -> Result<Vec<(String, RgbImage)>, IoError> {
-    let bytes = limits::read_file(path, FORMAT, limits::max_file_bytes(), check_magic)?;
+    let bytes = super::read_bytes(path, FORMAT, limits::max_file_bytes(), check_magic)?;
     decode_layers(path, &bytes)
 }
 

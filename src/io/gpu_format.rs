@@ -136,6 +136,25 @@ impl TexelFormat {
         Self::ALL.into_iter().find(|f| f.vk_format() == vk_format)
     }
 
+    /// The largest value every channel of the format holds, above which encoding saturates:
+    /// 65504 for half floats, 64512 for B10G11R11 (the 10-bit blue; red and green hold 65024),
+    /// 65408 for E5B9G9R9 (511/512 · 2¹⁶); `None` for single floats.
+    pub fn max_value(self) -> Option<f32> {
+        match self {
+            TexelFormat::Rgba16Float | TexelFormat::Rg16Float => Some(F16_MAX),
+            TexelFormat::B10G11R11Ufloat => Some(64512.0),
+            TexelFormat::E5B9G9R9Ufloat => Some(65408.0),
+            TexelFormat::Rgba32Float | TexelFormat::Rg32Float => None,
+        }
+    }
+
+    /// How many texels of `values` (`channels` floats each) have a channel above
+    /// [`TexelFormat::max_value`]: the texels encoding saturates.
+    pub fn saturated_texels(self, values: &[f32], channels: usize) -> usize {
+        let Some(max) = self.max_value() else { return 0 };
+        values.chunks_exact(channels).filter(|t| t.iter().any(|&v| v > max)).count()
+    }
+
     /// Channels a texel holds: 4 (RGBA), 3 (the packed RGB formats) or 2 (RG).
     pub fn channels(self) -> usize {
         match self {

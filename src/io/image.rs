@@ -77,28 +77,26 @@ impl ImageFormat {
 /// A check of the first bytes of a file.
 type StartCheck = fn(&[u8]) -> Result<(), String>;
 
-/// Reads an HDR image (EXR, Radiance `.hdr`, PFM), chosen by extension. The file is refused
-/// at once when it does not start like its format, and read only up to
-/// [`limits::max_file_bytes`]; sizes in its header are checked against the image ceilings
-/// before pixels are allocated (`docs/limits.md`).
+/// Reads an HDR image (EXR, Radiance `.hdr`, PFM), chosen by extension (`-`, standard input,
+/// by its signature). The input is refused at once when it does not start like its format, and
+/// read only up to [`limits::max_file_bytes`]; sizes in its header are checked against the image
+/// ceilings before pixels are allocated (`docs/limits.md`).
 pub fn read_image(path: &Path) -> Result<RgbImage, IoError> {
-    let format =
-        ImageFormat::from_path(path).ok_or_else(|| IoError::UnknownFormat { path: path.to_path_buf(), extra: "" })?;
-    let (name, check_start): (&'static str, StartCheck) = match format {
-        ImageFormat::Exr => ("OpenEXR", super::exr::check_magic),
-        ImageFormat::Rgbe => ("Radiance HDR", super::rgbe::check_magic),
-        ImageFormat::Pfm => ("PFM", super::pfm::check_magic),
+    let (name, check_start): (&'static str, StartCheck) = if super::read::is_stdin(path) {
+        ("image", |start| match ImageFormat::sniff(start) {
+            Some(_) => Ok(()),
+            None => Err("does not start like an EXR, Radiance HDR or PFM file".into()),
+        })
+    } else {
+        match ImageFormat::from_path(path) {
+            Some(ImageFormat::Exr) => ("OpenEXR", super::exr::check_magic),
+            Some(ImageFormat::Rgbe) => ("Radiance HDR", super::rgbe::check_magic),
+            Some(ImageFormat::Pfm) => ("PFM", super::pfm::check_magic),
+            None => return Err(IoError::UnknownFormat { path: path.to_path_buf(), extra: "" }),
+        }
     };
-    let bytes = limits::read_file(path, name, limits::max_file_bytes(), check_start)?;
-    let image = match format {
-        ImageFormat::Exr => super::exr::decode(path, &bytes)?,
-        ImageFormat::Rgbe => super::rgbe::decode(path, &bytes)?,
-        ImageFormat::Pfm => super::pfm::decode(path, &bytes)?,
-    };
-    if image.width == 0 || image.height == 0 {
-        return Err(IoError::invalid(path, "image", "the image is empty (zero width or height)"));
-    }
-    Ok(image)
+    let bytes = super::read_bytes(path, name, limits::max_file_bytes(), check_start)?;
+    decode_image(&super::read::display_path(path), &bytes)
 }
 
 /// Writes an image by extension: `.exr` (float), `.pfm`, or `.png` (tone-mapped with `exposure`

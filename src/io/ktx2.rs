@@ -28,6 +28,16 @@ use super::gpu_format::{TexelFormat, Texture, TextureError, TextureShape};
 /// The KTX 2.0 file identifier «KTX 20»\r\n\x1A\n.
 pub const IDENTIFIER: [u8; 12] = [0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A];
 
+/// Whether `start` (the first bytes of a file) is the start of a KTX 2.0 file: checked before
+/// the rest is read, so a device or a file of another kind costs 64 bytes of reading.
+pub fn check_identifier(start: &[u8]) -> Result<(), String> {
+    if start.starts_with(&IDENTIFIER) {
+        Ok(())
+    } else {
+        Err(format!("does not start with the KTX 2.0 identifier (found {:02x?})", &start[..start.len().min(12)]))
+    }
+}
+
 /// Rounds `n` up to a multiple of `align`.
 fn align_up(n: usize, align: usize) -> usize {
     n.div_ceil(align) * align
@@ -224,6 +234,7 @@ pub fn decode(bytes: &[u8]) -> Result<DecodedTexture, TextureError> {
     if header.layer_count > 0 || header.pixel_depth > 0 {
         return Err(bad("an array or 3-D texture; prtkit reads 2-D textures and cube maps".into()));
     }
+    check_level_index(bytes)?;
     let (w, h) = (header.pixel_width as usize, header.pixel_height as usize);
     let shape = match header.face_count {
         1 => TextureShape::Texture2d { width: w, height: h },
@@ -252,6 +263,50 @@ pub fn decode(bytes: &[u8]) -> Result<DecodedTexture, TextureError> {
     let levels = decoded.levels.iter().map(Vec::as_slice).collect();
     Texture { shape, channels: format.channels(), levels }.check()?;
     Ok(decoded)
+}
+
+/// Checks the level index of a KTX 2.0 file (KTX 2.0 §3.9, after the 80-byte header): every
+/// level's bytes lie after the header, the level index and the descriptors it points to
+/// (DFD, key/value data, supercompression data), and no two levels overlap. The `ktx2` crate
+/// only checks that the bytes are in the file, so an offset into the header would be read as
+/// texels.
+fn check_level_index(bytes: &[u8]) -> Result<(), TextureError> {
+    let bad = |why: String| TextureError::Invalid(why);
+    let u32_at = |o: usize| bytes.get(o..o + 4).map(|b| u32::from_le_bytes(b.try_into().unwrap()) as u64);
+    let u64_at = |o: usize| bytes.get(o..o + 8).map(|b| u64::from_le_bytes(b.try_into().unwrap()));
+    let truncated = || bad("truncated header".into());
+    let level_count = u32_at(40).ok_or_else(truncated)?.max(1);
+    let index_end = 80 + 24 * level_count;
+    let ranges = [(48, 52, false), (56, 60, false), (64, 72, true)].map(|(offset, length, wide)| {
+        let read = |o| if wide { u64_at(o) } else { u32_at(o) };
+        Some((read(offset)?, read(length)?))
+    });
+    let mut metadata_end = index_end;
+    for range in ranges {
+        let (offset, length) = range.ok_or_else(truncated)?;
+        if length > 0 {
+            metadata_end = metadata_end.max(offset.saturating_add(length));
+        }
+    }
+    let mut levels = Vec::with_capacity(level_count as usize);
+    for p in 0..level_count {
+        let at = 80 + 24 * p as usize;
+        let (offset, length) = (u64_at(at).ok_or_else(truncated)?, u64_at(at + 8).ok_or_else(truncated)?);
+        if offset < metadata_end {
+            return Err(bad(format!(
+                "level {p} starts at byte {offset}, inside the header, level index and descriptors (bytes 0..{metadata_end})"
+            )));
+        }
+        levels.push((offset, offset.saturating_add(length), p));
+    }
+    levels.sort_unstable();
+    for pair in levels.windows(2) {
+        let ((_, end, p), (start, _, q)) = (pair[0], pair[1]);
+        if start < end {
+            return Err(bad(format!("levels {p} and {q} overlap (bytes {start}..{end})")));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

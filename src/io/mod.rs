@@ -10,11 +10,13 @@ pub mod image;
 pub mod ktx2;
 pub mod pfm;
 pub mod png;
+pub mod read;
 pub mod rgbe;
 
 pub use self::image::{ImageFormat, RgbImage};
 pub use atomic::{write_atomic, Output, OutputSet};
 pub use document::{Document, Provenance};
+pub use read::{read_bytes, read_text};
 
 use std::path::{Path, PathBuf};
 
@@ -70,9 +72,4 @@ impl IoError {
     pub(crate) fn unsupported(path: &Path, format: &'static str, reason: impl Into<String>) -> Self {
         IoError::Unsupported { path: path.to_path_buf(), format, reason: reason.into() }
     }
-}
-
-/// Reads a whole file, naming it in the error.
-pub fn read_bytes(path: &Path) -> Result<Vec<u8>, IoError> {
-    std::fs::read(path).map_err(|e| IoError::os(path, e))
 }

@@ -99,9 +99,8 @@ impl EncodeReport {
 
 /// Reads the report at `path` (e.g. the `--header` of a decode run), naming the file in errors.
 pub fn read(path: &Path) -> Result<Document<EncodeReport>, BundleError> {
-    let bad = |reason: String| BundleError::Document { path: path.into(), reason };
-    let text = String::from_utf8(crate::io::read_bytes(path)?).map_err(|_| bad("not UTF-8 text".into()))?;
-    parse(&text).map_err(bad)
+    let text = crate::io::document::read_text(path)?;
+    parse(&text).map_err(|reason| BundleError::Document { path: crate::io::read::display_path(path), reason })
 }
 
 /// Parses a report, checking format and version.

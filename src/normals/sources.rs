@@ -105,7 +105,7 @@ impl NormalSource {
 
 /// Reads a file whole, up to [`crate::limits::max_file_bytes`] (`docs/limits.md`).
 fn read_whole(path: &Path, format: &'static str) -> Result<Vec<u8>, IoError> {
-    crate::limits::read_file(path, format, crate::limits::max_file_bytes(), |_| Ok(()))
+    crate::io::read_bytes(path, format, crate::limits::max_file_bytes(), |_| Ok(()))
 }
 
 /// Raw little-endian f32 xyz triples.

@@ -24,7 +24,7 @@ use crate::envmap::EnvMap;
 use crate::ibl::cube::CubeMap;
 use crate::ibl::dfg::split_sum_terms;
 use crate::ibl::ggx::SplitSumLobe;
-use crate::ibl::manifest::{IblBody, FORMAT, VERSION};
+use crate::ibl::manifest::{IblBody, FACE_ORDER, FORMAT, VERSION};
 use crate::ibl::reference::{LobeIntegral, Reference};
 use crate::io::document::{named_file, read_document, BundleError};
 use crate::io::gpu_format::TextureShape;
@@ -95,6 +95,7 @@ pub struct OtherSource {
 impl IblBake {
     /// Reads `DIR/ibl.json` and the KTX2 files it names, checking them against it.
     pub fn load(manifest: &Path) -> Result<Self, IblLoadError> {
+        crate::io::read::refuse_stdin(manifest, "a bake's ibl.json")?;
         let body = read_document::<IblBody>(manifest, FORMAT, VERSION)?.body;
         let bad = |reason: String| IblLoadError::Document { path: manifest.into(), reason };
         if body.specular.container != "ktx2" {
@@ -107,14 +108,15 @@ impl IblBake {
         let world_from_prtkit = DMat3::from_cols_array_2d(&body.frame.world_from_prtkit).transpose();
         let roughness: Vec<f64> = body.specular.levels.iter().map(|l| l.roughness).collect();
 
-        let specular = read_cube(manifest, &body.specular.file, "specular cube")?;
-        if specular.levels.len() != roughness.len() {
-            return Err(mismatch(
-                manifest,
-                &body.specular.file,
-                format!("{} levels, the manifest lists {}", specular.levels.len(), roughness.len()),
-            ));
+        if body.frame.faces != FACE_ORDER {
+            return Err(bad(format!(
+                "frame.faces is {:?}; the cube files hold their faces in the order {FACE_ORDER:?}",
+                body.frame.faces
+            )));
         }
+        let specular = read_cube(manifest, &body.specular.file, "specular cube")?;
+        let level_sizes: Vec<usize> = body.specular.levels.iter().map(|l| l.size).collect();
+        check_described(manifest, &body.specular.file, &specular, &body.specular.format, &level_sizes)?;
         let size = cube_size(&specular);
         let specular = roughness
             .into_iter()
@@ -123,10 +125,16 @@ impl IblBake {
             .map(|(p, (r, texels))| (r, to_cube((size >> p).max(1), texels)))
             .collect();
         let irradiance = read_cube(manifest, &body.irradiance.file, "irradiance cube")?;
+        let (described, level) = (&body.irradiance, body.irradiance.level.size);
+        check_described(manifest, &described.file, &irradiance, &described.format, &[described.size])?;
+        if level != described.size {
+            return Err(bad(format!("irradiance.size is {}, its level's size {level}", described.size)));
+        }
         let irradiance = to_cube(cube_size(&irradiance), &irradiance.levels[0]);
 
         let dfg_file = named_file(manifest, &body.dfg.file);
         let dfg = read_texture(manifest, &body.dfg.file, "DFG table")?;
+        check_described(manifest, &body.dfg.file, &dfg, &body.dfg.format, &[body.dfg.size])?;
         let TextureShape::Texture2d { width, height } = dfg.shape else {
             return Err(mismatch(manifest, &body.dfg.file, "a cube map, not a 2-D table".into()));
         };
@@ -187,7 +195,8 @@ fn mismatch(manifest: &Path, file: &str, reason: String) -> IblLoadError {
 fn read_texture(manifest: &Path, file: &str, what: &'static str) -> Result<DecodedTexture, IblLoadError> {
     let path: PathBuf = named_file(manifest, file);
     let bytes =
-        crate::io::read_bytes(&path).map_err(|error| IblLoadError::Named { doc: manifest.into(), what, error })?;
+        crate::io::read_bytes(&path, "KTX2", crate::limits::max_file_bytes(), crate::io::ktx2::check_identifier)
+            .map_err(|error| IblLoadError::Named { doc: manifest.into(), what, error })?;
     decode(&bytes).map_err(|e| mismatch(manifest, file, e.to_string()))
 }
 
@@ -197,6 +206,29 @@ fn read_cube(manifest: &Path, file: &str, what: &'static str) -> Result<DecodedT
         return Err(mismatch(manifest, file, format!("the {what} must be an RGB(A) cube map")));
     }
     Ok(texture)
+}
+
+/// Checks a file read back against what the manifest says of it: its format, and its levels'
+/// sizes (`sizes`, largest first: one per level, each half the one before). A file that
+/// contradicts its manifest (another bake's, or the specular cube in place of the irradiance)
+/// would otherwise be rendered as if it were what the manifest says.
+fn check_described(
+    manifest: &Path,
+    file: &str,
+    texture: &DecodedTexture,
+    format: &str,
+    sizes: &[usize],
+) -> Result<(), IblLoadError> {
+    let differs = |reason: String| Err(mismatch(manifest, file, reason));
+    if texture.format.name() != format {
+        return differs(format!("the file is {}, the manifest says {format}", texture.format.name()));
+    }
+    let size = texture.shape.dimensions().0;
+    let file_sizes: Vec<usize> = (0..texture.levels.len()).map(|p| (size >> p).max(1)).collect();
+    if file_sizes != sizes {
+        return differs(format!("the file's levels are {file_sizes:?} texels wide, the manifest says {sizes:?}"));
+    }
+    Ok(())
 }
 
 fn cube_size(texture: &DecodedTexture) -> usize {

@@ -79,7 +79,7 @@ impl Mesh {
     pub fn load(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
         let load_error = |reason: String| MeshError::Load { path: name.clone(), reason };
-        let text = crate::limits::read_text(path, "OBJ", crate::limits::max_file_bytes(), |_| Ok(()))?;
+        let text = crate::io::read_text(path, "OBJ", crate::limits::max_file_bytes(), |_| Ok(()))?;
         let text = text.as_str();
         check_obj(text).map_err(|(line, column, reason)| MeshError::At { path: name.clone(), line, column, reason })?;
         let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };

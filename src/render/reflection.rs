@@ -8,7 +8,7 @@
 //! - Lambert SHRMs (`parameterization: normal`) are indexed by n and view-independent.
 
 use super::{Hit, Shade};
-use crate::io::document::{named_file, read_document, BundleError};
+use crate::io::document::{read_document, read_named_layers, BundleError};
 use crate::io::RgbImage;
 use crate::prefilter::document::{layer_name, ShrmBody, FORMAT, VERSION};
 use crate::prefilter::shrm::{reflection_map, Shrm};
@@ -25,6 +25,7 @@ pub type ShrmLoadError = BundleError;
 /// Reads a `prtkit.shrm` document and the SHRM EXR it names (relative to the document's
 /// directory when not absolute), checking layout, layer names and grid size.
 pub fn load(doc_path: &Path) -> Result<(Shrm, ShrmBody), ShrmLoadError> {
+    crate::io::read::refuse_stdin(doc_path, "an SHRM document")?;
     let body = read_document::<ShrmBody>(doc_path, FORMAT, VERSION)?.body;
     let bad = |reason: String| ShrmLoadError::Document { path: doc_path.into(), reason };
     if body.layout != "latlong" {
@@ -37,8 +38,7 @@ pub fn load(doc_path: &Path) -> Result<(Shrm, ShrmBody), ShrmLoadError> {
         return Err(bad(format!("unknown parameterization {:?}", body.parameterization)));
     }
     let file = body.shrm_file.clone().ok_or_else(|| bad("the document names no shrm_file".into()))?;
-    let exr = named_file(doc_path, &file);
-    let layers = crate::io::exr::decode_layers(&exr, &crate::io::read_bytes(&exr)?)?;
+    let (exr, layers) = read_named_layers(doc_path, &file, "SHRM file")?;
     let mismatch = |reason: String| ShrmLoadError::Mismatch { exr: exr.clone(), doc: doc_path.into(), reason };
     let n = count(body.p_b);
     let mut ordered = Vec::with_capacity(n);

@@ -57,7 +57,7 @@ impl ShaderError {
 
 /// Reads a shader's source: at most [`crate::limits::MAX_SHADER_SOURCE_BYTES`], UTF-8.
 pub fn read_source(path: &std::path::Path) -> Result<String, crate::io::IoError> {
-    crate::limits::read_text(path, "shader", crate::limits::MAX_SHADER_SOURCE_BYTES, |_| Ok(()))
+    crate::io::read_text(path, "shader", crate::limits::MAX_SHADER_SOURCE_BYTES, |_| Ok(()))
 }
 
 /// A compiled shader with its parameter values.

@@ -47,19 +47,10 @@ struct Plan {
 /// Problems of the command-line layer that the library already fixes, tolerated by the binary
 /// check until the CLI uses the library's way (each names its fix; remove the entry with it):
 /// (binary, target, words of the message).
-const KNOWN_CLI_ISSUES: &[(&str, &str, &str)] = &[
-    // render/reflection.rs reads the SHRM's EXR with io::read_bytes; io::document::
-    // read_named_layers names the document first.
-    ("render", "shrm", "No such file or directory"),
-];
+const KNOWN_CLI_ISSUES: &[(&str, &str, &str)] = &[];
 
 /// The same for the library entry points of files not yet using the library's way.
-const KNOWN_LIBRARY_ISSUES: &[(&str, &str)] = &[
-    // render::reflection::load reads the SHRM's EXR with io::read_bytes and exr::decode_layers,
-    // so a missing or garbled EXR is named without the document; io::document::
-    // read_named_layers(doc, file, "SHRM file") names the document first.
-    ("shrm", "unnamed_error"),
-];
+const KNOWN_LIBRARY_ISSUES: &[(&str, &str)] = &[];
 
 /// Something an input did that it must not.
 #[derive(Clone, Debug)]

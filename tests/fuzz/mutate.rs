@@ -447,3 +447,29 @@ pub fn brdf_spec(rng: &mut Rng, data: &[u8], other: &[u8]) -> Vec<u8> {
     };
     spec.into_bytes()
 }
+
+/// A KTX 2.0 file: a header field (format, sizes, counts, descriptor offsets) or a level-index
+/// entry (offset, lengths) set to an interesting number, or a byte-level mutation.
+pub fn ktx2(rng: &mut Rng, data: &[u8], other: &[u8]) -> Vec<u8> {
+    let mut d = data.to_vec();
+    let int = |rng: &mut Rng| *pick(rng, &INTERESTING_INTS);
+    match below(rng, 3) {
+        // vkFormat … kvdByteLength: twelve u32 fields from byte 12.
+        0 => put_i32(&mut d, 12 + 4 * below(rng, 12), int(rng) as i32),
+        1 => {
+            let levels =
+                d.get(40..44).map_or(1, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize).clamp(1, 16);
+            let at = 80 + 8 * below(rng, 3 * levels);
+            // Offsets into the header, the index, or past the end, besides the interesting ints.
+            let v = match below(rng, 2) {
+                0 => *pick(rng, &[0u64, 16, 80, 104, data.len() as u64, u64::MAX]),
+                _ => int(rng) as u64,
+            };
+            if let Some(slot) = d.get_mut(at..at + 8) {
+                slot.copy_from_slice(&v.to_le_bytes());
+            }
+        }
+        _ => return bytes(rng, data, other),
+    }
+    d
+}

@@ -223,7 +223,43 @@ pub fn all() -> Vec<Target> {
             },
             names_file: true,
         },
+        Target {
+            name: "ktx2",
+            ext: "ktx2",
+            mutate: mutate::ktx2,
+            library: |p| {
+                let ceiling = prtkit::limits::max_file_bytes();
+                let bytes =
+                    prtkit::io::read_bytes(p, "KTX2", ceiling, prtkit::io::ktx2::check_identifier).map_err(err)?;
+                prtkit::io::ktx2::decode(&bytes).map(drop).map_err(|e| format!("{}: {e}", p.display()))
+            },
+            // Rendered as the specular cube of the corpus bake: a manifest beside the input names it.
+            binary: |file, out, work| {
+                let text = std::fs::read_to_string(work.join("ibl.json")).unwrap_or_default();
+                let name = file.file_name().unwrap_or_default().to_string_lossy().to_string();
+                let manifest = file.with_extension("ibl.json");
+                std::fs::write(&manifest, text.replace("\"specular.ktx2\"", &format!("{name:?}")))
+                    .unwrap_or_else(|e| panic!("{e}"));
+                ("render", render(work, out, &ibl_args(&manifest)))
+            },
+            names_file: true,
+        },
+        Target {
+            name: "ibl",
+            ext: "ibl.json",
+            mutate: mutate::json,
+            library: |p| prtkit::render::ibl::IblBake::load(p).map(drop).map_err(err),
+            binary: |file, out, work| ("render", render(work, out, &ibl_args(file))),
+            names_file: true,
+        },
     ]
+}
+
+/// `render` arguments that shade with the bake of `manifest`.
+fn ibl_args(manifest: &Path) -> Vec<String> {
+    let mut args = ["--shading", "ibl", "--brdf", "gltf:roughness=0.5", "--ibl"].map(String::from).to_vec();
+    args.push(s(manifest));
+    args
 }
 
 /// The binary's path (built by cargo for integration tests).
@@ -236,6 +272,7 @@ pub fn binary_path(name: &str) -> PathBuf {
         "encode-normals" => env!("CARGO_BIN_EXE_encode-normals"),
         "count-terms" => env!("CARGO_BIN_EXE_count-terms"),
         "prefilter" => env!("CARGO_BIN_EXE_prefilter"),
+        "ibl" => env!("CARGO_BIN_EXE_ibl"),
         other => panic!("no binary {other}"),
     }
     .into()
@@ -326,6 +363,11 @@ pub fn corpus(work: &Path) -> Vec<(&'static str, Vec<Vec<u8>>)> {
         &["phong:s=8", "--resolution", "6", "--factors", "f.exr", "--terms", "12", "-o", "f.factor.json", "-q"],
         work,
     );
+    // A small bake of the same sky, its files beside the corpus (where documents find them).
+    run_ok("ibl", &["sky.exr", "--size", "8", "--min-size", "4", "--samples", "0", "-o", "bake", "-q"], work);
+    for file in ["ibl.json", "specular.ktx2", "irradiance.ktx2", "dfg.ktx2"] {
+        std::fs::copy(work.join("bake").join(file), work.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+    }
     let read = |p: &Path| std::fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
     let img = RgbImage::from_fn(16, 8, |x, y| [x as f32 * 0.5 + 0.1, y as f32 * 0.25, 2.0]);
     let small = RgbImage::from_fn(4, 2, |x, y| [x as f32, y as f32, 0.5]);
@@ -404,6 +446,8 @@ pub fn corpus(work: &Path) -> Vec<(&'static str, Vec<Vec<u8>>)> {
                 b"paint merl:synthetic.binary 64\nwax lafortune:kd=0.2,lobe=-1/1/10\n".to_vec(),
             ],
         ),
+        ("ktx2", ["specular.ktx2", "irradiance.ktx2", "dfg.ktx2"].iter().map(|f| read(&work.join(f))).collect()),
+        ("ibl", vec![document(&work.join("ibl.json"))]),
     ]
 }
 

@@ -22,7 +22,8 @@ pub struct Args {
     #[command(flatten)]
     pub matrix: MatrixArgs,
 
-    /// A manifest of `name spec [budget]` lines (docs/count-terms.md).
+    /// A manifest of `name spec [budget]` lines (docs/count-terms.md), or `-` for stdin (relative
+    /// MERL paths then from the working directory).
     #[arg(long, value_name = "FILE")]
     pub manifest: Option<PathBuf>,
 

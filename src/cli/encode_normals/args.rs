@@ -12,7 +12,7 @@ use std::path::PathBuf;
 #[derive(Debug, Parser)]
 #[command(name = "encode-normals", version)]
 pub struct Args {
-    /// Input normals (encode) or codes (--decode).
+    /// Input normals (encode) or codes (--decode); `-` reads stdin (raw f32 xyz triples to encode).
     pub input: Option<PathBuf>,
     /// Parameterization: onv-range, onv-domain, sc, pp, spp, cm.
     #[arg(long, default_value = "onv-range", value_parser = |s: &str| s.parse::<Scheme>())]

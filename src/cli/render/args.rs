@@ -67,7 +67,8 @@ pub struct Args {
     #[arg(short = 'F', long, default_value_t = 2)]
     pub order: usize,
 
-    /// shrm: the prtkit.shrm document written by `prefilter --shrm` (names the EXR).
+    /// shrm: the prtkit.shrm document written by `prefilter --shrm` (names the EXR beside it, so a
+    /// file: not `-`).
     #[arg(long, value_name = "SHRM.json")]
     pub shrm: Option<PathBuf>,
 
@@ -84,7 +85,7 @@ pub struct Args {
     pub terms: usize,
 
     /// factored: a prtkit.factor document written by `factor-brdf --factors FILE.exr` (names
-    /// the EXR). Without it the BRDF is factored here, on the hemisphere with the cosine folded in.
+    /// the EXR beside it, so a file: not `-`). Without it the BRDF is factored here, on the hemisphere with the cosine folded in.
     #[arg(long, value_name = "FACTOR.json")]
     pub factors: Option<PathBuf>,
 
@@ -109,7 +110,7 @@ pub struct Args {
     pub bright: crate::envmap::bright::BrightRule,
 
     /// ibl: the bake `ibl -o DIR` wrote: DIR, or its manifest DIR/ibl.json (which names the KTX2
-    /// files read). The environment map given must be the one baked (the manifest's source_hash).
+    /// files read; so a directory or file, not `-`). The environment map given must be the one baked (the manifest's source_hash).
     #[arg(long, value_name = "DIR|IBL.json")]
     pub ibl: Option<PathBuf>,
 

@@ -22,7 +22,7 @@ pub enum ArithArg {
 #[derive(Debug, Parser)]
 #[command(name = "sample-shader", version)]
 pub struct Args {
-    /// Shader source file (prtkit shading language, docs/shading-language.md).
+    /// Shader source file (prtkit shading language, docs/shading-language.md), or `-` for stdin.
     #[arg(value_name = "SHADER")]
     pub shader: PathBuf,
 
