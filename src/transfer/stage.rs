@@ -170,7 +170,7 @@ pub struct ErrorFigures {
     pub p99_vertex: f64,
     /// Largest per-vertex relative error.
     pub max_vertex: f64,
-    /// Mean over vertices of the share of rays above the horizon that escaped.
+    /// Mean over vertices of the share of rays that escaped.
     pub visible_fraction: f64,
 }
 
@@ -292,7 +292,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
             for (v, p) in points.iter().enumerate() {
                 transfer[v * coeffs..(v + 1) * coeffs].copy_from_slice(&p.shadowed);
             }
-            error = Some(integration_error(mesh, &points, n, config.albedo));
+            error = Some(integration_error(mesh, &points, n, config.rays, config.albedo));
         }
     }
     let seconds = start.elapsed().as_secs_f64();
@@ -310,9 +310,9 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
             "stratified rays",
             config.rays,
             format!(
-                "{} directions, one jittered in each of {} cells of equal solid angle 4pi/{} over the sphere \
-                 (bands in z, cells in phi), the same set at every vertex; rays below the vertex normal's horizon are \
-                 not cast",
+                "{} rays per vertex over the hemisphere about its normal, cosine-weighted and stratified: one \
+                 jittered in each of {} cells of equal projected solid angle pi/{} (bands in sin^2 theta, cells in \
+                 phi), the same local set turned onto every vertex's normal; T_i = (albedo/N) sum_k V(w_k) Y_i(w_k)",
                 config.rays, config.rays, config.rays
             ),
         ),
@@ -392,7 +392,7 @@ fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody) -
 }
 
 /// The direction set's integration error on the unshadowed integrand ([`ErrorFigures`]).
-fn integration_error(mesh: &Mesh, points: &[PointTransfer], order: usize, albedo: f64) -> ErrorFigures {
+fn integration_error(mesh: &Mesh, points: &[PointTransfer], order: usize, rays: usize, albedo: f64) -> ErrorFigures {
     let coeffs = order * order;
     let mut exact = vec![0.0; coeffs];
     let (mut diff2, mut ref2) = (0.0, 0.0);
@@ -405,7 +405,7 @@ fn integration_error(mesh: &Mesh, points: &[PointTransfer], order: usize, albedo
         diff2 += d2;
         ref2 += r2;
         per_vertex.push(if r2 > 0.0 { (d2 / r2).sqrt() } else { 0.0 });
-        visible += if p.above > 0 { p.visible as f64 / p.above as f64 } else { 0.0 };
+        visible += p.visible as f64 / rays as f64;
     }
     per_vertex.sort_by(f64::total_cmp);
     let at = |q: f64| {

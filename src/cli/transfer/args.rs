@@ -40,8 +40,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = Mode::Shadowed)]
     pub mode: Mode,
 
-    /// Ray directions per vertex (shadowed), stratified over the sphere in cells of equal solid
-    /// angle; about half of them lie above a vertex's horizon and are cast.
+    /// Rays cast per vertex (shadowed): cosine-weighted over the hemisphere about its normal,
+    /// stratified in cells of equal projected solid angle.
     #[arg(long, default_value_t = 1024)]
     pub rays: usize,
 
