@@ -354,12 +354,8 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     let glb = glb::encode(&glb_mesh(mesh, &transfer, coeffs, &body)).map_err(Error::Glb)?;
     let document = Document::new(FORMAT, VERSION, Provenance::new("transfer", &config.args, vec![name.clone()]), body);
     let cast = if config.mode == Mode::Shadowed { vertices * config.rays } else { 0 };
-    let summary = Summary {
-        vertices,
-        rays: rays,
-        seconds,
-        rays_per_second: if seconds > 0.0 { cast as f64 / seconds } else { 0.0 },
-    };
+    let summary =
+        Summary { vertices, rays, seconds, rays_per_second: if seconds > 0.0 { cast as f64 / seconds } else { 0.0 } };
     Ok(Output { document, glb, glsl: super::glsl::snippet(n), transfer, summary })
 }
 
