@@ -21,3 +21,4 @@ pub mod rng;
 pub mod sh;
 pub mod shader;
 pub mod sphere;
+pub mod transfer;

@@ -234,6 +234,39 @@ pub fn human_bytes(b: u128) -> String {
     }
 }
 
+// ---------------------------------------------------------------------------------------------
+// Meshes
+// ---------------------------------------------------------------------------------------------
+
+/// Most vertices `transfer` bakes: 2²⁴ (16.8 M). A `.glb` holds at most 4 GiB, and at order 8
+/// a vertex takes 24 bytes of position and normal plus 64 f32 of transfer (280 bytes): 2²⁴
+/// vertices are 4.7 GB, already beyond it; the check of the `.glb`'s length comes on top.
+pub const MAX_TRANSFER_VERTICES: usize = 1 << 24;
+
+/// Most triangles `transfer` casts rays against: 2²⁶ (67 M, about 4 GiB of BVH and triangles).
+pub const MAX_TRANSFER_TRIANGLES: usize = 1 << 26;
+
+/// Checks a mesh's size before its transfer is computed.
+pub fn check_transfer_mesh(what: &str, vertices: usize, triangles: usize) -> Result<(), LimitError> {
+    if vertices > MAX_TRANSFER_VERTICES {
+        return Err(LimitError {
+            what: format!("the vertex count of {what}"),
+            value: vertices.to_string(),
+            ceiling: MAX_TRANSFER_VERTICES.to_string(),
+            reason: "a .glb of the transfer holds at most 4 GiB",
+        });
+    }
+    if triangles > MAX_TRANSFER_TRIANGLES {
+        return Err(LimitError {
+            what: format!("the triangle count of {what}"),
+            value: triangles.to_string(),
+            ceiling: MAX_TRANSFER_TRIANGLES.to_string(),
+            reason: "the BVH of the visibility rays must fit in memory",
+        });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

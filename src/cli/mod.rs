@@ -15,4 +15,5 @@ pub mod prefilter;
 pub mod render;
 pub mod sample_shader;
 pub mod sh_project;
+pub mod transfer;
 pub mod umbrella;

@@ -70,6 +70,8 @@ pub enum Holds {
     Png,
     /// Linear data in layers: `.exr`.
     Exr,
+    /// A binary glTF: `.glb`.
+    Glb,
 }
 
 impl Holds {
@@ -82,6 +84,7 @@ impl Holds {
             Holds::Image => matches!(ext.as_deref(), Some("exr" | "pfm" | "png")),
             Holds::Png => ext.as_deref() == Some("png"),
             Holds::Exr => ext.as_deref() == Some("exr"),
+            Holds::Glb => ext.as_deref() == Some("glb"),
         };
         if !fits {
             let expected = match self {
@@ -89,6 +92,7 @@ impl Holds {
                 Holds::Image => ".exr, .pfm or .png",
                 Holds::Png => ".png",
                 Holds::Exr => ".exr",
+                Holds::Glb => ".glb",
             };
             anyhow::bail!("{}: unknown output format: the name must end in {expected}", path.display());
         }

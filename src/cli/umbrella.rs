@@ -32,6 +32,8 @@ enum StageArgs {
     Ibl(super::ibl::Args),
     /// Render a sphere or mesh with a bake (SH, SHRM, factored) or the reference, and compare.
     Render(super::render::Args),
+    /// Bake a mesh's diffuse precomputed radiance transfer (per-vertex SH, shadowed).
+    Transfer(super::transfer::Args),
 }
 
 /// Parses `prtkit <stage> …` and runs the stage.
@@ -50,5 +52,6 @@ pub fn main() -> ExitCode {
         StageArgs::EncodeNormals(args) => run(args),
         StageArgs::Ibl(args) => run(args),
         StageArgs::Render(args) => run(args),
+        StageArgs::Transfer(args) => run(args),
     }
 }

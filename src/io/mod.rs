@@ -5,6 +5,7 @@ pub mod atomic;
 pub mod dds;
 pub mod document;
 pub mod exr;
+pub mod glb;
 pub mod gpu_format;
 pub mod image;
 pub mod ktx2;

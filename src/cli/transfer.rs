@@ -1,0 +1,77 @@
+//! `transfer`: clap arguments → [`transfer::stage::Config`] → one library call → outputs.
+
+mod args;
+
+use super::common::{Context, Outcome, Stage};
+use super::options::{check_json_output, Execution};
+use super::outputs::{check_outputs, Holds, Outputs};
+use crate::io::Output;
+use crate::render::mesh::Mesh;
+use crate::transfer::stage::{self, Config};
+use anyhow::{Context as _, Result};
+pub use args::*;
+
+impl TryFrom<&Args> for Config {
+    type Error = anyhow::Error;
+    fn try_from(args: &Args) -> Result<Config> {
+        let glb_name = match &args.glb {
+            Output::File(path) => path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+            Output::Stdout => "-".into(),
+        };
+        Ok(Config {
+            order: args.order,
+            mode: args.mode,
+            rays: args.rays,
+            seed: args.seed,
+            albedo: args.albedo,
+            offset: args.offset,
+            source: args.mesh.display().to_string(),
+            glb_name,
+            args: std::env::args().collect(),
+        })
+    }
+}
+
+impl Stage for Args {
+    const NAME: &'static str = "transfer";
+    fn execution(&self) -> &Execution {
+        &self.run
+    }
+    fn run(self, ctx: &Context) -> Result<Outcome> {
+        check_json_output(&self.output, self.json)?;
+        check_outputs(
+            [(&self.glb, Holds::Glb), (&self.output, Holds::Text)]
+                .into_iter()
+                .chain(self.glsl.iter().map(|g| (g, Holds::Text))),
+        )?;
+        let extension = self.mesh.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        if extension.as_deref() != Some("obj") {
+            anyhow::bail!(
+                "{}: transfer reads OBJ meshes (.obj); PLY and glTF input are later slices of issue 32",
+                self.mesh.display()
+            );
+        }
+        let config = Config::try_from(&self)?;
+        let mesh = Mesh::load(&self.mesh)?;
+        let out = stage::run(&config, &mesh, ctx.progress())
+            .with_context(|| format!("cannot bake {}", self.mesh.display()))?;
+        if out.summary.rays > 0 {
+            ctx.note(format!(
+                "{} vertices x {} rays in {:.2} s: {:.3e} rays/s",
+                out.summary.vertices, out.summary.rays, out.summary.seconds, out.summary.rays_per_second
+            ));
+        }
+
+        let mut outputs = Outputs::new();
+        outputs.bytes(&self.glb, out.glb)?;
+        if let Some(glsl) = &self.glsl {
+            outputs.bytes(glsl, out.glsl.into_bytes())?;
+        }
+        outputs.json(&self.output, &out.document)?;
+        if self.json {
+            outputs.json(&Output::Stdout, &out.summary)?;
+        }
+        outputs.commit()?;
+        Ok(Outcome::Success)
+    }
+}

@@ -1,0 +1,67 @@
+//! The flags of `transfer` (clap declarations only; their help text is the user's reference).
+
+use crate::cli::options::{parse_output, Execution};
+use crate::io::Output;
+use crate::transfer::stage::Mode;
+use clap::Parser;
+use std::path::PathBuf;
+
+/// Bake a mesh's diffuse precomputed radiance transfer (Sloan, Kautz & Snyder 2002).
+///
+/// Reads an OBJ mesh (every object in it; they shadow each other) and writes, per vertex, the
+/// transfer vector T_i = (albedo/π) ∫ V(x,ω) max(n·ω,0) Y_i(ω) dω, so that a renderer relights it
+/// under any SH lighting L as B = Σ_i T_i L_i: a `.glb` with the transfer as `_PRT_k` vertex
+/// attributes, a `prtkit.transfer` manifest and, optionally, the GLSL of the dot product.
+#[derive(Debug, Parser)]
+#[command(name = "transfer", version)]
+pub struct Args {
+    /// The mesh (.obj). Normals are read from it when every vertex has one, else computed
+    /// (area-weighted face normals).
+    #[arg(value_name = "MESH")]
+    pub mesh: PathBuf,
+
+    /// The `.glb` to write: the mesh with the transfer as vertex attributes.
+    #[arg(long, value_name = "FILE", value_parser = parse_output)]
+    pub glb: Output,
+
+    /// The manifest (`prtkit.transfer` JSON; `-` for stdout).
+    #[arg(short, long, default_value = "-", value_parser = parse_output)]
+    pub output: Output,
+
+    /// Write the run-time GLSL snippet (the dot product with the lighting's SH) to FILE.
+    #[arg(long, value_name = "FILE", value_parser = parse_output)]
+    pub glsl: Option<Output>,
+
+    /// SH order n: bands 0..n-1, n² coefficients per vertex (1 to 8).
+    #[arg(short = 'n', long, default_value_t = 3)]
+    pub order: usize,
+
+    /// unshadowed (exact quadrature, no rays) or shadowed (visibility by ray casting).
+    #[arg(long, value_enum, default_value_t = Mode::Shadowed)]
+    pub mode: Mode,
+
+    /// Rays cast per vertex (shadowed): cosine-weighted over the hemisphere about its normal,
+    /// stratified in cells of equal projected solid angle.
+    #[arg(long, default_value_t = 1024)]
+    pub rays: usize,
+
+    /// Seed of the directions' jitter (the same set at every vertex).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+
+    /// Constant albedo baked into the transfer.
+    #[arg(long, default_value_t = 1.0)]
+    pub albedo: f64,
+
+    /// Shadow rays leave from x + offset·n, offset given as a fraction of the mesh's bounding-box
+    /// diagonal (stated in the manifest with its absolute value).
+    #[arg(long, default_value_t = 1e-4)]
+    pub offset: f64,
+
+    /// Print a JSON summary (vertices, rays, seconds, rays per second) on stdout.
+    #[arg(long)]
+    pub json: bool,
+
+    #[command(flatten)]
+    pub run: Execution,
+}

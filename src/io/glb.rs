@@ -1,0 +1,135 @@
+//! Binary glTF 2.0 (`.glb`): one mesh of one indexed triangle primitive with float vertex
+//! attributes, written by hand (Khronos glTF 2.0 specification, §4.4 "GLB File Format
+//! Specification": a 12-byte header, a JSON chunk padded with spaces and a BIN chunk padded
+//! with zeros, each to 4 bytes). Application-specific attributes are named with a leading
+//! underscore (§3.7.2.1), e.g. `_PRT_0`.
+
+use serde_json::{json, Value};
+
+/// One vertex attribute: its semantic, components per vertex (1–4) and values, vertex after
+/// vertex.
+#[derive(Clone, Debug)]
+pub struct Attribute {
+    /// Semantic, e.g. `NORMAL` or `_PRT_0`.
+    pub name: String,
+    /// Components per vertex: 1 (SCALAR) to 4 (VEC4).
+    pub components: usize,
+    /// `components` × vertex count values.
+    pub values: Vec<f32>,
+}
+
+/// A triangle mesh to write.
+#[derive(Clone, Debug)]
+pub struct GlbMesh {
+    /// Positions, the `POSITION` attribute.
+    pub positions: Vec<[f32; 3]>,
+    /// Further attributes (`NORMAL`, custom ones).
+    pub attributes: Vec<Attribute>,
+    /// Triangles, as indices into the vertices.
+    pub triangles: Vec<[u32; 3]>,
+    /// The asset's `generator` string.
+    pub generator: String,
+    /// Application data stored in the mesh's `extras`.
+    pub extras: Value,
+}
+
+const FLOAT: u32 = 5126;
+const UNSIGNED_INT: u32 = 5125;
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+
+/// The whole `.glb` file. Fails when it would exceed the format's 4 GiB length.
+pub fn encode(mesh: &GlbMesh) -> Result<Vec<u8>, String> {
+    let count = mesh.positions.len();
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut attributes = serde_json::Map::new();
+    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: u32| {
+        let offset = bin.len();
+        bin.extend_from_slice(bytes);
+        views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target}));
+        views.len() - 1
+    };
+    let floats = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+
+    let flat: Vec<f32> = mesh.positions.iter().flatten().copied().collect();
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in &mesh.positions {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let view = push_view(&mut bin, &floats(&flat), ARRAY_BUFFER);
+    accessors.push(
+        json!({"bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC3", "min": lo, "max": hi}),
+    );
+    attributes.insert("POSITION".into(), json!(accessors.len() - 1));
+    for a in &mesh.attributes {
+        if a.values.len() != a.components * count {
+            return Err(format!("attribute {} holds {} values for {count} vertices", a.name, a.values.len()));
+        }
+        let kind = ["SCALAR", "VEC2", "VEC3", "VEC4"][a.components - 1];
+        let view = push_view(&mut bin, &floats(&a.values), ARRAY_BUFFER);
+        accessors.push(json!({"bufferView": view, "componentType": FLOAT, "count": count, "type": kind}));
+        attributes.insert(a.name.clone(), json!(accessors.len() - 1));
+    }
+    let indices: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+    let view = push_view(&mut bin, &indices, ELEMENT_ARRAY_BUFFER);
+    accessors.push(
+        json!({"bufferView": view, "componentType": UNSIGNED_INT, "count": 3 * mesh.triangles.len(), "type": "SCALAR"}),
+    );
+    let indices_accessor = accessors.len() - 1;
+
+    let document = json!({
+        "asset": {"version": "2.0", "generator": mesh.generator},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{
+            "primitives": [{"attributes": attributes, "indices": indices_accessor, "mode": 4}],
+            "extras": mesh.extras,
+        }],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    let mut json_chunk = serde_json::to_vec(&document).map_err(|e| e.to_string())?;
+    json_chunk.resize(json_chunk.len().next_multiple_of(4), b' ');
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let total = 12 + 8 + json_chunk.len() + 8 + bin.len();
+    let length = u32::try_from(total).map_err(|_| format!("{total} bytes exceed the 4 GiB a .glb can hold"))?;
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&length.to_le_bytes());
+    out.extend_from_slice(&(json_chunk.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json_chunk);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    Ok(out)
+}
+
+/// The JSON chunk of a `.glb` (for readers and tests): `None` when the header is not glTF 2.
+pub fn json_chunk(bytes: &[u8]) -> Option<Value> {
+    let word = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    if bytes.get(0..4)? != b"glTF" || word(4)? != 2 || bytes.get(16..20)? != b"JSON" {
+        return None;
+    }
+    let len = word(12)? as usize;
+    serde_json::from_slice(bytes.get(20..20 + len)?).ok()
+}
+
+/// The BIN chunk of a `.glb`.
+pub fn bin_chunk(bytes: &[u8]) -> Option<&[u8]> {
+    let word = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let at = 20 + word(12)? as usize;
+    let len = word(at)? as usize;
+    if bytes.get(at + 4..at + 8)? != b"BIN\0" {
+        return None;
+    }
+    bytes.get(at + 8..at + 8 + len)
+}

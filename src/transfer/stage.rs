@@ -1,0 +1,419 @@
+//! The `transfer` stage as one library call: a mesh in, its per-vertex diffuse transfer
+//! (Sloan, Kautz & Snyder 2002) out as a `.glb` with `_PRT_k` vertex attributes, a
+//! `prtkit.transfer` manifest and a GLSL snippet (`docs/transfer.md`,
+//! `docs/formats/transfer.md`).
+//!
+//! **Self-intersection.** Shadow rays leave from x + δ·n, with δ = `offset` × the length of the
+//! mesh's bounding-box diagonal (default 10⁻⁴): far above the single-precision rounding of the
+//! ray casts (2⁻²⁴ ≈ 6·10⁻⁸ of the coordinates), far below any feature a mesh is modelled with.
+//! The manifest states both numbers.
+
+use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
+use super::directions::Stratified;
+use super::visibility::{triangle_area, Occluders};
+use crate::io::glb::{self, Attribute, GlbMesh};
+use crate::io::{Document, Provenance};
+use crate::limits::LimitError;
+use crate::progress::Progress;
+use crate::render::mesh::Mesh;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Document kind of the manifest.
+pub const FORMAT: &str = "prtkit.transfer";
+/// Its schema version.
+pub const VERSION: u32 = 1;
+/// Highest SH order n (bands; n² coefficients) of the transfer.
+pub const MAX_ORDER: usize = 8;
+/// Most ray directions per vertex.
+pub const MAX_RAYS: usize = 1 << 20;
+/// Vertices per unit of progress and per parallel work item.
+const CHUNK: usize = 64;
+
+/// Which light transport the transfer holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// V ≡ 1: every direction above the horizon reaches the lighting (Sloan et al. 2002, eq. 7),
+    /// computed by an exact quadrature.
+    Unshadowed,
+    /// With visibility V(x, ω) by ray casting (Sloan et al. 2002, eq. 8).
+    Shadowed,
+}
+
+/// What `transfer` computes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Config {
+    /// SH order n: bands 0..n−1, n² coefficients (1 ≤ n ≤ [`MAX_ORDER`]).
+    pub order: usize,
+    /// Unshadowed or shadowed.
+    pub mode: Mode,
+    /// Ray directions per vertex (shadowed mode).
+    pub rays: usize,
+    /// Seed of the directions' jitter.
+    pub seed: u64,
+    /// The constant albedo ρ baked into the transfer.
+    pub albedo: f64,
+    /// The ray origin offset along the normal, as a fraction of the bounding-box diagonal.
+    pub offset: f64,
+    /// The mesh's name, for messages and the manifest.
+    pub source: String,
+    /// The `.glb`'s file name, for the manifest.
+    pub glb_name: String,
+    /// The command line, for provenance.
+    pub args: Vec<String>,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            order: 3,
+            mode: Mode::Shadowed,
+            rays: 1024,
+            seed: 0,
+            albedo: 1.0,
+            offset: 1e-4,
+            source: String::new(),
+            glb_name: String::new(),
+            args: Vec::new(),
+        }
+    }
+}
+
+/// The manifest's body (`docs/formats/transfer.md`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct TransferBody {
+    /// SH order n (bands), as in Sloan et al. 2002.
+    pub order: usize,
+    /// n² coefficients per vertex.
+    pub coefficients: usize,
+    /// `unshadowed` or `shadowed`.
+    pub mode: Mode,
+    /// The albedo ρ baked in.
+    pub albedo: f64,
+    /// How the integral was computed.
+    pub integration: Integration,
+    /// The ray origin offset.
+    pub offset: Offset,
+    /// The mesh.
+    pub mesh: MeshInfo,
+    /// The `.glb` and its attributes.
+    pub glb: GlbInfo,
+    /// In which axes the SH basis is evaluated.
+    pub frame: String,
+    /// The integration error, measured (shadowed mode).
+    pub error: Option<ErrorFigures>,
+}
+
+/// How T was integrated.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Integration {
+    /// `exact quadrature` or `stratified rays`.
+    pub method: String,
+    /// Ray directions per vertex (0 for the exact quadrature).
+    pub rays: usize,
+    /// Seed of the directions.
+    pub seed: u64,
+    /// In words.
+    pub description: String,
+}
+
+/// The shadow rays' origin offset.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Offset {
+    /// Fraction of the bounding-box diagonal.
+    pub relative: f64,
+    /// In the mesh's units.
+    pub absolute: f64,
+    /// Along what.
+    pub along: String,
+}
+
+/// What was read.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct MeshInfo {
+    /// The input file.
+    pub source: String,
+    /// Vertices.
+    pub vertices: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// Triangles of zero area (kept in the `.glb`, left out of the BVH).
+    pub zero_area_triangles: usize,
+    /// `file` or `computed` (area-weighted face normals).
+    pub normals: String,
+    /// Length of the bounding-box diagonal.
+    pub extent: f64,
+}
+
+/// The `.glb` written beside the manifest.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct GlbInfo {
+    /// Its file name.
+    pub file: String,
+    /// The transfer attributes, in order: `_PRT_k` holds coefficients 4k..4k+3.
+    pub attributes: Vec<String>,
+    /// The packing in words.
+    pub packing: String,
+}
+
+/// The integration error of the direction set, measured on the unshadowed integrand (for which
+/// the exact value is known) with the same rays: ‖T_rays − T_exact‖ / ‖T_exact‖ per vertex.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ErrorFigures {
+    /// What is measured, in words.
+    pub measured: String,
+    /// RMS over every vertex and coefficient, relative to the RMS of the exact transfer.
+    pub relative_rms: f64,
+    /// 99th percentile of the per-vertex relative error.
+    pub p99_vertex: f64,
+    /// Largest per-vertex relative error.
+    pub max_vertex: f64,
+    /// Mean over vertices of the share of rays that escaped.
+    pub visible_fraction: f64,
+}
+
+/// What `transfer` produces.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// The manifest.
+    pub document: Document<TransferBody>,
+    /// The `.glb` bytes.
+    pub glb: Vec<u8>,
+    /// The GLSL snippet.
+    pub glsl: String,
+    /// The per-vertex transfer, n² values per vertex.
+    pub transfer: Vec<f64>,
+    /// The `--json` summary.
+    pub summary: Summary,
+}
+
+/// The machine-readable summary (`transfer --json`): what the manifest says, plus timings.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Summary {
+    /// Vertices baked.
+    pub vertices: usize,
+    /// Rays per vertex (0 unshadowed).
+    pub rays: usize,
+    /// Seconds of the integration pass (with the BVH build).
+    pub seconds: f64,
+    /// Vertices × rays per second of the visibility pass (0 unshadowed).
+    pub rays_per_second: f64,
+}
+
+/// Errors of the stage.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The order is outside 1..=8.
+    #[error("--order {0} is outside 1..={MAX_ORDER}")]
+    Order(usize),
+    /// The ray count is outside 1..=MAX_RAYS.
+    #[error("--rays {0} is outside 1..={MAX_RAYS}")]
+    Rays(usize),
+    /// The albedo or offset is not a finite number in range.
+    #[error("{0}")]
+    Parameter(String),
+    /// The mesh has no triangle of non-zero area.
+    #[error("{0}: every triangle has zero area: nothing to bake")]
+    ZeroArea(String),
+    /// The mesh is larger than the ceilings.
+    #[error("{source_name}: {error}")]
+    Limit {
+        /// The mesh.
+        source_name: String,
+        /// Which ceiling.
+        error: LimitError,
+    },
+    /// The `.glb` cannot be written.
+    #[error("{0}")]
+    Glb(String),
+}
+
+/// Runs `transfer` on `mesh`.
+pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Output, Error> {
+    let n = config.order;
+    if !(1..=MAX_ORDER).contains(&n) {
+        return Err(Error::Order(n));
+    }
+    if !(1..=MAX_RAYS).contains(&config.rays) {
+        return Err(Error::Rays(config.rays));
+    }
+    if !(config.albedo.is_finite() && config.albedo >= 0.0) {
+        return Err(Error::Parameter(format!("--albedo {} must be a finite number ≥ 0", config.albedo)));
+    }
+    if !(config.offset.is_finite() && (0.0..0.1).contains(&config.offset)) {
+        return Err(Error::Parameter(format!("--offset {} must be in [0, 0.1)", config.offset)));
+    }
+    let name = &config.source;
+    crate::limits::check_transfer_mesh(name, mesh.positions.len(), mesh.triangles.len())
+        .map_err(|error| Error::Limit { source_name: name.clone(), error })?;
+    let zero_area = mesh.triangles.iter().filter(|t| triangle_area(&mesh.positions, t) <= 0.0).count();
+    if zero_area == mesh.triangles.len() {
+        return Err(Error::ZeroArea(name.clone()));
+    }
+
+    let coeffs = n * n;
+    let vertices = mesh.positions.len();
+    let offset = config.offset * mesh.extent();
+    let start = Instant::now();
+    let mut transfer = vec![0.0; vertices * coeffs];
+    let mut error = None;
+    match config.mode {
+        Mode::Unshadowed => {
+            progress.start("transfer (unshadowed)", vertices as u64);
+            transfer.par_chunks_mut(CHUNK * coeffs).enumerate().for_each(|(c, out)| {
+                for (k, t) in out.chunks_exact_mut(coeffs).enumerate() {
+                    unshadowed_exact(mesh.normals[c * CHUNK + k], n, config.albedo, t);
+                }
+                progress.advance((out.len() / coeffs) as u64);
+            });
+            progress.finish();
+        }
+        Mode::Shadowed => {
+            let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
+            let directions = Stratified::new(config.rays, config.seed);
+            let integrator = Shadowed::new(&directions, n, &occluders);
+            progress.start("visibility", vertices as u64);
+            // One work item per chunk of vertices; each vertex's sums run in the directions'
+            // fixed order, so the bits do not depend on which thread ran which chunk.
+            let points: Vec<PointTransfer> = (0..vertices.div_ceil(CHUNK))
+                .into_par_iter()
+                .flat_map_iter(|c| {
+                    let range = c * CHUNK..((c + 1) * CHUNK).min(vertices);
+                    let done: Vec<PointTransfer> = range
+                        .map(|v| integrator.integrate(mesh.positions[v], mesh.normals[v], offset, config.albedo))
+                        .collect();
+                    progress.advance(done.len() as u64);
+                    done
+                })
+                .collect();
+            progress.finish();
+            for (v, p) in points.iter().enumerate() {
+                transfer[v * coeffs..(v + 1) * coeffs].copy_from_slice(&p.shadowed);
+            }
+            error = Some(integration_error(mesh, &points, n, config.rays, config.albedo));
+        }
+    }
+    let seconds = start.elapsed().as_secs_f64();
+
+    let attributes: Vec<String> = (0..coeffs.div_ceil(4)).map(|k| format!("_PRT_{k}")).collect();
+    let (method, rays, description) = match config.mode {
+        Mode::Unshadowed => (
+            "exact quadrature",
+            0,
+            "8 Gauss-Legendre nodes in n.w times 18 equally spaced azimuths about the normal: exact for the \
+             band-limited integrand, so T_lm = (albedo/pi) A_l Y_lm(n) to rounding"
+                .to_string(),
+        ),
+        Mode::Shadowed => (
+            "stratified rays",
+            config.rays,
+            format!(
+                "{} rays per vertex over the hemisphere about its normal, cosine-weighted and stratified: one \
+                 jittered in each of {} cells of equal projected solid angle pi/{} (bands in sin^2 theta, cells in \
+                 phi), the same local set turned onto every vertex's normal; T_i = (albedo/N) sum_k V(w_k) Y_i(w_k)",
+                config.rays, config.rays, config.rays
+            ),
+        ),
+    };
+    let body = TransferBody {
+        order: n,
+        coefficients: coeffs,
+        mode: config.mode,
+        albedo: config.albedo,
+        integration: Integration { method: method.into(), rays, seed: config.seed, description },
+        offset: Offset {
+            relative: config.offset,
+            absolute: offset,
+            along: "the vertex normal: shadow rays leave from x + offset * n".into(),
+        },
+        mesh: MeshInfo {
+            source: config.source.clone(),
+            vertices,
+            triangles: mesh.triangles.len(),
+            zero_area_triangles: zero_area,
+            normals: if mesh.normals_computed { "computed" } else { "file" }.into(),
+            extent: mesh.extent(),
+        },
+        glb: GlbInfo {
+            file: config.glb_name.clone(),
+            attributes: attributes.clone(),
+            packing: format!(
+                "_PRT_k is a float VEC4 holding coefficients 4k..4k+3 in index order i = l(l+1)+m; \
+                 {} coefficients, zeros pad the last attribute",
+                coeffs
+            ),
+        },
+        frame: "the mesh file's own axes (positions as stored): the SH basis is evaluated with x, y, z as \
+                stored, so lighting SH must be expressed in those axes (prtkit's +Z-up documents apply as they are \
+                when the mesh's +Z is up; a +Y-up glTF asset needs the lighting rotated)"
+            .into(),
+        error,
+    };
+    let glb = glb::encode(&glb_mesh(mesh, &transfer, coeffs, &body)).map_err(Error::Glb)?;
+    let document = Document::new(FORMAT, VERSION, Provenance::new("transfer", &config.args, vec![name.clone()]), body);
+    let cast = if config.mode == Mode::Shadowed { vertices * config.rays } else { 0 };
+    let summary =
+        Summary { vertices, rays, seconds, rays_per_second: if seconds > 0.0 { cast as f64 / seconds } else { 0.0 } };
+    Ok(Output { document, glb, glsl: super::glsl::snippet(n), transfer, summary })
+}
+
+/// The `.glb`: positions, unit normals, the transfer packed four coefficients per `_PRT_k`, and
+/// the manifest's body in the mesh's `extras` (so that the file explains itself).
+fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody) -> GlbMesh {
+    let vertices = mesh.positions.len();
+    let mut attributes = vec![Attribute {
+        name: "NORMAL".into(),
+        components: 3,
+        values: mesh.normals.iter().flat_map(|n| n.as_vec3().to_array()).collect(),
+    }];
+    for k in 0..coeffs.div_ceil(4) {
+        let mut values = Vec::with_capacity(4 * vertices);
+        for v in 0..vertices {
+            for j in 0..4 {
+                let i = 4 * k + j;
+                values.push(if i < coeffs { transfer[v * coeffs + i] as f32 } else { 0.0 });
+            }
+        }
+        attributes.push(Attribute { name: format!("_PRT_{k}"), components: 4, values });
+    }
+    GlbMesh {
+        positions: mesh.positions.iter().map(|p| p.as_vec3().to_array()).collect(),
+        attributes,
+        triangles: mesh.triangles.clone(),
+        generator: format!("prtkit {} transfer", env!("CARGO_PKG_VERSION")),
+        extras: serde_json::json!({ "prtkit.transfer": { "order": body.order, "mode": body.mode, "albedo": body.albedo } }),
+    }
+}
+
+/// The direction set's integration error on the unshadowed integrand ([`ErrorFigures`]).
+fn integration_error(mesh: &Mesh, points: &[PointTransfer], order: usize, rays: usize, albedo: f64) -> ErrorFigures {
+    let coeffs = order * order;
+    let mut exact = vec![0.0; coeffs];
+    let (mut diff2, mut ref2) = (0.0, 0.0);
+    let mut per_vertex = Vec::with_capacity(points.len());
+    let mut visible = 0.0;
+    for (p, n) in points.iter().zip(&mesh.normals) {
+        unshadowed_exact(*n, order, albedo, &mut exact);
+        let d2: f64 = p.unshadowed.iter().zip(&exact).map(|(a, b)| (a - b) * (a - b)).sum();
+        let r2: f64 = exact.iter().map(|b| b * b).sum();
+        diff2 += d2;
+        ref2 += r2;
+        per_vertex.push(if r2 > 0.0 { (d2 / r2).sqrt() } else { 0.0 });
+        visible += p.visible as f64 / rays as f64;
+    }
+    per_vertex.sort_by(f64::total_cmp);
+    let at = |q: f64| {
+        per_vertex.get(((per_vertex.len() as f64 * q).ceil() as usize).saturating_sub(1)).copied().unwrap_or(0.0)
+    };
+    ErrorFigures {
+        measured: "the same rays with visibility ignored against the exact unshadowed transfer: \
+                   |T_rays - T_exact| / |T_exact| per vertex"
+            .into(),
+        relative_rms: if ref2 > 0.0 { (diff2 / ref2).sqrt() } else { 0.0 },
+        p99_vertex: at(0.99),
+        max_vertex: at(1.0),
+        visible_fraction: visible / points.len().max(1) as f64,
+    }
+}

@@ -1,0 +1,299 @@
+//! `transfer` (issue 32, first slice): diffuse per-vertex PRT against independent derivations.
+//!
+//! - Unshadowed transfer on a sphere equals the clamped cosine's SH convolution,
+//!   T_lm = (ρ/π) Â_l Y_lm(n), with Â_l typed in from Ramamoorthi & Hanrahan 2001 (eq. 8–9).
+//! - Shadowed transfer in a bowl holding a ball matches a brute-force integral by another code
+//!   path: a naive loop over every triangle (f64 Möller–Trumbore, no BVH) over a dense
+//!   Gauss–Legendre × azimuth product rule in world axes (not the stage's stratified rays).
+//! - Thread counts give the same bytes; bad meshes exit 2 naming the file and write nothing.
+
+mod common;
+
+use common::{cmd, stderr};
+use glam::DVec3;
+use prtkit::progress::NoProgress;
+use prtkit::render::mesh::{uv_sphere, Mesh};
+use prtkit::sh::basis::eval_basis_dir;
+use prtkit::sh::legendre::LegendreTable;
+use prtkit::transfer::stage::{self, Config, Mode};
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Â_l of the clamped cosine, l = 0..7 (Ramamoorthi & Hanrahan 2001, eq. 8–9): π, 2π/3, π/4,
+/// 0, −π/24, 0, π/64, 0.
+const A_HAT: [f64; 8] = [PI, 2.0 * PI / 3.0, PI / 4.0, 0.0, -PI / 24.0, 0.0, PI / 64.0, 0.0];
+
+fn band(i: usize) -> usize {
+    (i as f64).sqrt().floor() as usize
+}
+
+/// A bowl (the lower unit hemisphere, normals facing its inside) holding a ball of radius 0.35
+/// resting near its bottom: two objects that shadow themselves and each other.
+fn bowl_and_ball() -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
+    let (rings, segments) = (12usize, 24usize);
+    let mut p = Vec::new();
+    for r in 0..=rings {
+        let theta = PI / 2.0 + PI / 2.0 * r as f64 / rings as f64;
+        for s in 0..segments {
+            let phi = 2.0 * PI * s as f64 / segments as f64;
+            p.push(DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()));
+        }
+    }
+    let mut n: Vec<DVec3> = p.iter().map(|v| -*v).collect();
+    let mut t = Vec::new();
+    let at = |r: usize, s: usize| (r * segments + s % segments) as u32;
+    for r in 0..rings {
+        for s in 0..segments {
+            t.push([at(r, s), at(r + 1, s), at(r + 1, s + 1)]);
+            t.push([at(r, s), at(r + 1, s + 1), at(r, s + 1)]);
+        }
+    }
+    let (sp, st) = uv_sphere(10, 20);
+    let base = p.len() as u32;
+    let centre = DVec3::new(0.2, 0.0, -0.6);
+    for v in &sp {
+        p.push(centre + 0.35 * *v);
+        n.push(*v);
+    }
+    t.extend(st.iter().map(|tri| tri.map(|i| i + base)));
+    (p, n, t)
+}
+
+fn write_obj(path: &Path, p: &[DVec3], n: &[DVec3], t: &[[u32; 3]]) {
+    let mut s = String::from("o scene\n");
+    for v in p {
+        s += &format!("v {} {} {}\n", v.x, v.y, v.z);
+    }
+    for v in n {
+        s += &format!("vn {} {} {}\n", v.x, v.y, v.z);
+    }
+    for f in t {
+        s += &format!("f {0}//{0} {1}//{1} {2}//{2}\n", f[0] + 1, f[1] + 1, f[2] + 1);
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+#[test]
+fn unshadowed_sphere_is_the_clamped_cosine_convolution() {
+    let (p, t) = uv_sphere(16, 32);
+    let mesh = Mesh::new(p.clone(), Some(p.clone()), t).unwrap();
+    let (order, albedo) = (8, 0.8);
+    let config = Config { order, mode: Mode::Unshadowed, albedo, ..Config::default() };
+    let out = stage::run(&config, &mesh, &NoProgress).unwrap();
+    let table = LegendreTable::new(order - 1);
+    let mut y = vec![0.0; 64];
+    let mut worst = 0.0f64;
+    for (v, n) in mesh.normals.iter().enumerate() {
+        eval_basis_dir(&table, *n, &mut y);
+        for i in 0..64 {
+            let expected = albedo / PI * A_HAT[band(i)] * y[i];
+            worst = worst.max((out.transfer[v * 64 + i] - expected).abs());
+        }
+    }
+    eprintln!("unshadowed sphere, order 8, {} vertices: largest |T - (albedo/pi) A_l Y_lm(n)| = {worst:.2e}", p.len());
+    assert!(worst < 1e-6, "{worst}");
+
+    // Shadowed on a convex mesh: nothing occludes, so the rays' error is the quadrature's alone.
+    let config = Config { order, mode: Mode::Shadowed, albedo, rays: 4096, ..Config::default() };
+    let shadowed = stage::run(&config, &mesh, &NoProgress).unwrap();
+    let error = shadowed.document.body.error.clone().unwrap();
+    let (mut d2, mut r2) = (0.0, 0.0);
+    for (a, b) in shadowed.transfer.iter().zip(&out.transfer) {
+        d2 += (a - b) * (a - b);
+        r2 += b * b;
+    }
+    let rms = (d2 / r2).sqrt();
+    eprintln!(
+        "shadowed sphere, 4096 rays: relative RMS {rms:.2e} against the closed form, visible fraction {:.6}",
+        error.visible_fraction
+    );
+    assert_eq!(error.visible_fraction, 1.0);
+    assert!((rms - error.relative_rms).abs() < 1e-12 && rms < 0.01, "{rms}");
+}
+
+/// Brute-force shadowed transfer at one point: every triangle tested for every direction of a
+/// Gauss–Legendre (μ = z) × equally spaced φ rule in world axes.
+fn brute_force(
+    p: &[DVec3],
+    tris: &[[u32; 3]],
+    origin: DVec3,
+    normal: DVec3,
+    order: usize,
+    directions: &[(DVec3, f64)],
+) -> Vec<f64> {
+    let table = LegendreTable::new(order - 1);
+    let mut y = vec![0.0; order * order];
+    let mut t = vec![0.0; order * order];
+    for &(d, w) in directions {
+        let cos = normal.dot(d);
+        if cos <= 0.0 {
+            continue;
+        }
+        let blocked = tris.iter().any(|tri| {
+            let [a, b, c] = tri.map(|i| p[i as usize]);
+            let (e1, e2) = (b - a, c - a);
+            let pv = d.cross(e2);
+            let det = e1.dot(pv);
+            if det.abs() < 1e-300 {
+                return false;
+            }
+            let tv = origin - a;
+            let u = tv.dot(pv) / det;
+            let qv = tv.cross(e1);
+            let v = d.dot(qv) / det;
+            (0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && e2.dot(qv) / det > 0.0
+        });
+        if !blocked {
+            eval_basis_dir(&table, d, &mut y);
+            for i in 0..y.len() {
+                t[i] += w * cos * y[i] / PI;
+            }
+        }
+    }
+    t
+}
+
+#[test]
+fn shadowed_bowl_matches_a_brute_force_integral() {
+    let (p, n, t) = bowl_and_ball();
+    let mesh = Mesh::new(p.clone(), Some(n.clone()), t.clone()).unwrap();
+    let order = 8;
+    let rule = prtkit::quadrature::gauss_legendre(96);
+    let azimuths = 192;
+    let directions: Vec<(DVec3, f64)> = rule
+        .iter()
+        .flat_map(|&(z, w)| {
+            let s = (1.0 - z * z).sqrt();
+            (0..azimuths).map(move |k| {
+                let phi = 2.0 * PI * (k as f64 + 0.5) / azimuths as f64;
+                (DVec3::new(s * phi.cos(), s * phi.sin(), z), w * 2.0 * PI / azimuths as f64)
+            })
+        })
+        .collect();
+    // Every third vertex of the bowl and the ball (the brute force costs vertices × directions
+    // × triangles).
+    let sample: Vec<usize> = (0..p.len()).step_by(3).collect();
+    let offset = 1e-4 * mesh.extent();
+    let reference: Vec<Vec<f64>> =
+        sample.iter().map(|&v| brute_force(&p, &t, p[v] + offset * n[v], n[v], order, &directions)).collect();
+    for rays in [1024, 4096, 16384] {
+        let config = Config { order, mode: Mode::Shadowed, rays, ..Config::default() };
+        let out = stage::run(&config, &mesh, &NoProgress).unwrap();
+        let (mut d2, mut r2) = (0.0, 0.0);
+        for (&v, r) in sample.iter().zip(&reference) {
+            for i in 0..64 {
+                let d = out.transfer[v * 64 + i] - r[i];
+                d2 += d * d;
+                r2 += r[i] * r[i];
+            }
+        }
+        let rms = (d2 / r2).sqrt();
+        let error = out.document.body.error.unwrap();
+        eprintln!(
+            "bowl + ball, order 8, {rays} rays, {} of {} vertices vs brute force over {} directions: relative RMS \
+             {rms:.4}; visible fraction {:.3}; unshadowed integration error of the rays {:.4}",
+            sample.len(),
+            p.len(),
+            directions.len(),
+            error.visible_fraction,
+            error.relative_rms
+        );
+        if rays == 16384 {
+            assert!(rms < 0.01, "{rms}");
+        }
+        assert!(error.visible_fraction < 0.9, "the bowl should shadow itself");
+    }
+}
+
+#[test]
+fn thread_counts_give_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (p, n, t) = bowl_and_ball();
+    let obj = dir.path().join("scene.obj");
+    write_obj(&obj, &p, &n, &t);
+    let mut outputs = Vec::new();
+    for threads in ["1", "2"] {
+        // The same names in two folders: the manifest names its .glb.
+        let out = dir.path().join(threads);
+        std::fs::create_dir(&out).unwrap();
+        let (glb, json, glsl) = (out.join("t.glb"), out.join("t.json"), out.join("t.glsl"));
+        cmd("transfer")
+            .arg(&obj)
+            .args(["-n", "5", "--rays", "512", "-q", "--threads", threads, "--glb"])
+            .arg(&glb)
+            .arg("-o")
+            .arg(&json)
+            .arg("--glsl")
+            .arg(&glsl)
+            .assert()
+            .success();
+        let mut doc: serde_json::Value = common::read(&json);
+        doc.as_object_mut().unwrap().remove("provenance"); // names the thread count
+        outputs.push((std::fs::read(&glb).unwrap(), doc, std::fs::read(&glsl).unwrap()));
+    }
+    assert!(outputs[0] == outputs[1], "outputs differ between --threads 1 and 2");
+
+    // The .glb holds the transfer as documented: _PRT_k = coefficients 4k..4k+3, zero padded.
+    let bytes = &outputs[0].0;
+    let gltf = prtkit::io::glb::json_chunk(bytes).unwrap();
+    let bin = prtkit::io::glb::bin_chunk(bytes).unwrap();
+    let attributes = &gltf["meshes"][0]["primitives"][0]["attributes"];
+    let config = Config { order: 5, mode: Mode::Shadowed, rays: 512, ..Config::default() };
+    let mesh = Mesh::load(&obj).unwrap();
+    let out = stage::run(&config, &mesh, &NoProgress).unwrap();
+    for k in 0..7 {
+        let accessor = &gltf["accessors"][attributes[format!("_PRT_{k}")].as_u64().unwrap() as usize];
+        assert_eq!((accessor["type"].as_str(), accessor["count"].as_u64()), (Some("VEC4"), Some(p.len() as u64)));
+        let view = &gltf["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+        let start = view["byteOffset"].as_u64().unwrap() as usize;
+        for v in [0, p.len() / 2, p.len() - 1] {
+            for j in 0..4 {
+                let at = start + 16 * v + 4 * j;
+                let value = f32::from_le_bytes(bin[at..at + 4].try_into().unwrap());
+                let i = 4 * k + j;
+                let expected = if i < 25 { out.transfer[v * 25 + i] as f32 } else { 0.0 };
+                assert_eq!(value, expected, "_PRT_{k}[{j}] of vertex {v}");
+            }
+        }
+    }
+    assert!(attributes.get("_PRT_7").is_none());
+
+    // The GLSL snippet compiles (naga's GLSL front end, then its validator).
+    let glsl = String::from_utf8(outputs[0].2.clone()).unwrap();
+    let src = format!(
+        "#version 450\n#define PRTKIT_LIGHT_SH_DECLARED\nlayout(std140, binding = 0) uniform Light {{ vec3 prtkitLightSH[25]; }};\n{glsl}\
+         layout(location = 0) in vec4 t0;\nlayout(location = 0) out vec4 o;\n\
+         void main() {{ vec4 t[7] = vec4[7](t0, t0, t0, t0, t0, t0, t0); o = vec4(prtkitTransferRadiance(t), 1.0); }}\n"
+    );
+    let module = naga::front::glsl::Frontend::default()
+        .parse(&naga::front::glsl::Options::from(naga::ShaderStage::Fragment), &src)
+        .unwrap_or_else(|e| panic!("{e:?}\n{src}"));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+        .validate(&module)
+        .unwrap();
+}
+
+#[test]
+fn bad_meshes_exit_2_naming_the_file_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "not a finite"),
+        ("huge.obj", "v 1e39 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "not a finite"),
+        ("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n", "zero area"),
+        ("empty.obj", "v 0 0 0\n", "no triangles"),
+        ("mesh.ply", "ply\nformat ascii 1.0\nend_header\n", "reads OBJ"),
+    ];
+    for (name, text, reason) in cases {
+        let mesh = dir.path().join(name);
+        std::fs::write(&mesh, text).unwrap();
+        let glb = dir.path().join("out.glb");
+        let json = dir.path().join("out.json");
+        let output = cmd("transfer").arg(&mesh).arg("--glb").arg(&glb).arg("-o").arg(&json).output().unwrap();
+        let message = stderr(&output);
+        assert_eq!(output.status.code(), Some(2), "{name}: {message}");
+        assert!(message.contains(&mesh.display().to_string()) && message.contains(reason), "{name}: {message}");
+        assert!(!glb.exists() && !json.exists(), "{name}: an output was written");
+    }
+    assert!(prtkit::limits::check_transfer_mesh("m.obj", prtkit::limits::MAX_TRANSFER_VERTICES + 1, 1).is_err());
+    assert!(prtkit::limits::check_transfer_mesh("m.obj", 8, prtkit::limits::MAX_TRANSFER_TRIANGLES + 1).is_err());
+}
