@@ -84,10 +84,12 @@ mod tests {
             assert_eq!(s.len(), n);
             assert!(s.local.iter().all(|d| (d.length() - 1.0).abs() < 1e-12 && d.z > 0.0));
         }
-        // With p = cos θ/π: ∫ cos θ · cos θ dω = 2π/3 ≈ (π/N) Σ cos θ_k.
+        // With p = cos θ/π: ∫ cos θ · cos θ dω = 2π/3 ≈ (π/N) Σ cos θ_k. One jittered direction
+        // per cell leaves an error of a few 1e-5 at N = 4096 (6.5e-5 at seed 1); directions not
+        // distributed as cos θ/π miss by more than 1e-2 (uniform ones give π/2).
         let s = Stratified::new(4096, 1);
         let estimate: f64 = s.local.iter().map(|d| d.z).sum::<f64>() * PI / 4096.0;
-        assert!((estimate - 2.0 * PI / 3.0).abs() < 1e-5, "{estimate}");
+        assert!((estimate - 2.0 * PI / 3.0).abs() < 2e-4, "{estimate}");
         // Same seed, same set; another seed, another jitter; turned onto a normal, above it.
         assert_eq!(Stratified::new(100, 5).local, Stratified::new(100, 5).local);
         assert_ne!(Stratified::new(100, 5).local, Stratified::new(100, 6).local);
