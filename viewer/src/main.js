@@ -106,6 +106,22 @@ sky.frustumCulled = false;
 sky.renderOrder = -1;
 
 // --- spheres: ray-cast in the fragment shader (exact silhouette and normals, as render's) ----
+// The lines every sphere shader shares: the view ray d through this fragment meets the sphere
+// (center, radius) at \`hit\` with normal n, or the fragment is discarded; the depth written is
+// the hit's, so spheres occlude each other exactly.
+const SPHERE_HIT = /* glsl */ `
+    vec3 d = normalize(vWorld - cameraPosition);
+    vec3 oc = cameraPosition - center;
+    float b = dot(oc, d);
+    float h = b * b - (dot(oc, oc) - radius * radius);
+    if (h < 0.0) discard;
+    float t = -b - sqrt(h);
+    if (t < 0.0) discard;
+    vec3 hit = cameraPosition + t * d;
+    vec3 n = normalize(hit - center);`;
+const SPHERE_DEPTH = /* glsl */ `
+    vec4 clip = projectionMatrix * viewMatrix * vec4(hit, 1.0);
+    gl_FragDepth = 0.5 * clip.z / clip.w + 0.5;`;
 const sphereVertex = /* glsl */ `
   varying vec3 vWorld;
   void main() {
@@ -124,18 +140,9 @@ const sphereFragment = /* glsl */ `
   uniform float exposureScale;
   varying vec3 vWorld;
   void main() {
-    vec3 d = normalize(vWorld - cameraPosition);
-    vec3 oc = cameraPosition - center;
-    float b = dot(oc, d);
-    float h = b * b - (dot(oc, oc) - radius * radius);
-    if (h < 0.0) discard;
-    float t = -b - sqrt(h);
-    if (t < 0.0) discard;
-    vec3 hit = cameraPosition + t * d;
-    vec3 n = normalize(hit - center);
+    ${SPHERE_HIT}
     vec3 c = prtkitSplitSum(n, -d, baseColor, metalness, roughness) * exposureScale;
-    vec4 clip = projectionMatrix * viewMatrix * vec4(hit, 1.0);
-    gl_FragDepth = 0.5 * clip.z / clip.w + 0.5;
+    ${SPHERE_DEPTH}
     gl_FragColor = linearToOutputTexel(vec4(c, 1.0));
   }`;
 const spheres = new THREE.Group();
@@ -212,19 +219,10 @@ function shFragment(mode) {
   uniform float exposureScale;
   varying vec3 vWorld;
   void main() {
-    vec3 d = normalize(vWorld - cameraPosition);
-    vec3 oc = cameraPosition - center;
-    float b = dot(oc, d);
-    float h = b * b - (dot(oc, oc) - radius * radius);
-    if (h < 0.0) discard;
-    float t = -b - sqrt(h);
-    if (t < 0.0) discard;
-    vec3 hit = cameraPosition + t * d;
-    vec3 n = normalize(hit - center);
+    ${SPHERE_HIT}
     vec3 c = vec3(0.0);
     ${shadeBody[mode]}
-    vec4 clip = projectionMatrix * viewMatrix * vec4(hit, 1.0);
-    gl_FragDepth = 0.5 * clip.z / clip.w + 0.5;
+    ${SPHERE_DEPTH}
     gl_FragColor = linearToOutputTexel(vec4(c * exposureScale, 1.0));
   }`;
 }
