@@ -943,17 +943,23 @@ fn all_or_nothing_an_unwritable_output_leaves_the_others_untouched() {
     assert_eq!(std::fs::read(dir.join("faces/px.exr")).unwrap(), b"old");
 }
 
+/// The device that is always full, or `None` (having said so) on a system without it.
+fn dev_full() -> Option<&'static Path> {
+    let full = Path::new("/dev/full");
+    if !full.exists() {
+        eprintln!("skipped: no /dev/full");
+        return None;
+    }
+    Some(full)
+}
+
 /// Standard output on a full disk beside file outputs that exist from an earlier run: exit
 /// status 2, and the earlier files untouched, since file outputs are committed only after
 /// standard output has been written and flushed (issue 34).
 #[cfg(target_os = "linux")]
 #[test]
 fn a_full_stdout_replaces_no_file_output() {
-    let full = Path::new("/dev/full");
-    if !full.exists() {
-        eprintln!("skipped: no /dev/full");
-        return;
-    }
+    let Some(full) = dev_full() else { return };
     let w = world();
     let wood = testdata("shaders/wood.sl");
     // (a run writing stdout, its file output that exists already)
@@ -994,11 +1000,7 @@ fn a_full_stdout_replaces_no_file_output() {
 #[cfg(target_os = "linux")]
 #[test]
 fn a_full_disk_is_an_error_and_writes_nothing_else() {
-    let full = Path::new("/dev/full");
-    if !full.exists() {
-        eprintln!("skipped: no /dev/full");
-        return;
-    }
+    let Some(full) = dev_full() else { return };
     let w = world();
     let wood = testdata("shaders/wood.sl");
     let tri = w.root.join("tri.obj");
