@@ -19,10 +19,10 @@ mkdir -p "$out"
 say() { printf '\n== %s\n' "$*" >&2; }
 # A fresh clone compiles prtkit and its dependencies first (minutes on 2 cores). The build is
 # the one `cargo test --release` needs too (the binaries and the tests, one feature set), so the
-# README's second command compiles nothing; `build` says every 20 s that it is still going.
+# README's second command compiles nothing; `narrated_build` says every 20 s that it is still going.
 . scripts/lib/build.sh
 say "0. building prtkit and its tests (cargo test --release --no-run; minutes the first time, then nothing)"
-build cargo test --release --no-run
+narrated_build cargo test --release --no-run
 bin=target/release
 
 say "1. sample-shader: a procedural sky as a 512x256 lat-long environment"

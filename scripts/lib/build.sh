@@ -1,8 +1,8 @@
-# Sourced by scripts/demo.sh and .ci/run: `build CMD…` runs a build that may take minutes.
+# Sourced by scripts/demo.sh and .ci/run: `narrated_build CMD…` runs a build that may take minutes.
 # On a terminal cargo draws its own progress. Elsewhere (CI logs, a pipe, `| tee`) cargo prints a
 # line per crate but nothing while one large crate compiles, for minutes at a time: say every
 # 20 s that the build is still going, so it never looks hung.
-build() {
+narrated_build() {
   if [ -t 2 ]; then
     "$@"
     return
