@@ -34,6 +34,7 @@ use crate::io::gpu_format::{TexelFormat, Texture, TextureError, TextureShape};
 use crate::io::{dds, ktx2, Document, Provenance};
 use crate::progress::Progress;
 use glam::{DMat3, DVec3};
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// How level index maps to roughness.
@@ -252,7 +253,7 @@ pub enum Error {
     Angular(#[from] AngularError),
     /// The reference.
     #[error("angular reference: {0}")]
-    Reference(#[from] crate::prefilter::angular::AngularError),
+    Reference(#[from] super::reference::ReferenceError),
     /// GGX.
     #[error(transparent)]
     Ggx(#[from] GgxError),
@@ -589,15 +590,22 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     // Measure.
     let t_measure = Instant::now();
     let mut measured_against = None;
+    for b in baked.iter_mut().chain(std::iter::once(&mut irradiance)) {
+        b.level.min_value = b.cube.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64;
+    }
     if config.samples > 0 {
         let reference = Reference::new(&latlong)?;
-        for b in baked.iter_mut().chain(std::iter::once(&mut irradiance)) {
-            b.level.min_value = b.cube.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64;
-            if b.level.roughness <= 0.0 {
-                continue;
-            }
-            let lobe = SplitSumLobe::new(b.level.roughness)?;
-            let m = reference.measure(&b.cube, &lobe, env_from_cube, config.samples);
+        // The levels are measured side by side: each sets up its own lobe's texel rule.
+        let levels: Vec<&mut Baked> =
+            baked.iter_mut().chain(std::iter::once(&mut irradiance)).filter(|b| b.level.roughness > 0.0).collect();
+        let measured = levels
+            .par_iter()
+            .map(|b| {
+                let lobe = SplitSumLobe::new(b.level.roughness)?;
+                Ok(reference.measure(&b.cube, &lobe, env_from_cube, config.samples))
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+        for (b, m) in levels.into_iter().zip(measured) {
             b.level.max_rel_error = Some(m.max_rel_error);
             b.level.rms_rel_error = Some(m.rms_rel_error);
             b.level.reference_bound = reference.is_filtered().then_some(m.reference_bound);
