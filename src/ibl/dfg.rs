@@ -180,30 +180,56 @@ pub struct DfgTable {
     values: Vec<[f32; 2]>,
 }
 
+/// The side of the table prtkit ships as data ([`DEFAULT_SIZE`]).
+pub const SHIPPED_SIZE: usize = DEFAULT_SIZE;
+
+/// A and B of every texel of the [`SHIPPED_SIZE`]² table by the default quadrature, as f64
+/// little-endian pairs, row-major: the same for every bake, so computed once
+/// (`cargo run --release --example dfg_table -- data/dfg-128.bin`) and checked bit for bit
+/// against the quadrature by `the_shipped_table_is_the_quadratures`.
+static SHIPPED: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/dfg-128.bin"));
+
+/// A and B at every texel of an N×N table, row-major, by the quadrature with `order` nodes
+/// per θ_h piece (rows in parallel; every texel is computed independently, so the result does
+/// not depend on the thread count).
+pub fn integrate_table(size: usize, order: usize) -> Result<Vec<SplitSumTerms>, DfgError> {
+    if size == 0 || size > MAX_SIZE {
+        return Err(DfgError::Size(size));
+    }
+    Ok((0..size)
+        .into_par_iter()
+        .flat_map_iter(|row| {
+            let ggx = Ggx::new(DfgTable::texel_coordinate(size, row)).expect("texel centres lie in (0, 1)");
+            (0..size).map(move |col| integrate(DfgTable::texel_coordinate(size, col), ggx, order))
+        })
+        .collect())
+}
+
+/// The shipped table's terms, decoded.
+fn shipped_terms() -> Vec<SplitSumTerms> {
+    let value = |k: usize| f64::from_le_bytes(SHIPPED[8 * k..8 * k + 8].try_into().expect("8 bytes"));
+    (0..SHIPPED_SIZE * SHIPPED_SIZE).map(|t| SplitSumTerms { scale: value(2 * t), bias: value(2 * t + 1) }).collect()
+}
+
 impl DfgTable {
-    /// Integrates the table (rows in parallel; every texel is computed independently, so the
-    /// result does not depend on the thread count).
+    /// The table by the default quadrature: the [`SHIPPED_SIZE`]² one from the data it was
+    /// computed into, any other size integrated.
     pub fn new(size: usize, variant: DfgVariant) -> Result<Self, DfgError> {
+        if size == SHIPPED_SIZE {
+            return Ok(Self::from_terms(size, variant, &shipped_terms()));
+        }
         Self::with_quadrature_order(size, variant, DEFAULT_ORDER)
     }
 
-    /// [`DfgTable::new`] with `order` Gauss–Legendre nodes per θ_h piece ([`phi_nodes`] in φ) instead of
-    /// [`DEFAULT_ORDER`]: for convergence studies.
+    /// The table integrated with `order` Gauss–Legendre nodes per θ_h piece ([`phi_nodes`] in
+    /// φ): for convergence studies.
     pub fn with_quadrature_order(size: usize, variant: DfgVariant, order: usize) -> Result<Self, DfgError> {
-        if size == 0 || size > MAX_SIZE {
-            return Err(DfgError::Size(size));
-        }
-        let values = (0..size)
-            .into_par_iter()
-            .flat_map_iter(|row| {
-                let ggx = Ggx::new(Self::texel_coordinate(size, row)).expect("texel centres lie in (0, 1)");
-                (0..size).map(move |col| {
-                    let c = integrate(Self::texel_coordinate(size, col), ggx, order).channels(variant);
-                    [c[0] as f32, c[1] as f32]
-                })
-            })
-            .collect();
-        Ok(DfgTable { size, variant, values })
+        Ok(Self::from_terms(size, variant, &integrate_table(size, order)?))
+    }
+
+    fn from_terms(size: usize, variant: DfgVariant, terms: &[SplitSumTerms]) -> Self {
+        let values = terms.iter().map(|t| t.channels(variant).map(|c| c as f32)).collect();
+        DfgTable { size, variant, values }
     }
 
     /// (k + ½)/N: the n·v of column k and the roughness of row k.
@@ -369,5 +395,23 @@ mod tests {
         assert_eq!(split_sum_terms(0.0, 0.5), Err(DfgError::NDotV(0.0)));
         assert!(split_sum_terms(f64::NAN, 0.5).is_err());
         assert!(matches!(split_sum_terms(0.5, 2.0), Err(DfgError::Roughness(_))));
+    }
+
+    /// The shipped data is what the quadrature computes today, bit for bit (regenerate it with
+    /// the `dfg_table` example when the quadrature changes).
+    #[test]
+    fn the_shipped_table_is_the_quadratures() {
+        assert_eq!(SHIPPED.len(), SHIPPED_SIZE * SHIPPED_SIZE * 16);
+        let computed = integrate_table(SHIPPED_SIZE, DEFAULT_ORDER).unwrap();
+        for (k, (a, b)) in shipped_terms().iter().zip(&computed).enumerate() {
+            assert!(
+                a.scale.to_bits() == b.scale.to_bits() && a.bias.to_bits() == b.bias.to_bits(),
+                "texel {k}: shipped {a:?}, quadrature {b:?}"
+            );
+        }
+        for variant in [DfgVariant::ScaleBias, DfgVariant::MultiScatter] {
+            let shipped = DfgTable::new(SHIPPED_SIZE, variant).unwrap();
+            assert_eq!(shipped, DfgTable::with_quadrature_order(SHIPPED_SIZE, variant, DEFAULT_ORDER).unwrap());
+        }
     }
 }

@@ -209,11 +209,6 @@ impl Default for Config {
 /// Largest face size `ibl` bakes (a 4096² RGBA16F chain is 512 MiB in memory as f32).
 pub const MAX_SIZE: usize = 4096;
 
-/// Gauss–Legendre nodes per θ_h piece of the DFG table (order + 2 in φ). Measured against 48
-/// nodes over the whole 128² table: 1.6e-4 with 5, 9.9e-5 with 6, 1.3e-5 with 8; 6 stays below
-/// the half-float rounding of the stored values (2.4e-4 in [0.5, 1)) at 75 % of the time of 8.
-pub const DFG_QUADRATURE_ORDER: usize = 6;
-
 /// Errors of the stage.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -506,10 +501,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     let ((dfg, (sh, sh_time)), cubes) = rayon::join(
         || {
             rayon::join(
-                || {
-                    DfgTable::with_quadrature_order(config.dfg_size, config.dfg, DFG_QUADRATURE_ORDER)
-                        .map(|t| (t, t_dfg.elapsed()))
-                },
+                || DfgTable::new(config.dfg_size, config.dfg).map(|t| (t, t_dfg.elapsed())),
                 || {
                     let t_sh = Instant::now();
                     (IrradianceSh::project(&latlong, config.world_from_prtkit()), t_sh.elapsed())
