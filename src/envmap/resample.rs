@@ -37,7 +37,8 @@ impl EnvMap {
 }
 
 /// Resamples `src` into `layout` at `width`×`height` (per face for [`Layout::Faces`]), averaging
-/// `supersample`² lookups per texel.
+/// `supersample`² lookups per texel. The same layout at the same size is `src` itself: its
+/// texels already are the map, and lookups about their centres would only blur them.
 pub fn resample(
     src: &EnvMap,
     layout: Layout,
@@ -46,6 +47,9 @@ pub fn resample(
     supersample: usize,
 ) -> Result<EnvMap, EnvMapError> {
     layout.check_size(width, height)?;
+    if src.layout == layout && src.images.iter().all(|i| (i.width, i.height) == (width, height)) {
+        return Ok(src.clone());
+    }
     let count = if layout == Layout::Faces { 6 } else { 1 };
     let blank: Vec<RgbImage> = (0..count).map(|_| RgbImage::new(width, height)).collect();
     let mut dst = EnvMap { layout, images: blank, orientation: src.orientation };
@@ -136,6 +140,21 @@ pub fn box_latlong(img: &RgbImage, width: usize, height: usize) -> RgbImage {
 mod tests {
     use super::*;
     use crate::sphere::LatLong;
+
+    /// The same layout at the same size keeps every texel bit for bit (a supersampled resample
+    /// would average each texel with its neighbours); another size still resamples.
+    #[test]
+    fn resampling_into_the_same_grid_keeps_the_texels() {
+        let img = RgbImage::from_fn(64, 32, |x, y| [(x * 7 % 5) as f32, (y % 3) as f32, (x ^ y) as f32 * 0.1]);
+        let map = EnvMap::latlong(img.clone()).unwrap();
+        let same = resample(&map, Layout::LatLong, 64, 32, 2).unwrap();
+        assert_eq!(same.image().pixels, img.pixels);
+        let cube = resample(&map, Layout::Faces, 16, 16, 2).unwrap();
+        let again = resample(&cube, Layout::Faces, 16, 16, 2).unwrap();
+        assert_eq!(again.images(), cube.images());
+        let smaller = resample(&map, Layout::LatLong, 32, 16, 2).unwrap();
+        assert_eq!((smaller.image().width, smaller.image().height), (32, 16));
+    }
 
     #[test]
     fn box_resampling_keeps_the_integral_at_any_ratio() {
