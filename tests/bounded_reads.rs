@@ -237,3 +237,29 @@ fn ktx2_files_an_ibl_manifest_names_are_read_within_the_file_ceiling() {
         ],
     );
 }
+
+/// `ibl` plans its memory before it allocates any (`ibl::stage::Config::planned_bytes`): under
+/// a 1 GiB address space (a 512 MiB budget) 2048² faces are refused at once with the figure they
+/// need, where they used to abort in the encoder; 1024² faces bake.
+#[test]
+fn ibl_refuses_up_front_a_bake_its_memory_cannot_hold() {
+    if !limited_runs_possible() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut pfm = b"PF\n64 32\n-1.0\n".to_vec();
+    for k in 0..64 * 32 * 3 {
+        pfm.extend_from_slice(&(0.5 + (k % 7) as f32 * 0.1).to_le_bytes());
+    }
+    std::fs::write(dir.path().join("sky.pfm"), pfm).unwrap();
+    let (code, stderr) = run_limited(dir.path(), "ibl", &["sky.pfm", "-o", "big", "--size", "2048", "-q"], None);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("the memory the bake needs is") && stderr.contains("above the ceiling of 512.0 MiB"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("big").exists());
+    let (code, stderr) = run_limited(dir.path(), "ibl", &["sky.pfm", "-o", "fits", "--size", "1024", "-q"], None);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(dir.path().join("fits/specular.ktx2").is_file());
+}

@@ -464,6 +464,30 @@ fn bench_peers() {
     }
 }
 
+#[test]
+fn ibl_scaling() {
+    if shared_testdata("ibl-scaling").is_none() || example("ibl-scaling", "ibl_scaling").is_none() {
+        return;
+    }
+    if !Path::new("/usr/bin/time").is_file() {
+        return skip("ibl-scaling", "/usr/bin/time is absent");
+    }
+    let Some(run) = run("ibl-scaling") else { return };
+    let rows = markdown_table(&run.section("ibl-scaling.md"));
+    assert_eq!(rows.len(), 3, "two inputs at one face size, one more face size: {rows:?}");
+    for r in &rows {
+        let number = |key: &str| -> f64 { r[key].parse().unwrap_or_else(|e| panic!("{key} in {r:?}: {e}")) };
+        // Both runs finished and were timed (CPU seconds at /usr/bin/time's 10 ms resolution can
+        // read 0 at these sizes).
+        for key in ["ibl wall s", "ibl MB", "`--samples 0` wall s", "MB"] {
+            assert!(number(key) > 0.0, "{key} in {r:?}");
+        }
+        assert!(number("ibl CPU s") >= 0.0 && number("CPU s") >= 0.0, "{r:?}");
+    }
+    let section = run.section("ibl-scaling.md");
+    assert!(section.contains("| 256 × 128 | 0 |"), "the run under a 4 GiB limit completed:\n{section}");
+}
+
 /// The benchmark scripts run `cargo bench`, which builds: under `PRTKIT_BIN` they must say so
 /// and stop with success, writing nothing.
 fn bench_script(name: &str) {

@@ -81,8 +81,36 @@ struct Grid {
     geometry: LatLong,
     /// Radiance of every texel, row-major.
     radiance: Arc<Vec<[f64; 3]>>,
-    /// The texels with D_T ≠ 0 (none when the grid is the input).
+    /// The texels with D_T ≠ 0 (none when the grid is the input), block by block.
     deviations: Vec<Deviation>,
+    /// Blocks of [`BLOCK`] × [`BLOCK`] texels, for the bound.
+    blocks: Vec<Block>,
+}
+
+/// Texels per side of a [`Block`].
+const BLOCK: usize = 8;
+
+/// How much looser than the texel-by-texel bound the stated bound may be: blocks are bounded at
+/// once until what that could add is this share of the texels' bound.
+const BOUND_SLACK: f64 = 0.1;
+
+/// A block of a filtered grid's texels, bounded at once. For each texel T of the block,
+/// (max_T k − min_T k)/2 = ρ_T |dk/dγ(ξ)| for some ξ in [γ_T − ρ_T, γ_T + ρ_T] (the kernel is
+/// monotone in γ), and that interval lies within [γ_B − s, γ_B + s], γ_B the angle to the block's
+/// centre and s its `spread`. So the block's texels add between (Σ_T D_T) ρ_min min |dk/dγ| and
+/// (Σ_T D_T) ρ_max max |dk/dγ| over the block's interval.
+struct Block {
+    centre: DVec3,
+    /// The largest angle from the centre to a member texel's centre, plus `texel_radius`.
+    spread: f64,
+    /// The largest angular radius ρ_T of a member texel.
+    texel_radius: f64,
+    /// The smallest.
+    texel_radius_min: f64,
+    /// Σ_T D_T per channel.
+    d: [f64; 3],
+    /// The members with D_T ≠ 0, in `Grid::deviations`.
+    members: std::ops::Range<usize>,
 }
 
 /// A texel of a filtered grid, for the bound: its centre, the cosine and sine of its angular
@@ -186,11 +214,16 @@ impl Grid {
         let radiance = |image: &RgbImage| Arc::new(image.pixels.iter().map(|p| p.map(f64::from)).collect());
         if factor == 1 {
             let geometry = LatLong::new(input.width, input.height);
-            return Grid { geometry, radiance: radiance(input), deviations: Vec::new() };
+            return Grid { geometry, radiance: radiance(input), deviations: Vec::new(), blocks: Vec::new() };
         }
         let filtered = box_latlong(input, input.width / factor, input.height / factor);
-        let deviations = deviations(input, &filtered, factor);
-        Grid { geometry: LatLong::new(filtered.width, filtered.height), radiance: radiance(&filtered), deviations }
+        let (deviations, blocks) = deviations(input, &filtered, factor);
+        Grid {
+            geometry: LatLong::new(filtered.width, filtered.height),
+            radiance: radiance(&filtered),
+            deviations,
+            blocks,
+        }
     }
 
     /// The lobe's integral with the coarsest texel rule whose texel integrals move by at most
@@ -212,34 +245,120 @@ impl Grid {
         integral(&choice.rule)
     }
 
-    /// Per channel, the bound of the module docs on |B_input(R) − B_grid(R)| for `lobe`.
+    /// Per channel, the bound of the module docs on |B_input(R) − B_grid(R)| for `lobe`, within
+    /// [`BOUND_SLACK`] of its texel-by-texel sum: every block is bounded at once ([`Block`]), then
+    /// the blocks whose bound could shrink the most are summed texel by texel until what the
+    /// rest could still give back is at most that share of the texels' sum (of which the blocks'
+    /// lower ends are a lower bound).
     fn filtering_bound(&self, axis: DVec3, lobe: &SplitSumLobe) -> [f64; 3] {
+        let slope = Slope::of(lobe);
+        let mut blocks = Vec::with_capacity(self.blocks.len());
+        let (mut lower_total, mut slack) = (0.0, 0.0);
+        for (i, block) in self.blocks.iter().enumerate() {
+            let gamma = axis.dot(block.centre).clamp(-1.0, 1.0).acos();
+            let (lo, hi) = (gamma - block.spread, gamma + block.spread);
+            if lo >= FRAC_PI_2 {
+                continue; // every texel of the block lies where the kernel is zero
+            }
+            let (a, b) = (lo.max(0.0), hi.min(FRAC_PI_2));
+            let steepest = block.texel_radius * slope.max_over(a, b);
+            // The slope vanishes at γ = 0 and past π/2, so a block reaching either has no
+            // lower end.
+            let flattest =
+                if lo <= 0.0 || hi >= FRAC_PI_2 { 0.0 } else { block.texel_radius_min * slope.at(a).min(slope.at(b)) };
+            let d: f64 = block.d.iter().sum();
+            lower_total += d * flattest;
+            slack += d * (steepest - flattest);
+            blocks.push((d * (steepest - flattest), i, steepest));
+        }
+        blocks.sort_by(|x, y| y.0.total_cmp(&x.0));
         let mut bound = [0.0; 3];
-        for t in &self.deviations {
-            // cos(γ ∓ ρ) from cos γ = R·c: no angle is computed.
-            let cos_gamma = axis.dot(t.centre).clamp(-1.0, 1.0);
-            let sin_gamma = (1.0 - cos_gamma * cos_gamma).sqrt();
-            let (cc, ss) = (cos_gamma * t.cos_radius, sin_gamma * t.sin_radius);
-            // γ − ρ < 0 when cos γ > cos ρ: the texel holds R, where k peaks. γ + ρ past π
-            // when cos γ < −cos ρ; the kernel is zero there anyway, as it is past π/2.
-            let nearest = if cos_gamma >= t.cos_radius { 1.0 } else { cc + ss };
-            let half_range = 0.5 * (lobe.kernel(nearest) - lobe.kernel((cc - ss).max(-1.0)));
-            for c in 0..3 {
-                bound[c] += t.d[c] * half_range;
+        for (gap, i, steepest) in blocks {
+            let block = &self.blocks[i];
+            if slack <= BOUND_SLACK * lower_total {
+                for c in 0..3 {
+                    bound[c] += block.d[c] * steepest;
+                }
+                continue;
+            }
+            slack -= gap;
+            for t in &self.deviations[block.members.clone()] {
+                // cos(γ ∓ ρ) from cos γ = R·c: no angle is computed.
+                let cos_gamma = axis.dot(t.centre).clamp(-1.0, 1.0);
+                let sin_gamma = (1.0 - cos_gamma * cos_gamma).sqrt();
+                let (cc, ss) = (cos_gamma * t.cos_radius, sin_gamma * t.sin_radius);
+                // γ − ρ < 0 when cos γ > cos ρ: the texel holds R, where k peaks. γ + ρ past π
+                // when cos γ < −cos ρ; the kernel is zero there anyway, as it is past π/2.
+                let nearest = if cos_gamma >= t.cos_radius { 1.0 } else { cc + ss };
+                let half_range = 0.5 * (lobe.kernel(nearest) - lobe.kernel((cc - ss).max(-1.0)));
+                for c in 0..3 {
+                    bound[c] += t.d[c] * half_range;
+                }
             }
         }
         bound
     }
 }
 
+/// |dk/dγ| of the split-sum kernel on [0, π/2]: with c = cos γ and k = scale · c / (a + b c)²
+/// ([`HalfChord`]'s constants in terms of c: a = (α² + 1)/2, b = (α² − 1)/2),
+/// |dk/dγ| = sin γ · scale (a − b c) / (a + b c)³. It rises from 0 at γ = 0 to one peak γ* and
+/// falls after it (or rises all the way, α = 1), so its maximum over an interval is at γ* when
+/// the interval holds it and at an end otherwise (`the_slope_has_one_peak`).
+struct Slope {
+    scale: f64,
+    a: f64,
+    b: f64,
+    peak: f64,
+}
+
+impl Slope {
+    fn of(lobe: &SplitSumLobe) -> Slope {
+        let a2 = lobe.ggx().alpha() * lobe.ggx().alpha();
+        let mut slope =
+            Slope { scale: a2 / (PI * lobe.normalization()), a: 0.5 * (a2 + 1.0), b: 0.5 * (a2 - 1.0), peak: 0.0 };
+        // The peak by a scan, then golden-section search in the bracket around the best sample.
+        let steps = 1024;
+        let h = FRAC_PI_2 / steps as f64;
+        let best = (0..=steps).max_by(|&i, &j| slope.at(i as f64 * h).total_cmp(&slope.at(j as f64 * h))).unwrap_or(0);
+        let (mut lo, mut hi) = ((best as f64 - 1.0).max(0.0) * h, ((best + 1) as f64 * h).min(FRAC_PI_2));
+        let ratio = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..60 {
+            let (m1, m2) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
+            if slope.at(m1) < slope.at(m2) {
+                lo = m1;
+            } else {
+                hi = m2;
+            }
+        }
+        slope.peak = 0.5 * (lo + hi);
+        slope
+    }
+
+    /// |dk/dγ| at γ ∈ [0, π/2].
+    fn at(&self, gamma: f64) -> f64 {
+        let (s, c) = gamma.sin_cos();
+        let t = self.a + self.b * c;
+        s * self.scale * (self.a - self.b * c) / (t * t * t)
+    }
+
+    /// max |dk/dγ| over [a, b] ⊂ [0, π/2].
+    fn max_over(&self, a: f64, b: f64) -> f64 {
+        if (a..=b).contains(&self.peak) {
+            self.at(self.peak)
+        } else {
+            self.at(a).max(self.at(b))
+        }
+    }
+}
+
 /// D_T = Σ_{t⊂T} Ω_t |L_t − L̄_T| of every texel T of `filtered` (`input` box-filtered by
-/// `factor`), keeping those not zero.
-fn deviations(input: &RgbImage, filtered: &RgbImage, factor: usize) -> Vec<Deviation> {
+/// `factor`), keeping those not zero, grouped in [`Block`]s.
+fn deviations(input: &RgbImage, filtered: &RgbImage, factor: usize) -> (Vec<Deviation>, Vec<Block>) {
     let (fine, coarse) = (LatLong::new(input.width, input.height), LatLong::new(filtered.width, filtered.height));
-    (0..filtered.height)
+    let rows: Vec<Vec<[f64; 3]>> = (0..filtered.height)
         .into_par_iter()
-        .flat_map_iter(|y| {
-            let radius = angular_radius(coarse, y);
+        .map(|y| {
             let mut d = vec![[0.0f64; 3]; filtered.width];
             for yy in y * factor..(y + 1) * factor {
                 let omega = fine.row_solid_angle(yy);
@@ -250,14 +369,41 @@ fn deviations(input: &RgbImage, filtered: &RgbImage, factor: usize) -> Vec<Devia
                     }
                 }
             }
-            d.into_iter().enumerate().filter(|(_, d)| *d != [0.0; 3]).map(move |(x, d)| Deviation {
-                centre: coarse.texel_direction(x, y),
-                cos_radius: radius.cos(),
-                sin_radius: radius.sin(),
-                d,
-            })
+            d
         })
-        .collect()
+        .collect();
+    let radii: Vec<f64> = (0..filtered.height).map(|y| angular_radius(coarse, y)).collect();
+    let (mut members, mut blocks) = (Vec::new(), Vec::new());
+    for y0 in (0..filtered.height).step_by(BLOCK) {
+        for x0 in (0..filtered.width).step_by(BLOCK) {
+            let (y1, x1) = ((y0 + BLOCK).min(filtered.height), (x0 + BLOCK).min(filtered.width));
+            let centre = coarse.direction_at(0.5 * (x0 + x1) as f64, 0.5 * (y0 + y1) as f64);
+            let (start, mut d, mut reach) = (members.len(), [0.0; 3], 0.0f64);
+            let (mut texel_radius, mut texel_radius_min) = (0.0f64, f64::INFINITY);
+            for y in y0..y1 {
+                texel_radius = texel_radius.max(radii[y]);
+                texel_radius_min = texel_radius_min.min(radii[y]);
+                for x in x0..x1 {
+                    let t = coarse.texel_direction(x, y);
+                    reach = reach.max(centre.dot(t).clamp(-1.0, 1.0).acos());
+                    if rows[y][x] != [0.0; 3] {
+                        (0..3).for_each(|c| d[c] += rows[y][x][c]);
+                        members.push(Deviation {
+                            centre: t,
+                            cos_radius: radii[y].cos(),
+                            sin_radius: radii[y].sin(),
+                            d: rows[y][x],
+                        });
+                    }
+                }
+            }
+            if members.len() > start {
+                let spread = reach + texel_radius;
+                blocks.push(Block { centre, spread, texel_radius, texel_radius_min, d, members: start..members.len() });
+            }
+        }
+    }
+    (members, blocks)
 }
 
 /// The largest angle from the centre of a texel of row `y` to a point of the texel: over its
@@ -520,7 +666,7 @@ mod tests {
         let map = detailed(64, 32);
         let (fine, coarse) = (LatLong::new(64, 32), LatLong::new(16, 8));
         let filtered = box_latlong(map.image(), 16, 8);
-        let found = deviations(map.image(), &filtered, 4);
+        let (found, _) = deviations(map.image(), &filtered, 4);
         for y in 0..8 {
             for x in 0..16 {
                 let (mut energy, mut d) = ([0.0f64; 3], [0.0f64; 3]);
@@ -589,6 +735,31 @@ mod tests {
                         );
                     }
                 }
+            }
+        }
+    }
+
+    /// |dk/dγ| has one peak on [0, π/2] (what `Slope::max_over` relies on), `Slope::at` is the
+    /// derivative of the kernel, and the peak found is the scan's.
+    #[test]
+    fn the_slope_has_one_peak() {
+        for r in [0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 1.0] {
+            let lobe = SplitSumLobe::new(r).unwrap();
+            let slope = Slope::of(&lobe);
+            let n = 20_000;
+            let values: Vec<f64> = (0..=n).map(|i| slope.at(FRAC_PI_2 * i as f64 / n as f64)).collect();
+            let top = values.iter().cloned().fold(0.0, f64::max);
+            let rises = values.windows(2).take_while(|w| w[1] >= w[0]).count();
+            assert!(values[rises..].windows(2).all(|w| w[1] <= w[0]), "r {r}: a second rise after the peak");
+            assert!(
+                slope.at(slope.peak) >= top * (1.0 - 1e-9),
+                "r {r}: peak {} misses the scan's {top}",
+                slope.at(slope.peak)
+            );
+            for gamma in [0.01f64, 0.1, 0.7, 1.5] {
+                let h = 1e-6;
+                let numeric = (lobe.kernel((gamma - h).cos()) - lobe.kernel((gamma + h).cos())) / (2.0 * h);
+                assert!((numeric - slope.at(gamma)).abs() <= 1e-5 * numeric.abs().max(1e-3), "r {r} γ {gamma}");
             }
         }
     }

@@ -246,6 +246,9 @@ pub enum Error {
     /// Angular prefilter.
     #[error(transparent)]
     Angular(#[from] AngularError),
+    /// The bake would need more memory than the budget allows.
+    #[error(transparent)]
+    Memory(#[from] crate::limits::LimitError),
     /// The reference.
     #[error("angular reference: {0}")]
     Reference(#[from] super::reference::ReferenceError),
@@ -315,6 +318,15 @@ impl Config {
     /// Number of specular levels.
     pub fn levels(&self) -> usize {
         (self.size / self.min_size).trailing_zeros() as usize + 1
+    }
+
+    /// The memory a bake of an input of `input_texels` holds at its peak, planned before any of
+    /// it is allocated: the working lat-long map and its filter source (RGB f32 each), every
+    /// specular level and the irradiance cube (RGB f32), and the encoded files (`format`).
+    pub fn planned_bytes(&self, input_texels: u64) -> u128 {
+        let cube_texels: u128 = (0..self.levels()).map(|k| 6 * ((self.size >> k) as u128).pow(2)).sum::<u128>()
+            + 6 * (self.irradiance_size as u128).pow(2);
+        2 * 12 * input_texels as u128 + cube_texels * (12 + self.format.texel_bytes() as u128)
     }
 
     /// M: output frame from prtkit's frame (module docs).
@@ -489,6 +501,8 @@ fn bake_level(
 /// Runs `ibl` on `env` (any layout, prtkit's frame).
 pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Output, Error> {
     config.check()?;
+    let input_texels = env.images().iter().map(|i| (i.width * i.height) as u64).sum();
+    crate::limits::check_memory("the bake", config.planned_bytes(input_texels))?;
     let t0 = Instant::now();
     let mut timings = manifest::Timings::default();
     let latlong = working_latlong(config, env)?;
@@ -551,33 +565,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     timings.specular = specular_seconds;
     timings.irradiance = irradiance_seconds + sh_time.as_secs_f64();
 
-    // Encode.
-    let t_enc = Instant::now();
-    let ext = config.container.name();
-    let chain = CubeMipChain::new(baked.iter().map(|b| b.cube.clone()).collect())?;
-    let specular_bytes = config.container.encode(&chain.as_texture(), config.format)?;
-    let irradiance_bytes = config.container.encode(
-        &Texture {
-            shape: TextureShape::Cube { size: config.irradiance_size },
-            channels: 3,
-            levels: vec![irradiance.cube.texels()],
-        },
-        config.format,
-    )?;
-    let dfg_format =
-        if config.format == TexelFormat::Rgba32Float { TexelFormat::Rg32Float } else { TexelFormat::Rg16Float };
-    let rg = dfg.interleaved();
-    let dfg_bytes = config.container.encode(
-        &Texture {
-            shape: TextureShape::Texture2d { width: dfg.size(), height: dfg.size() },
-            channels: 2,
-            levels: vec![&rg],
-        },
-        dfg_format,
-    )?;
-    let frame_words = config.frame_words(env.orientation());
-    timings.encode = t_enc.elapsed().as_secs_f64();
-    timings.bake = t0.elapsed().as_secs_f64();
+    let baked_seconds = t0.elapsed().as_secs_f64();
 
     // Measure.
     let t_measure = Instant::now();
@@ -607,6 +595,36 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     }
     timings.measure = t_measure.elapsed().as_secs_f64();
 
+    // Encode.
+    let t_enc = Instant::now();
+    let ext = config.container.name();
+    // The levels move into the chain: the largest bakes hold one copy of their cubes.
+    let (cubes, levels): (Vec<CubeMap>, Vec<Level>) = baked.into_iter().map(|b| (b.cube, b.level)).unzip();
+    let chain = CubeMipChain::new(cubes)?;
+    let specular_bytes = config.container.encode(&chain.as_texture(), config.format)?;
+    let irradiance_bytes = config.container.encode(
+        &Texture {
+            shape: TextureShape::Cube { size: config.irradiance_size },
+            channels: 3,
+            levels: vec![irradiance.cube.texels()],
+        },
+        config.format,
+    )?;
+    let dfg_format =
+        if config.format == TexelFormat::Rgba32Float { TexelFormat::Rg32Float } else { TexelFormat::Rg16Float };
+    let rg = dfg.interleaved();
+    let dfg_bytes = config.container.encode(
+        &Texture {
+            shape: TextureShape::Texture2d { width: dfg.size(), height: dfg.size() },
+            channels: 2,
+            levels: vec![&rg],
+        },
+        dfg_format,
+    )?;
+    let frame_words = config.frame_words(env.orientation());
+    timings.encode = t_enc.elapsed().as_secs_f64();
+    timings.bake = baked_seconds + timings.encode;
+
     let provenance = Provenance::new("ibl", &config.args, vec![config.source.clone()]);
     let scale = "E(n)/pi: the radiance a white Lambertian surface reflects (multiply by the albedo)".to_string();
     let body = IblBody {
@@ -621,7 +639,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
             roughness_map: config.roughness_map.name().into(),
             roughness_formula: config.roughness_map.formula().into(),
             lobe: "split-sum GGX (Karis 2013): N = V = R, weights D(h) max(N.L, 0), normalized; perceptual roughness r, alpha = r^2".into(),
-            levels: baked.iter().map(|b| b.level.clone()).collect(),
+            levels,
         },
         irradiance: manifest::Irradiance {
             file: format!("irradiance.{ext}"),

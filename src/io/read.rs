@@ -40,9 +40,24 @@ pub fn read_bytes(
         return read_within(std::io::stdin().lock(), 0, &name, format, ceiling, check_start);
     }
     let file = std::fs::File::open(path).map_err(os)?;
-    // The size on disk sizes the buffer when it is a regular file within the ceiling.
-    let hint = file.metadata().ok().filter(|m| m.is_file()).map_or(0, |m| m.len()).min(ceiling);
-    read_within(file, hint, &name, format, ceiling, check_start)
+    // A regular file's size on disk refuses it before a byte is read when it is too large, and
+    // sizes the buffer otherwise (devices and pipes say 0 and are bounded as they are read).
+    let size = file.metadata().ok().filter(|m| m.is_file()).map_or(0, |m| m.len());
+    if size > ceiling {
+        return Err(too_large(&name, format, human_bytes(size as u128), ceiling));
+    }
+    read_within(file, size, &name, format, ceiling, check_start)
+}
+
+/// The error for an input above `ceiling` bytes (`value`: its size, as far as it is known).
+fn too_large(name: &Path, format: &'static str, value: String, ceiling: u64) -> IoError {
+    let e = LimitError {
+        what: "the file".into(),
+        value,
+        ceiling: human_bytes(ceiling as u128),
+        reason: "files are read whole into memory",
+    };
+    IoError::invalid(name, format, e.to_string())
 }
 
 fn read_within(
@@ -76,13 +91,7 @@ fn read_within(
         bytes.extend_from_slice(&chunk[..n]);
     }
     if bytes.len() as u64 > ceiling {
-        let e = LimitError {
-            what: "the file".into(),
-            value: format!("more than {}", human_bytes(ceiling as u128)),
-            ceiling: human_bytes(ceiling as u128),
-            reason: "files are read whole into memory",
-        };
-        return Err(IoError::invalid(name, format, e.to_string()));
+        return Err(too_large(name, format, format!("more than {}", human_bytes(ceiling as u128)), ceiling));
     }
     Ok(bytes)
 }
