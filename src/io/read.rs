@@ -44,7 +44,7 @@ pub fn read_bytes(
     // sizes the buffer otherwise (devices and pipes say 0 and are bounded as they are read).
     let size = file.metadata().ok().filter(|m| m.is_file()).map_or(0, |m| m.len());
     if size > ceiling {
-        return Err(too_large(&name, format, human_bytes(size as u128), ceiling));
+        return Err(too_large(&name, format, format!("{} ({size} bytes)", human_bytes(size as u128)), ceiling));
     }
     read_within(file, size, &name, format, ceiling, check_start)
 }
