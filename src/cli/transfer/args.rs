@@ -36,11 +36,17 @@ pub struct Args {
     #[arg(short = 'n', long, default_value_t = 3)]
     pub order: usize,
 
-    /// unshadowed (exact quadrature, no rays) or shadowed (visibility by ray casting).
+    /// unshadowed (exact quadrature, no rays), shadowed (visibility by ray casting) or
+    /// interreflected (shadowed plus --bounces bounces of light off the mesh itself).
     #[arg(long, value_enum, default_value_t = Mode::Shadowed)]
     pub mode: Mode,
 
-    /// Rays cast per vertex (shadowed): cosine-weighted over the hemisphere about its normal,
+    /// Interreflection bounces B (interreflected mode only; 1 to 16, default 2): the transfer is
+    /// the shadowed one plus B bounces gathered over the same rays.
+    #[arg(long, value_name = "B")]
+    pub bounces: Option<usize>,
+
+    /// Rays cast per vertex (shadowed, interreflected): cosine-weighted over the hemisphere about its normal,
     /// stratified in cells of equal projected solid angle.
     #[arg(long, default_value_t = 1024)]
     pub rays: usize,
