@@ -460,3 +460,189 @@ fn interreflected_bowl_is_shadowed_plus_bounces_and_thread_independent() {
     }
     assert!(outputs[0] == outputs[1], "interreflected outputs differ between --threads 1 and 2");
 }
+
+/// `render --json`'s metrics against `--compare`.
+/// (PSNR is `null` when the images are equal, so the summary is read as JSON values.)
+fn render_metrics(args: &[&str], dir: &Path) -> Metrics {
+    let out = cmd("render").args(args).args(["-q", "--json"]).current_dir(dir).output().unwrap();
+    assert!(out.status.success(), "render {args:?}: {}", stderr(&out));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let at = |k: &str| v["metrics"][k].as_f64().unwrap_or(f64::NAN);
+    Metrics { rel_error: at("rel_error"), max_rel_error: at("max_rel_error"), transfer: v["transfer"].clone() }
+}
+
+/// What the tests read of `render --json`.
+#[derive(Debug)]
+struct Metrics {
+    rel_error: f64,
+    max_rel_error: f64,
+    transfer: serde_json::Value,
+}
+
+/// Writes `mesh` (positions and normals) as OBJ.
+fn write_sphere(dir: &Path, rings: usize, segments: usize) -> std::path::PathBuf {
+    let (p, t) = uv_sphere(rings, segments);
+    let obj = dir.join("sphere.obj");
+    write_obj(&obj, &p, &p, &t);
+    obj
+}
+
+#[test]
+fn relit_unshadowed_sphere_is_the_irradiance_shading() {
+    // An unshadowed transfer relit under L is (ρ/π) Σ Â_l L_lm Y_lm(n) at every vertex
+    // (R&H 2001, eq. 8–9), which `--shading irradiance` evaluates per pixel from the normal by
+    // another code path; the two differ by the vertex interpolation of a function of the normal
+    // (the transfer's Gouraud shading against irradiance at the interpolated normal) alone, of
+    // order (edge length)²: small on a sphere of 96 × 192 quads.
+    let dir = tempfile::tempdir().unwrap();
+    common::sky_pfm(dir.path(), 64, 32);
+    write_sphere(dir.path(), 96, 192);
+    cmd("transfer")
+        .args([
+            "sphere.obj",
+            "-n",
+            "3",
+            "--mode",
+            "unshadowed",
+            "--albedo",
+            "0.7",
+            "-q",
+            "--glb",
+            "s.glb",
+            "-o",
+            "s.json",
+        ])
+        .current_dir(dir.path())
+        .assert()
+        .success();
+    let view = ["--scene", "sphere.obj", "--res", "96x96", "--brdf", "lambert:albedo=0.7"];
+    let irradiance =
+        [&["sky.pfm"][..], &view, &["--shading", "irradiance", "-F", "2", "--window", "none", "-o", "i.exr"]].concat();
+    render_metrics(&irradiance, dir.path());
+    let transfer =
+        [&["sky.pfm"][..], &view, &["--shading", "transfer", "--transfer", "s.glb", "--compare", "i.exr"]].concat();
+    let m = render_metrics(&transfer, dir.path());
+    eprintln!(
+        "unshadowed sphere (96 x 192), n = 3, relit vs irradiance F = 2: relative RMS {:.2e}, max {:.2e}",
+        m.rel_error, m.max_rel_error
+    );
+    assert!(m.rel_error < 2e-4 && m.max_rel_error < 1e-3, "{m:?}");
+    let relight = &m.transfer;
+    assert_eq!((relight["order"].as_u64(), relight["mode"].as_str()), (Some(3), Some("unshadowed")));
+    assert_eq!(relight["vertices"].as_u64(), Some(2 + 95 * 192));
+    assert!(relight["frames_per_second"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn relit_shadowed_bowl_approaches_the_reference_with_visibility() {
+    // The bowl seen from above (its inside only), relit from its shadowed transfer, against
+    // `--shading reference`: every texel of the map × BRDF × cosine × visibility by the mesh's
+    // own ray casts, per pixel. The transfer's error is the lighting's SH truncation at n bands
+    // (the test sky has a sun, cos²⁰⁰ wide, which no low order holds), the rays' noise and the
+    // vertex interpolation: it must fall as n grows.
+    let dir = tempfile::tempdir().unwrap();
+    common::sky_pfm(dir.path(), 64, 32);
+    let bowl = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes/bowl.obj");
+    let view = ["--scene", bowl.to_str().unwrap(), "--res", "64x64", "--eye", "0,0.01,3.5", "--target", "0,0,-0.3"];
+    render_metrics(&[&["sky.pfm"][..], &view, &["--shading", "reference", "-o", "r.exr"]].concat(), dir.path());
+    let mut errors = Vec::new();
+    for n in ["2", "4", "8"] {
+        cmd("transfer")
+            .arg(&bowl)
+            .args(["-n", n, "--rays", "4096", "-q", "--glb", "b.glb", "-o", "b.json"])
+            .current_dir(dir.path())
+            .assert()
+            .success();
+        let args =
+            [&["sky.pfm"][..], &view, &["--shading", "transfer", "--transfer", "b.glb", "--compare", "r.exr"]].concat();
+        let m = render_metrics(&args, dir.path());
+        eprintln!(
+            "shadowed bowl, n = {n}, 4096 rays, relit vs reference with visibility: relative RMS {:.4}",
+            m.rel_error
+        );
+        errors.push(m.rel_error);
+    }
+    assert!(errors[0] > errors[1] && errors[1] > errors[2] && errors[2] < 0.05, "{errors:?}");
+}
+
+#[test]
+fn a_turned_environment_is_one_sh_rotation() {
+    // Turning the environment by 90° about +Z is rolling a lat-long map by a quarter of its
+    // width (φ = 2π(x + ½)/W, docs/conventions.md; the turned map at φ is the map at φ − 90°),
+    // a symmetry of the projection's texel grid: the relit image with --env-rotation 90 must be
+    // the relit image of the rolled map, to rounding; and the reference turns the same way.
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64, 32);
+    let sky = common::sky_image(w, h);
+    common::write_pfm(dir.path(), "sky.pfm", &sky);
+    let mut rolled = sky.clone();
+    for y in 0..h {
+        for x in 0..w {
+            rolled.pixels[y * w + x] = sky.pixels[y * w + (x + w - w / 4) % w];
+        }
+    }
+    common::write_pfm(dir.path(), "rolled.pfm", &rolled);
+    let bowl = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes/bowl.obj");
+    cmd("transfer")
+        .arg(&bowl)
+        .args(["-n", "5", "--rays", "512", "-q", "--glb", "b.glb", "-o", "b.json"])
+        .current_dir(dir.path())
+        .assert()
+        .success();
+    let view = ["--scene", bowl.to_str().unwrap(), "--res", "48x48", "--eye", "0,0.01,3.5", "--target", "0,0,-0.3"];
+    let relit = ["--shading", "transfer", "--transfer", "b.glb"];
+    render_metrics(&[&["rolled.pfm"][..], &view, &relit, &["-o", "rolled.exr"]].concat(), dir.path());
+    let turned = [&["sky.pfm"][..], &view, &relit, &["--env-rotation", "90", "--compare", "rolled.exr"]].concat();
+    let m = render_metrics(&turned, dir.path());
+    let unturned = [&["sky.pfm"][..], &view, &relit, &["--compare", "rolled.exr"]].concat();
+    let other = render_metrics(&unturned, dir.path());
+    eprintln!(
+        "--env-rotation 90 vs the rolled map: relative RMS {:.2e} (unturned: {:.2e})",
+        m.rel_error, other.rel_error
+    );
+    assert!(m.rel_error < 1e-5 && other.rel_error > 1e-2, "{m:?} {other:?}");
+
+    let reference = ["--shading", "reference"];
+    render_metrics(&[&["rolled.pfm"][..], &view, &reference, &["-o", "ref-rolled.exr"]].concat(), dir.path());
+    let turned =
+        [&["sky.pfm"][..], &view, &reference, &["--env-rotation", "90", "--compare", "ref-rolled.exr"]].concat();
+    let m = render_metrics(&turned, dir.path());
+    eprintln!("reference --env-rotation 90 vs the rolled map: relative RMS {:.2e}", m.rel_error);
+    assert!(m.rel_error < 1e-5, "{m:?}");
+}
+
+#[test]
+fn a_bake_of_another_mesh_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    common::sky_pfm(dir.path(), 16, 8);
+    let bowl = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes/bowl.obj");
+    write_sphere(dir.path(), 8, 16);
+    cmd("transfer")
+        .args(["sphere.obj", "-q", "--rays", "16", "--glb", "s.glb", "-o", "s.json"])
+        .current_dir(dir.path())
+        .assert()
+        .success();
+    std::fs::write(dir.path().join("junk.glb"), b"glTF not really").unwrap();
+    let cases: [(&[&str], &str); 5] = [
+        (&["--scene", bowl.to_str().unwrap(), "--transfer", "s.glb"], "s.glb: the transfer is of a mesh of"),
+        (&["--scene", "sphere.obj", "--transfer", "junk.glb"], "junk.glb: not a prtkit transfer .glb"),
+        (
+            &["--scene", "sphere.obj", "--transfer", "s.glb", "--brdf", "lambert:albedo=0.5"],
+            "s.glb: the transfer was baked with albedo 1",
+        ),
+        (&["--scene", "sphere", "--transfer", "s.glb"], "relights a mesh"),
+        (&["--scene", "sphere.obj", "--transfer", "s.glb", "--env-rotation", "400"], "--env-rotation 400 is outside"),
+    ];
+    for (args, says) in cases {
+        let out = cmd("render")
+            .arg("sky.pfm")
+            .args(["--shading", "transfer", "-o", "o.exr"])
+            .args(args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
+        assert!(!dir.path().join("o.exr").exists());
+    }
+}

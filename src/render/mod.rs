@@ -26,6 +26,7 @@ pub mod reference;
 pub mod reflection;
 pub mod scene;
 pub mod stage;
+pub mod transfer;
 
 pub use camera::Camera;
 pub use frame::{render, Frame, Shade, Sum};
