@@ -30,13 +30,11 @@
 //! again in every bounce instead: the same rays through the same tree give the same hits, so
 //! both ways give the same bits.
 
-use super::diffuse::PointTransfer;
+use super::diffuse::{LocalBasis, PointTransfer};
 use super::directions::Stratified;
 use super::visibility::{barycentrics, Occluders};
 use crate::progress::Progress;
 use crate::render::mesh::Mesh;
-use crate::sh::basis::eval_basis_dir;
-use crate::sh::legendre::LegendreTable;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -76,6 +74,7 @@ pub struct Tracer<'a> {
     mesh: &'a Mesh,
     occluders: &'a Occluders,
     directions: &'a Stratified,
+    basis: LocalBasis,
     order: usize,
     offset: f64,
 }
@@ -144,57 +143,44 @@ impl<'a> Tracer<'a> {
         order: usize,
         offset: f64,
     ) -> Tracer<'a> {
-        Tracer { mesh, occluders, directions, order, offset }
+        Tracer { mesh, occluders, directions, basis: LocalBasis::new(directions, order), order, offset }
     }
 
     /// Vertex `v`'s shadowed transfer with albedo ρ (T_i = (ρ/N) Σ_k V_k Y_i(ω_k), Sloan et al.
     /// 2002 eq. 8 with the cosine in the density), appending its front hits to `hits` in the
     /// rays' order; returns the transfer and the number of back hits.
     pub fn trace(&self, v: usize, albedo: f64, hits: &mut Vec<FrontHit>) -> (PointTransfer, u32) {
-        let coeffs = self.order * self.order;
-        let table = LegendreTable::new(self.order - 1);
-        let mut y = vec![0.0; coeffs];
-        let mut shadowed = vec![0.0; coeffs];
-        let mut unshadowed = vec![0.0; coeffs];
+        let mut local = vec![0.0; self.order * self.order];
         let (mut visible, mut back) = (0u32, 0u32);
-        self.each_ray(v, |d, outcome| {
-            eval_basis_dir(&table, d, &mut y);
-            for i in 0..coeffs {
-                unshadowed[i] += y[i];
+        self.each_ray(v, |k, _, outcome| match outcome {
+            Ray::Escaped => {
+                visible += 1;
+                self.basis.add_row(k, &mut local);
             }
-            match outcome {
-                Ray::Escaped => {
-                    visible += 1;
-                    for i in 0..coeffs {
-                        shadowed[i] += y[i];
-                    }
-                }
-                Ray::Back => back += 1,
-                Ray::Front(hit) => hits.push(hit),
-            }
+            Ray::Back => back += 1,
+            Ray::Front(hit) => hits.push(hit),
         });
         let scale = albedo / self.directions.len() as f64;
-        for t in shadowed.iter_mut().chain(&mut unshadowed) {
-            *t *= scale;
-        }
+        let (shadowed, unshadowed) = self.basis.to_world(self.mesh.normals[v], &local, scale);
         (PointTransfer { shadowed, unshadowed, visible }, back)
     }
 
     /// Vertex `v`'s front hits alone, appended to `hits` in the rays' order (the bounces'
     /// re-tracing: the same rays as [`Tracer::trace`], so the same hits).
     fn trace_hits(&self, v: usize, hits: &mut Vec<FrontHit>) {
-        self.each_ray(v, |_, outcome| {
+        self.each_ray(v, |_, _, outcome| {
             if let Ray::Front(hit) = outcome {
                 hits.push(hit);
             }
         });
     }
 
-    /// Casts vertex `v`'s rays in order, from x + offset · n, and tells `f` where each went.
-    fn each_ray(&self, v: usize, mut f: impl FnMut(DVec3, Ray)) {
+    /// Casts vertex `v`'s rays in order, from x + offset · n, and tells `f` each one's index,
+    /// direction and where it went.
+    fn each_ray(&self, v: usize, mut f: impl FnMut(usize, DVec3, Ray)) {
         let normal = self.mesh.normals[v];
         let origin = self.mesh.positions[v] + self.offset * normal;
-        for d in self.directions.about(normal) {
+        for (k, d) in self.directions.about(normal).enumerate() {
             let outcome = match self.occluders.closest(origin, d) {
                 None => Ray::Escaped,
                 Some((triangle, t)) => {
@@ -207,7 +193,7 @@ impl<'a> Tracer<'a> {
                     }
                 }
             };
-            f(d, outcome);
+            f(k, d, outcome);
         }
     }
 
