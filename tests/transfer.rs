@@ -281,7 +281,9 @@ fn bad_meshes_exit_2_naming_the_file_and_write_nothing() {
         ("huge.obj", "v 1e39 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "not a finite"),
         ("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n", "zero area"),
         ("empty.obj", "v 0 0 0\n", "no triangles"),
-        ("mesh.ply", "ply\nformat ascii 1.0\nend_header\n", "reads OBJ"),
+        ("mesh.ply", "ply\nformat ascii 1.0\nend_header\n", "no vertex element"),
+        ("nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\nnan 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "not finite"),
+        ("mesh.stl", "solid x\n", "reads OBJ and PLY"),
     ];
     let flags: &[&str] = &[];
     let cases = cases.iter().map(|c| (c, flags)).chain([
@@ -645,4 +647,67 @@ fn a_bake_of_another_mesh_is_refused() {
         assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
         assert!(!dir.path().join("o.exr").exists());
     }
+}
+
+/// `p`, `n`, `t` as a binary little-endian PLY with normals and an extra property, quads left
+/// as they are: the same mesh as [`write_obj`] writes.
+fn write_ply(path: &Path, p: &[DVec3], n: &[DVec3], t: &[[u32; 3]]) {
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nelement face {}\n\
+         property list uchar uint vertex_indices\nend_header\n",
+        p.len(),
+        t.len()
+    )
+    .into_bytes();
+    for (v, m) in p.iter().zip(n) {
+        for c in [v.x, v.y, v.z, m.x, m.y, m.z] {
+            b.extend((c as f32).to_le_bytes());
+        }
+        b.push(9);
+    }
+    for f in t {
+        b.push(3);
+        for i in f {
+            b.extend(i.to_le_bytes());
+        }
+    }
+    std::fs::write(path, b).unwrap();
+}
+
+#[test]
+fn ply_and_obj_of_one_mesh_bake_the_same_transfer() {
+    // The same vertices (to single precision, as both files hold them), normals and triangles:
+    // the same transfer at every vertex. (tobj numbers an OBJ's vertices in the order the faces
+    // first use them, a PLY keeps its own order: vertices are matched by position.)
+    let dir = tempfile::tempdir().unwrap();
+    let (p, n, t) = bowl_and_ball();
+    let (obj, ply) = (dir.path().join("scene.obj"), dir.path().join("scene.ply"));
+    write_obj(&obj, &p, &n, &t);
+    write_ply(&ply, &p, &n, &t);
+    let config = Config { order: 3, rays: 128, mode: Mode::Interreflected, ..Config::default() };
+    let key = |v: DVec3| v.as_vec3().to_array().map(f32::to_bits);
+    let mut baked = Vec::new();
+    for path in [&obj, &ply] {
+        let mesh = Mesh::load(path).unwrap();
+        assert!(!mesh.normals_computed && mesh.triangles.len() == t.len(), "{}", path.display());
+        let out = stage::run(&config, &mesh, &NoProgress).unwrap();
+        let by_position: std::collections::BTreeMap<[u32; 3], Vec<f64>> =
+            mesh.positions.iter().zip(out.transfer.chunks_exact(9)).map(|(v, x)| (key(*v), x.to_vec())).collect();
+        assert_eq!(by_position.len(), p.len());
+        baked.push(by_position);
+    }
+    assert!(baked[0] == baked[1], "the PLY's transfer differs from the OBJ's");
+    // And through the binary: a PLY is baked like an OBJ.
+    cmd("transfer")
+        .arg(&ply)
+        .args(["-n", "3", "--rays", "64", "-q", "--glb", "t.glb", "-o", "t.json"])
+        .current_dir(dir.path())
+        .assert()
+        .success();
+    let doc: serde_json::Value = common::read(&dir.path().join("t.json"));
+    assert_eq!(
+        (doc["mesh"]["vertices"].as_u64(), doc["mesh"]["normals"].as_str()),
+        (Some(p.len() as u64), Some("file"))
+    );
 }

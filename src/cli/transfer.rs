@@ -52,9 +52,9 @@ impl Stage for Args {
                 .chain(self.glsl.iter().map(|g| (g, Holds::Text))),
         )?;
         let extension = self.mesh.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        if extension.as_deref() != Some("obj") {
+        if !matches!(extension.as_deref(), Some("obj" | "ply")) {
             anyhow::bail!(
-                "{}: transfer reads OBJ meshes (.obj); PLY and glTF input are later slices of issue 32",
+                "{}: transfer reads OBJ and PLY meshes (.obj, .ply); glTF input is a later slice of issue 32",
                 self.mesh.display()
             );
         }

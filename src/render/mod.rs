@@ -22,6 +22,7 @@ pub mod ibl;
 pub mod irradiance;
 pub mod mesh;
 pub mod panel;
+pub mod ply;
 pub mod reference;
 pub mod reflection;
 pub mod scene;
