@@ -38,6 +38,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         brdf: Brdf::parse("phong:s=30")?,
         shading: Shading::Reference { integrand: Integrand::BrdfCosine },
         camera,
+        env_rotation: 0.0,
         compare: None,
         panel: None,
         label: None,

@@ -17,6 +17,7 @@ if [ "${1:-}" != "--assemble" ]; then
   scripts/reproduce-shader-table.sh
   scripts/reproduce-fig6.sh
   scripts/factored-bright.sh
+  scripts/transfer-results.sh
   scripts/reproduce-fig7.sh
   scripts/bench-render.sh
   scripts/ibl-accuracy.sh
@@ -35,7 +36,7 @@ fi
   echo "\`docs/results/*.md\`. Speeds are ratios measured in one run (the machine is shared and"
   echo "noisy); absolute times are for orientation only."
   echo
-  for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader render render-bright render-fig7 render-bench ibl-accuracy ibl-grid ibl-scaling peers viewer ring-free windows fuzz; do
+  for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader render render-bright render-fig7 render-bench transfer ibl-accuracy ibl-grid ibl-scaling peers viewer ring-free windows fuzz; do
     f="$docs/results/$section.md"
     if [ -f "$f" ]; then
       # Sections link their figures relative to docs/results/; this file lives in docs/.

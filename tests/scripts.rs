@@ -257,6 +257,51 @@ fn factored_bright() {
 }
 
 #[test]
+fn transfer_results() {
+    if example("transfer-results", "transfer_accuracy").is_none() {
+        return;
+    }
+    let Some(run) = run("transfer-results") else { return };
+    let of = |check: &str| -> Vec<&Value> { run.rows.iter().filter(|r| text(r, "check") == check).collect() };
+    // The exact quadrature is Â_l Y_lm(n) to rounding (R&H 2001, eq. 8–9).
+    let unshadowed = of("unshadowed");
+    assert_eq!(unshadowed.len(), 1);
+    assert!(num(unshadowed[0], "max_abs_error") < 1e-12, "{}", unshadowed[0]);
+    // More rays, closer to the brute-force integral.
+    let shadowed: Vec<f64> = of("shadowed").iter().map(|r| num(r, "relative_rms")).collect();
+    assert!(shadowed.len() >= 2 && shadowed.iter().all(|&e| e > 0.0 && e < 0.5), "{shadowed:?}");
+    assert_monotone("shadowed error against rays", &shadowed, false);
+    // The furnace: the geometric series, bounce after bounce (no ray lost at the small size).
+    let furnace = of("furnace");
+    assert!(furnace.len() >= 4);
+    for (b, r) in furnace.iter().enumerate() {
+        let rho = num(r, "albedo");
+        let series: f64 = (0..=b + 1).map(|k| rho.powi(k as i32)).sum();
+        assert!((num(r, "series") - series).abs() < 1e-12, "{r}");
+        assert!((num(r, "total") / series - 1.0).abs() < 1e-3 && num(r, "max_relative_error") < 1e-3, "{r}");
+    }
+    // Speed rows: both modes of the same scene; the bounces are a part of the interreflected run.
+    let speed = of("speed");
+    let modes: Vec<&str> = speed.iter().map(|r| text(r, "mode")).collect();
+    assert_eq!(modes, ["shadowed", "interreflected"]);
+    for r in &speed {
+        assert!(num(r, "rays_per_second") > 0.0 && num(r, "vertices") > 100.0, "{r}");
+        assert!(num(r, "bounce_seconds") <= num(r, "seconds"), "{r}");
+    }
+    assert_eq!((num(speed[0], "bounces"), num(speed[1], "bounces")), (0.0, 2.0));
+    let relight = of("relight");
+    assert_eq!(relight.len(), 1);
+    assert!(num(relight[0], "frames_per_second") >= num(relight[0], "median_frames_per_second"), "{}", relight[0]);
+    assert_eq!(num(relight[0], "vertices"), num(speed[0], "vertices"));
+    let section = run.section("transfer.md");
+    for r in of("shadowed") {
+        let cell = format!("| {} | {} |", num(r, "order"), num(r, "rays"));
+        assert!(section.contains(&cell), "{cell:?} not in:\n{section}");
+    }
+    assert!(section.contains(&format!("| 3 | {} | 31 |", num(relight[0], "vertices"))), "{section}");
+}
+
+#[test]
 fn reproduce_normals_table() {
     let Some(run) = run("reproduce-normals-table") else { return };
     let bits: Vec<f64> = run.rows.iter().map(|r| num(r, "bits")).collect();

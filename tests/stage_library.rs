@@ -319,6 +319,7 @@ fn render_library_and_binary_write_the_same_bytes() {
         brdf: Brdf::parse("phong:s=8").unwrap(),
         shading: Shading::Shrm { shrm, body: Box::new(body), window: prtkit::sh::window::Window::Nonneg },
         camera: camera(),
+        env_rotation: 0.0,
         compare: Some(("ref.exr".into(), reference.clone())),
         panel: Some(vec![PanelItem { label: "reference".into(), image: Some(reference) }]),
         label: None,

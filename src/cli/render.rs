@@ -64,6 +64,22 @@ impl Args {
                 }
                 Shading::Ibl { bake: Box::new(IblBake::load(&doc)?), grid }
             }
+            ShadingArg::Transfer => {
+                let file = self
+                    .transfer
+                    .as_ref()
+                    .context("--shading transfer needs --transfer FILE.glb (from transfer --glb)")?;
+                let bytes = crate::io::read_bytes(file, "glTF binary", crate::limits::max_file_bytes(), |start| {
+                    if start.starts_with(b"glTF") {
+                        Ok(())
+                    } else {
+                        Err("not a .glb (no glTF magic)".into())
+                    }
+                })?;
+                let bake = crate::render::transfer::TransferBake::from_glb(&file.display().to_string(), &bytes)
+                    .map_err(anyhow::Error::msg)?;
+                Shading::Transfer { bake: Box::new(bake) }
+            }
             ShadingArg::Reference => Shading::Reference { integrand: self.integrand },
         })
     }
@@ -106,6 +122,9 @@ impl Stage for Args {
         if self.grid && self.shading != ShadingArg::Ibl {
             bail!("--grid is for --shading ibl");
         }
+        if self.transfer.is_some() && self.shading != ShadingArg::Transfer {
+            bail!("--transfer is for --shading transfer");
+        }
         let json_out = self.json.then_some(Output::Stdout);
         check_outputs(
             [
@@ -141,6 +160,7 @@ impl Stage for Args {
             brdf: self.brdf.clone(),
             shading: self.shading()?,
             camera,
+            env_rotation: self.env_rotation,
             compare,
             panel: self.panel_items()?,
             label: self.label.clone(),

@@ -7,13 +7,19 @@ use super::options::{check_json_output, Execution};
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::Output;
 use crate::render::mesh::Mesh;
-use crate::transfer::stage::{self, Config};
+use crate::transfer::stage::{self, Config, Mode};
 use anyhow::{Context as _, Result};
 pub use args::*;
 
 impl TryFrom<&Args> for Config {
     type Error = anyhow::Error;
     fn try_from(args: &Args) -> Result<Config> {
+        if args.bounces.is_some() && args.mode != Mode::Interreflected {
+            anyhow::bail!(
+                "--bounces is for --mode interreflected (the mode is {})",
+                format!("{:?}", args.mode).to_lowercase()
+            );
+        }
         let glb_name = match &args.glb {
             Output::File(path) => path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
             Output::Stdout => "-".into(),
@@ -22,6 +28,7 @@ impl TryFrom<&Args> for Config {
             order: args.order,
             mode: args.mode,
             rays: args.rays,
+            bounces: args.bounces.unwrap_or(Config::default().bounces),
             seed: args.seed,
             albedo: args.albedo,
             offset: args.offset,
@@ -45,9 +52,9 @@ impl Stage for Args {
                 .chain(self.glsl.iter().map(|g| (g, Holds::Text))),
         )?;
         let extension = self.mesh.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        if extension.as_deref() != Some("obj") {
+        if !matches!(extension.as_deref(), Some("obj" | "ply")) {
             anyhow::bail!(
-                "{}: transfer reads OBJ meshes (.obj); PLY and glTF input are later slices of issue 32",
+                "{}: transfer reads OBJ and PLY meshes (.obj, .ply); glTF input is a later slice of issue 32",
                 self.mesh.display()
             );
         }
@@ -58,8 +65,14 @@ impl Stage for Args {
         if out.summary.rays > 0 {
             ctx.note(format!(
                 "{} vertices x {} rays in {:.2} s: {:.3e} rays/s",
-                out.summary.vertices, out.summary.rays, out.summary.seconds, out.summary.rays_per_second
+                out.summary.vertices,
+                out.summary.rays,
+                out.summary.seconds - out.summary.bounce_seconds,
+                out.summary.rays_per_second
             ));
+        }
+        if out.summary.bounces > 0 {
+            ctx.note(format!("{} bounces in {:.2} s", out.summary.bounces, out.summary.bounce_seconds));
         }
 
         let mut outputs = Outputs::new();

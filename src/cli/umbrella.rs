@@ -31,8 +31,8 @@ enum StageArgs {
     /// Bake image-based lighting for glTF/PBR engines: GGX cube mips, irradiance, SH, DFG.
     Ibl(super::ibl::Args),
     /// Render a sphere or mesh with a bake (SH, SHRM, factored) or the reference, and compare.
-    Render(super::render::Args),
-    /// Bake a mesh's diffuse precomputed radiance transfer (per-vertex SH, shadowed).
+    Render(Box<super::render::Args>),
+    /// Bake a mesh's diffuse precomputed radiance transfer (per-vertex SH: unshadowed, shadowed, interreflected).
     Transfer(super::transfer::Args),
 }
 
@@ -51,7 +51,7 @@ pub fn main() -> ExitCode {
         StageArgs::SampleShader(args) => run(args),
         StageArgs::EncodeNormals(args) => run(args),
         StageArgs::Ibl(args) => run(args),
-        StageArgs::Render(args) => run(args),
+        StageArgs::Render(args) => run(*args),
         StageArgs::Transfer(args) => run(args),
     }
 }

@@ -1,4 +1,4 @@
-//! Triangle meshes from OBJ files (via `tobj`) with per-vertex normals, and a bounding-volume
+//! Triangle meshes from OBJ files (via `tobj`) or PLY files ([`super::ply`]) with per-vertex normals, and a bounding-volume
 //! hierarchy for primary rays and visibility (shadow) rays.
 
 use glam::DVec3;
@@ -73,11 +73,15 @@ pub struct MeshHit {
 }
 
 impl Mesh {
-    /// Reads an OBJ file (all its objects, triangulated). The file is read whole (at most
+    /// Reads a mesh file: PLY by its extension ([`Mesh::load_ply`]), else OBJ (all its objects,
+    /// triangulated). The file is read whole (at most
     /// [`crate::limits::max_file_bytes`]) and its geometry lines are checked first, so that an
     /// error names the line and column ([`check_obj`]); `tobj` then builds the mesh.
     pub fn load(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
+        if path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
+            return Self::load_ply(path);
+        }
         let load_error = |reason: String| MeshError::Load { path: name.clone(), reason };
         let text = crate::io::read_text(path, "OBJ", crate::limits::max_file_bytes(), |_| Ok(()))?;
         let text = text.as_str();
@@ -121,6 +125,29 @@ impl Mesh {
         }
         Mesh::new(positions, if all_have_normals { Some(normals) } else { None }, triangles)
             .map_err(|reason| MeshError::Invalid { path: name, reason })
+    }
+
+    /// Reads a PLY file (ASCII or binary; [`super::ply`]): its vertices, their normals when
+    /// every vertex has `nx ny nz` (else computed), its faces split into triangles.
+    pub fn load_ply(path: &Path) -> Result<Mesh, MeshError> {
+        let name = path.display().to_string();
+        let invalid = |reason: String| MeshError::Invalid { path: name.clone(), reason };
+        let bytes = crate::io::read_bytes(path, "PLY", crate::limits::max_file_bytes(), |start| {
+            if start.starts_with(b"ply") {
+                Ok(())
+            } else {
+                Err("no 'ply' magic".into())
+            }
+        })?;
+        let (positions, normals, triangles) =
+            super::ply::parse(&bytes).map_err(|reason| invalid(format!("cannot read PLY: {reason}")))?;
+        if triangles.is_empty() {
+            return Err(invalid("the PLY holds no triangles".into()));
+        }
+        if positions.iter().any(|p| !p.is_finite()) {
+            return Err(invalid("a vertex position is not finite".into()));
+        }
+        Mesh::new(positions, normals, triangles).map_err(invalid)
     }
 
     /// Builds a mesh; computes normals when `normals` is `None` (or when a given normal is zero).

@@ -22,10 +22,12 @@ pub mod ibl;
 pub mod irradiance;
 pub mod mesh;
 pub mod panel;
+pub mod ply;
 pub mod reference;
 pub mod reflection;
 pub mod scene;
 pub mod stage;
+pub mod transfer;
 
 pub use camera::Camera;
 pub use frame::{render, Frame, Shade, Sum};

@@ -59,6 +59,14 @@ impl<'a> Reference<'a> {
         Ok(Reference { texels, brdf, model, integrand, scene })
     }
 
+    /// The environment turned by `rotation`: L'(ω) = L(R⁻¹ω), each texel moved to R ω.
+    pub fn turned(mut self, rotation: glam::DMat3) -> Self {
+        for t in &mut self.texels {
+            t.0 = rotation * t.0;
+        }
+        self
+    }
+
     /// Number of texels summed per pixel.
     pub fn texel_count(&self) -> usize {
         self.texels.len()

@@ -9,6 +9,7 @@ use super::irradiance::Irradiance;
 use super::panel::{layout, layout_grid, Cell};
 use super::reference::{Integrand, Reference};
 use super::reflection::ShrmShader;
+use super::transfer::TransferBake;
 use super::{render, Camera, Frame, Scene, Shade, Sum};
 use crate::brdf::Brdf;
 use crate::envmap::bright::{split, BrightRule};
@@ -82,6 +83,12 @@ pub enum Shading {
         /// render of `--brdf`'s material.
         grid: Option<MaterialGrid>,
     },
+    /// From a `transfer` bake: the per-vertex dot product with the environment's SH (Sloan,
+    /// Kautz & Snyder 2002), interpolated over the triangles.
+    Transfer {
+        /// The bake, read from its `.glb`.
+        bake: Box<TransferBake>,
+    },
     /// Ground truth: a sum over every environment texel.
     Reference {
         /// The rendering equation, or the ρ̂ the prefilter represents.
@@ -97,6 +104,7 @@ impl Shading {
             Shading::Shrm { .. } => "shrm",
             Shading::Factored { .. } => "factored",
             Shading::Ibl { .. } => "ibl",
+            Shading::Transfer { .. } => "transfer",
             Shading::Reference { .. } => "reference",
         }
     }
@@ -133,6 +141,9 @@ pub struct Config {
     pub shading: Shading,
     /// The camera.
     pub camera: Camera,
+    /// The environment turned by this many degrees about +Z (transfer and reference; the
+    /// background is drawn as stored).
+    pub env_rotation: f64,
     /// A reference render to compare with (same size), and its name.
     pub compare: Option<(String, RgbImage)>,
     /// The panel's cells, if a panel is asked for.
@@ -216,7 +227,33 @@ pub struct Summary {
     /// Every cell of an ibl grid, with its error against its reference (ibl --grid).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grid: Option<Vec<GridCell>>,
+    /// The relighting from a transfer bake (transfer).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transfer: Option<RelightSummary>,
 }
+
+/// What relighting from a transfer bake cost (`render --shading transfer --json`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct RelightSummary {
+    /// The bake's SH order n (bands).
+    pub order: usize,
+    /// Its mode.
+    pub mode: String,
+    /// Vertices relit per frame.
+    pub vertices: usize,
+    /// Frames timed: each an SH rotation of the lighting and the dot product at every vertex
+    /// (one thread, single precision).
+    pub frames: usize,
+    /// 1 / the fastest frame's seconds.
+    pub frames_per_second: f64,
+    /// 1 / the median frame's seconds.
+    pub median_frames_per_second: f64,
+}
+
+/// Most degrees `--env-rotation` turns the environment by, either way.
+pub const MAX_ENV_ROTATION: f64 = 360.0;
+/// Frames of relighting timed for [`RelightSummary`].
+const RELIGHT_FRAMES: usize = 31;
 
 /// The bright texels a factored render shades exactly, and their share of the map's energy.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
@@ -267,6 +304,13 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
     if let Shading::Ibl { bake, .. } = &config.shading {
         bake.check_source(env)?;
     }
+    if config.env_rotation.is_nan() || config.env_rotation.abs() > MAX_ENV_ROTATION {
+        return Err(bad(format!("--env-rotation {} is outside -360..=360 degrees", config.env_rotation)));
+    }
+    if config.env_rotation != 0.0 && !matches!(config.shading, Shading::Transfer { .. } | Shading::Reference { .. }) {
+        return Err(bad("--env-rotation is for --shading transfer and reference".into()));
+    }
+    let turn = super::transfer::rotation_about_z(config.env_rotation);
     let brdf = &config.brdf;
     let start = Instant::now();
     let mut summary = Summary {
@@ -284,6 +328,7 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
         window: None,
         metrics: None,
         grid: None,
+        transfer: None,
     };
     let mut grid_panel = None;
     let (frame, label) = match &config.shading {
@@ -420,8 +465,52 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 }
             }
         }
+        Shading::Transfer { bake } => {
+            let Scene::Mesh(mesh) = scene else {
+                return Err(
+                    bad("--shading transfer relights a mesh: --scene FILE.obj, the mesh the bake is of".into()),
+                );
+            };
+            bake.check_mesh(mesh, "the --scene mesh").map_err(bad)?;
+            let Brdf::Lambert(m) = brdf else {
+                return Err(bad(format!(
+                    "--shading transfer relights the diffuse transfer; --brdf {} is not lambert",
+                    brdf.spec()
+                )));
+            };
+            if m.albedo != bake.albedo {
+                return Err(bad(format!(
+                    "{}: the transfer was baked with albedo {}, --brdf says {}",
+                    bake.name,
+                    bake.albedo,
+                    brdf.spec()
+                )));
+            }
+            // The lighting's SH at the bake's bands, projected once; each frame turns it and
+            // takes the dot products.
+            let light = crate::sh::project::project(env, bake.order - 1, progress)?;
+            let mut radiance = Vec::new();
+            let mut times = Vec::with_capacity(RELIGHT_FRAMES);
+            for _ in 0..RELIGHT_FRAMES {
+                let t = Instant::now();
+                let rotation = crate::sh::rotate::ShRotation::new(turn, bake.order - 1);
+                super::transfer::relight(bake, &light, &rotation, &mut radiance);
+                times.push(t.elapsed().as_secs_f64().max(1e-9));
+            }
+            times.sort_by(f64::total_cmp);
+            summary.transfer = Some(RelightSummary {
+                order: bake.order,
+                mode: bake.mode.clone(),
+                vertices: mesh.positions.len(),
+                frames: RELIGHT_FRAMES,
+                frames_per_second: 1.0 / times[0],
+                median_frames_per_second: 1.0 / times[RELIGHT_FRAMES / 2],
+            });
+            let shader = super::transfer::TransferShader::new(radiance, mesh);
+            (render(scene, &config.camera, env, &shader, progress), format!("transfer {} n={}", bake.mode, bake.order))
+        }
         Shading::Reference { integrand } => {
-            let shader = Reference::new(env, brdf.clone(), *integrand, scene).map_err(bad)?;
+            let shader = Reference::new(env, brdf.clone(), *integrand, scene).map_err(bad)?.turned(turn);
             (render(scene, &config.camera, env, &shader as &dyn Shade, progress), "reference".to_string())
         }
     };

@@ -16,7 +16,7 @@
 //! the weights are equal for any jitter.
 
 use crate::rng::SplitMix64;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use std::f64::consts::TAU;
 
 /// The stratified set in the local frame (+Z the normal): each direction stands for a projected
@@ -54,11 +54,19 @@ impl Stratified {
         Stratified { local }
     }
 
-    /// The directions about `normal` (unit), in world axes: the local set turned by the
-    /// deterministic frame (tangent, bitangent, normal) of glam's `any_orthonormal_pair`.
+    /// The directions about `normal` (unit), in world axes: the local set turned by
+    /// [`Stratified::frame`].
     pub fn about(&self, normal: DVec3) -> impl Iterator<Item = DVec3> + '_ {
+        let world_from_local = Self::frame(normal);
+        self.local.iter().map(move |d| world_from_local * *d)
+    }
+
+    /// The rotation taking the local set onto `normal` (unit): the columns are the deterministic
+    /// frame (tangent, bitangent, normal) of glam's `any_orthonormal_pair` (Duff et al. 2017),
+    /// right-handed, so a proper rotation whose SH rotation exists.
+    pub fn frame(normal: DVec3) -> DMat3 {
         let (tangent, bitangent) = normal.any_orthonormal_pair();
-        self.local.iter().map(move |d| d.x * tangent + d.y * bitangent + d.z * normal)
+        DMat3::from_cols(tangent, bitangent, normal)
     }
 
     /// How many directions.
@@ -95,5 +103,9 @@ mod tests {
         assert_ne!(Stratified::new(100, 5).local, Stratified::new(100, 6).local);
         let n = DVec3::new(0.3, -0.4, 0.5).normalize();
         assert!(s.about(n).all(|d| d.dot(n) > 0.0 && (d.length() - 1.0).abs() < 1e-12));
+        for n in [n, DVec3::Z, -DVec3::Z, DVec3::X, DVec3::new(-0.2, 0.9, -0.1).normalize()] {
+            let f = Stratified::frame(n);
+            assert!((f.determinant() - 1.0).abs() < 1e-12 && (f * DVec3::Z - n).length() < 1e-15, "{n}");
+        }
     }
 }

@@ -18,5 +18,6 @@
 pub mod diffuse;
 pub mod directions;
 pub mod glsl;
+pub mod interreflect;
 pub mod stage;
 pub mod visibility;

@@ -10,6 +10,7 @@
 
 use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
+use super::interreflect::{Hits, Storage, Tracer};
 use super::visibility::{triangle_area, Occluders};
 use crate::io::glb::{self, Attribute, GlbMesh};
 use crate::io::{Document, Provenance};
@@ -28,6 +29,10 @@ pub const VERSION: u32 = 1;
 pub const MAX_ORDER: usize = 8;
 /// Most ray directions per vertex.
 pub const MAX_RAYS: usize = 1 << 20;
+/// Most interreflection bounces: each bounce keeps a copy of the transfer and costs a gather over
+/// every hit; a white furnace of albedo 0.9 keeps 0.9¹⁶ ≈ 19 % of the first bounce's energy at
+/// the 16th, so more bounces only matter for albedos near 1.
+pub const MAX_BOUNCES: usize = 16;
 /// Vertices per unit of progress and per parallel work item.
 const CHUNK: usize = 64;
 
@@ -40,6 +45,9 @@ pub enum Mode {
     Unshadowed,
     /// With visibility V(x, ω) by ray casting (Sloan et al. 2002, eq. 8).
     Shadowed,
+    /// Shadowed plus `bounces` interreflections off the mesh itself (Sloan et al. 2002, eq. 9
+    /// and §5), gathered over the same rays.
+    Interreflected,
 }
 
 /// What `transfer` computes.
@@ -49,8 +57,10 @@ pub struct Config {
     pub order: usize,
     /// Unshadowed or shadowed.
     pub mode: Mode,
-    /// Ray directions per vertex (shadowed mode).
+    /// Ray directions per vertex (shadowed and interreflected modes).
     pub rays: usize,
+    /// Interreflection bounces B (interreflected mode; 1 ≤ B ≤ [`MAX_BOUNCES`]).
+    pub bounces: usize,
     /// Seed of the directions' jitter.
     pub seed: u64,
     /// The constant albedo ρ baked into the transfer.
@@ -71,6 +81,7 @@ impl Default for Config {
             order: 3,
             mode: Mode::Shadowed,
             rays: 1024,
+            bounces: 2,
             seed: 0,
             albedo: 1.0,
             offset: 1e-4,
@@ -88,8 +99,11 @@ pub struct TransferBody {
     pub order: usize,
     /// n² coefficients per vertex.
     pub coefficients: usize,
-    /// `unshadowed` or `shadowed`.
+    /// `unshadowed`, `shadowed` or `interreflected`.
     pub mode: Mode,
+    /// The interreflection bounces (interreflected mode, else absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interreflection: Option<Interreflection>,
     /// The albedo ρ baked in.
     pub albedo: f64,
     /// How the integral was computed.
@@ -102,7 +116,7 @@ pub struct TransferBody {
     pub glb: GlbInfo,
     /// In which axes the SH basis is evaluated.
     pub frame: String,
-    /// The integration error, measured (shadowed mode).
+    /// The integration error of the direct part, measured (shadowed and interreflected modes).
     pub error: Option<ErrorFigures>,
 }
 
@@ -117,6 +131,25 @@ pub struct Integration {
     pub seed: u64,
     /// In words.
     pub description: String,
+}
+
+/// How the interreflections were gathered (Sloan et al. 2002, §5).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Interreflection {
+    /// Bounces B: the transfer is T^0 + T^1 + … + T^B.
+    pub bounces: usize,
+    /// The rule for rays that reach the back of a surface, in words.
+    pub back_faces: String,
+    /// `recorded` (each ray's hit traced once and kept) or `re-traced` (every bounce casts the
+    /// rays again; when recording could pass the memory budget).
+    pub hits: String,
+    /// Share of all rays that hit the front of a surface (and carry a bounce).
+    pub front_hit_fraction: f64,
+    /// Share of all rays that hit the back of a surface (blocked, and nothing reflected).
+    pub back_hit_fraction: f64,
+    /// Mean over vertices of each pass's response to a uniform white sky of radiance 1
+    /// (√(4π) T_0), direct first then bounce 1..B: how fast the bounces fall off.
+    pub white_sky_response: Vec<f64>,
 }
 
 /// The shadow rays' origin offset.
@@ -196,10 +229,14 @@ pub struct Summary {
     pub vertices: usize,
     /// Rays per vertex (0 unshadowed).
     pub rays: usize,
-    /// Seconds of the integration pass (with the BVH build).
+    /// Interreflection bounces (0 unless interreflected).
+    pub bounces: usize,
+    /// Seconds of the whole computation (BVH build, visibility, bounces).
     pub seconds: f64,
-    /// Vertices × rays per second of the visibility pass (0 unshadowed).
+    /// Vertices × rays per second of the visibility pass with the BVH build (0 unshadowed).
     pub rays_per_second: f64,
+    /// Seconds of the bounces alone (0 unless interreflected).
+    pub bounce_seconds: f64,
 }
 
 /// Errors of the stage.
@@ -211,6 +248,9 @@ pub enum Error {
     /// The ray count is outside 1..=MAX_RAYS.
     #[error("--rays {0} is outside 1..={MAX_RAYS}")]
     Rays(usize),
+    /// The bounce count is outside 1..=MAX_BOUNCES.
+    #[error("--bounces {0} is outside 1..={MAX_BOUNCES}")]
+    Bounces(usize),
     /// The albedo or offset is not a finite number in range.
     #[error("{0}")]
     Parameter(String),
@@ -239,6 +279,9 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     if !(1..=MAX_RAYS).contains(&config.rays) {
         return Err(Error::Rays(config.rays));
     }
+    if config.mode == Mode::Interreflected && !(1..=MAX_BOUNCES).contains(&config.bounces) {
+        return Err(Error::Bounces(config.bounces));
+    }
     if !(config.albedo.is_finite() && config.albedo >= 0.0) {
         return Err(Error::Parameter(format!("--albedo {} must be a finite number ≥ 0", config.albedo)));
     }
@@ -259,6 +302,9 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     let start = Instant::now();
     let mut transfer = vec![0.0; vertices * coeffs];
     let mut error = None;
+    let mut interreflection = None;
+    let mut trace_seconds = 0.0;
+    let mut bounce_seconds = 0.0;
     match config.mode {
         Mode::Unshadowed => {
             progress.start("transfer (unshadowed)", vertices as u64);
@@ -289,10 +335,49 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
                 })
                 .collect();
             progress.finish();
+            trace_seconds = start.elapsed().as_secs_f64();
             for (v, p) in points.iter().enumerate() {
                 transfer[v * coeffs..(v + 1) * coeffs].copy_from_slice(&p.shadowed);
             }
             error = Some(integration_error(mesh, &points, n, config.rays, config.albedo));
+        }
+        Mode::Interreflected => {
+            let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
+            let directions = Stratified::new(config.rays, config.seed);
+            let tracer = Tracer::new(mesh, &occluders, &directions, n, offset);
+            let first = tracer.first_pass(config.albedo, Storage::Auto, progress);
+            trace_seconds = start.elapsed().as_secs_f64();
+            for (v, p) in first.points.iter().enumerate() {
+                transfer[v * coeffs..(v + 1) * coeffs].copy_from_slice(&p.shadowed);
+            }
+            let bounces = tracer.bounces(&transfer, config.bounces, config.albedo, &first.hits, progress);
+            bounce_seconds = start.elapsed().as_secs_f64() - trace_seconds;
+            let white = |t: &[f64]| {
+                (4.0 * std::f64::consts::PI).sqrt() * t.iter().step_by(coeffs).sum::<f64>() / vertices as f64
+            };
+            let mut white_sky_response = vec![white(&transfer)];
+            // Total = T^0 + Σ_b T^b, added bounce after bounce in a fixed order.
+            for bounce in &bounces {
+                white_sky_response.push(white(bounce));
+                for (t, b) in transfer.iter_mut().zip(bounce) {
+                    *t += b;
+                }
+            }
+            interreflection = Some(Interreflection {
+                bounces: config.bounces,
+                back_faces: "a ray that reaches the back of a surface (the hit triangle's geometric normal, turned to \
+                             the side of its vertex normals, points along the ray) is blocked and carries no bounce"
+                    .into(),
+                hits: match first.hits {
+                    Hits::Recorded(_) => "recorded",
+                    Hits::Retraced => "re-traced",
+                }
+                .into(),
+                front_hit_fraction: first.front_fraction,
+                back_hit_fraction: first.back_fraction,
+                white_sky_response,
+            });
+            error = Some(integration_error(mesh, &first.points, n, config.rays, config.albedo));
         }
     }
     let seconds = start.elapsed().as_secs_f64();
@@ -306,7 +391,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
              band-limited integrand, so T_lm = (albedo/pi) A_l Y_lm(n) to rounding"
                 .to_string(),
         ),
-        Mode::Shadowed => (
+        Mode::Shadowed | Mode::Interreflected => (
             "stratified rays",
             config.rays,
             format!(
@@ -321,6 +406,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         order: n,
         coefficients: coeffs,
         mode: config.mode,
+        interreflection,
         albedo: config.albedo,
         integration: Integration { method: method.into(), rays, seed: config.seed, description },
         offset: Offset {
@@ -353,9 +439,15 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     };
     let glb = glb::encode(&glb_mesh(mesh, &transfer, coeffs, &body)).map_err(Error::Glb)?;
     let document = Document::new(FORMAT, VERSION, Provenance::new("transfer", &config.args, vec![name.clone()]), body);
-    let cast = if config.mode == Mode::Shadowed { vertices * config.rays } else { 0 };
-    let summary =
-        Summary { vertices, rays, seconds, rays_per_second: if seconds > 0.0 { cast as f64 / seconds } else { 0.0 } };
+    let cast = if config.mode == Mode::Unshadowed { 0 } else { vertices * config.rays };
+    let summary = Summary {
+        vertices,
+        rays,
+        bounces: if config.mode == Mode::Interreflected { config.bounces } else { 0 },
+        seconds,
+        rays_per_second: if trace_seconds > 0.0 { cast as f64 / trace_seconds } else { 0.0 },
+        bounce_seconds,
+    };
     Ok(Output { document, glb, glsl: super::glsl::snippet(n), transfer, summary })
 }
 

@@ -206,7 +206,12 @@ pub fn all() -> Vec<Target> {
             name: "ply",
             ext: "ply",
             mutate: |rng, d, o| mutate::header_number(rng, d, 8, o),
-            library: |p| prtkit::normals::sources::NormalSource::read(p, false).map(drop).map_err(err),
+            library: |p| {
+                // Both PLY readers: the normals' (encode-normals) and the mesh's (render, transfer).
+                let mesh = prtkit::render::mesh::Mesh::load(p).map(drop).map_err(err);
+                let normals = prtkit::normals::sources::NormalSource::read(p, false).map(drop).map_err(err);
+                normals.and(mesh)
+            },
             binary: |file, out, _| ("encode-normals", vec![s(file), "-o".into(), s(&out.join("c.bin")), "-q".into()]),
             names_file: true,
         },
@@ -385,12 +390,12 @@ pub fn corpus(work: &Path) -> Vec<(&'static str, Vec<Vec<u8>>)> {
     sl.sort();
     let ply_header = |fmt: &str| {
         format!(
-            "ply\nformat {fmt} 1.0\nelement vertex 3\nproperty float x\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+            "ply\nformat {fmt} 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
         )
     };
     let mut ply_bin = ply_header("binary_little_endian").into_bytes();
     for k in 0..3 {
-        for v in [k as f32, 0.0, 0.6, 0.8] {
+        for v in [k as f32, (k == 1) as u8 as f32, (k == 2) as u8 as f32, 0.0, 0.6, 0.8] {
             ply_bin.extend(v.to_le_bytes());
         }
     }
@@ -434,7 +439,7 @@ pub fn corpus(work: &Path) -> Vec<(&'static str, Vec<Vec<u8>>)> {
                 ply_header("ascii")
                     .into_bytes()
                     .into_iter()
-                    .chain(b"0 0 0 1\n1 1 0 0\n2 0 1 0\n3 0 1 2\n".iter().copied())
+                    .chain(b"0 0 0 0 0 1\n1 1 0 1 0 0\n0 0 1 0 1 0\n3 0 1 2\n".iter().copied())
                     .collect(),
                 ply_bin,
             ],

@@ -19,6 +19,9 @@ pub enum ShadingArg {
     Factored,
     /// From an `ibl` bake (--ibl), with the split sum a glTF/PBR engine uses; --brdf gltf:….
     Ibl,
+    /// From a `transfer` bake (--transfer FILE.glb): the per-vertex dot product of the transfer
+    /// with the environment's SH, interpolated over the triangles; --scene the baked mesh.
+    Transfer,
     /// Ground truth: sum over every environment texel of L ρ cos (× visibility on meshes).
     Reference,
 }
@@ -66,6 +69,17 @@ pub struct Args {
     /// irradiance: SH order used (truncates --sh; the projection order otherwise).
     #[arg(short = 'F', long, default_value_t = 2)]
     pub order: usize,
+
+    /// transfer: the `.glb` written by `transfer --glb` for the --scene mesh (its vertices must be
+    /// the mesh's).
+    #[arg(long, value_name = "FILE.glb")]
+    pub transfer: Option<PathBuf>,
+
+    /// transfer and reference: turn the environment by DEG degrees about +Z (counter-clockwise
+    /// seen from above: azimuth φ goes to φ + DEG), -360 to 360; transfer turns its SH lighting
+    /// by one SH rotation. The background is drawn as stored.
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_hyphen_values = true)]
+    pub env_rotation: f64,
 
     /// shrm: the prtkit.shrm document written by `prefilter --shrm` (names the EXR beside it, so a
     /// file: not `-`).

@@ -8,15 +8,15 @@ use std::path::PathBuf;
 
 /// Bake a mesh's diffuse precomputed radiance transfer (Sloan, Kautz & Snyder 2002).
 ///
-/// Reads an OBJ mesh (every object in it; they shadow each other) and writes, per vertex, the
+/// Reads an OBJ or PLY mesh (every object in it; they shadow each other) and writes, per vertex, the
 /// transfer vector T_i = (albedo/π) ∫ V(x,ω) max(n·ω,0) Y_i(ω) dω, so that a renderer relights it
 /// under any SH lighting L as B = Σ_i T_i L_i: a `.glb` with the transfer as `_PRT_k` vertex
 /// attributes, a `prtkit.transfer` manifest and, optionally, the GLSL of the dot product.
 #[derive(Debug, Parser)]
 #[command(name = "transfer", version)]
 pub struct Args {
-    /// The mesh (.obj). Normals are read from it when every vertex has one, else computed
-    /// (area-weighted face normals).
+    /// The mesh (.obj, or .ply: ASCII or binary). Normals are read from it when every vertex
+    /// has one, else computed (area-weighted face normals).
     #[arg(value_name = "MESH")]
     pub mesh: PathBuf,
 
@@ -36,11 +36,17 @@ pub struct Args {
     #[arg(short = 'n', long, default_value_t = 3)]
     pub order: usize,
 
-    /// unshadowed (exact quadrature, no rays) or shadowed (visibility by ray casting).
+    /// unshadowed (exact quadrature, no rays), shadowed (visibility by ray casting) or
+    /// interreflected (shadowed plus --bounces bounces of light off the mesh itself).
     #[arg(long, value_enum, default_value_t = Mode::Shadowed)]
     pub mode: Mode,
 
-    /// Rays cast per vertex (shadowed): cosine-weighted over the hemisphere about its normal,
+    /// Interreflection bounces B (interreflected mode only; 1 to 16, default 2): the transfer is
+    /// the shadowed one plus B bounces gathered over the same rays.
+    #[arg(long, value_name = "B")]
+    pub bounces: Option<usize>,
+
+    /// Rays cast per vertex (shadowed, interreflected): cosine-weighted over the hemisphere about its normal,
     /// stratified in cells of equal projected solid angle.
     #[arg(long, default_value_t = 1024)]
     pub rays: usize,

@@ -1,0 +1,172 @@
+//! Relighting from a `transfer` bake (Sloan, Kautz & Snyder 2002, §4's run-time: "the dot
+//! product of the lighting's and the vertex's transfer vectors"): per vertex,
+//! B(x) = Σ_i T_i(x) L_i with L_i the environment's SH in the mesh's axes, then interpolated over
+//! each triangle by the hit's barycentrics, as a vertex shader's output is.
+//!
+//! **A turning environment.** The transfer is in the mesh's axes; an environment turned by R is
+//! L'(ω) = L(R⁻¹ω), whose coefficients are the block-diagonal SH rotation of L's
+//! ([`crate::sh::rotate::ShRotation`], Ivanic & Ruedenberg 1996): one small matrix per frame, the
+//! transfer untouched. [`relight`] is that frame: rotation, then one dot product per vertex.
+//!
+//! The bake is read from its `.glb` (`docs/formats/transfer.md`), the file an engine loads: its
+//! `POSITION` and `_PRT_k` attributes and the `prtkit.transfer` extras (order, mode, albedo).
+
+use super::mesh::Mesh;
+use super::{Hit, Shade};
+use crate::io::glb;
+use crate::sh::rotate::ShRotation;
+use crate::sh::ShCoeffs;
+use glam::{DMat3, DVec3};
+use serde_json::Value;
+
+/// A transfer bake read back from its `.glb`.
+#[derive(Clone, Debug)]
+pub struct TransferBake {
+    /// The file, for messages.
+    pub name: String,
+    /// SH order n (bands 0..n−1).
+    pub order: usize,
+    /// `unshadowed`, `shadowed` or `interreflected`.
+    pub mode: String,
+    /// The albedo baked in.
+    pub albedo: f64,
+    /// Positions as stored (single precision).
+    pub positions: Vec<[f32; 3]>,
+    /// Triangles in the file.
+    pub triangles: usize,
+    /// n² coefficients per vertex, vertex after vertex.
+    pub transfer: Vec<f32>,
+}
+
+impl TransferBake {
+    /// Reads the `.glb` bytes of the file `name`. Every fault names the file.
+    pub fn from_glb(name: &str, bytes: &[u8]) -> Result<TransferBake, String> {
+        let bad = |why: &str| format!("{name}: not a prtkit transfer .glb: {why}");
+        let gltf = glb::json_chunk(bytes).ok_or_else(|| bad("no glTF 2 header and JSON chunk"))?;
+        let bin = glb::bin_chunk(bytes).ok_or_else(|| bad("no BIN chunk"))?;
+        let mesh = &gltf["meshes"][0];
+        let extras = &mesh["extras"]["prtkit.transfer"];
+        let order = extras["order"].as_u64().ok_or_else(|| bad("no extras.prtkit.transfer.order"))? as usize;
+        if !(1..=crate::transfer::stage::MAX_ORDER).contains(&order) {
+            return Err(bad(&format!("order {order} is outside 1..={}", crate::transfer::stage::MAX_ORDER)));
+        }
+        let mode = extras["mode"].as_str().ok_or_else(|| bad("no extras.prtkit.transfer.mode"))?.to_string();
+        let albedo = extras["albedo"].as_f64().filter(|a| a.is_finite()).ok_or_else(|| bad("no finite albedo"))?;
+        let primitive = &mesh["primitives"][0];
+        let attributes = &primitive["attributes"];
+        let accessor = |index: &Value, kind: &str| -> Result<(usize, &[u8]), String> {
+            let a = &gltf["accessors"][index.as_u64().ok_or_else(|| bad("an attribute has no accessor"))? as usize];
+            if a["componentType"].as_u64() != Some(5126) || a["type"].as_str() != Some(kind) {
+                return Err(bad(&format!("an accessor is not float {kind}")));
+            }
+            let count = a["count"].as_u64().ok_or_else(|| bad("an accessor has no count"))? as usize;
+            let view = &gltf["bufferViews"][a["bufferView"].as_u64().ok_or_else(|| bad("no bufferView"))? as usize];
+            let start =
+                view["byteOffset"].as_u64().unwrap_or(0) as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
+            let components = if kind == "VEC3" { 3 } else { 4 };
+            let data = bin
+                .get(start..start + count * 4 * components)
+                .ok_or_else(|| bad("an accessor runs past the BIN chunk"))?;
+            Ok((count, data))
+        };
+        let floats = |data: &[u8]| {
+            data.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect::<Vec<f32>>()
+        };
+        let (vertices, data) = accessor(&attributes["POSITION"], "VEC3")?;
+        let positions: Vec<[f32; 3]> = floats(data).chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let coeffs = order * order;
+        let mut transfer = vec![0.0f32; vertices * coeffs];
+        for k in 0..coeffs.div_ceil(4) {
+            let (count, data) = accessor(&attributes[format!("_PRT_{k}")], "VEC4")?;
+            if count != vertices {
+                return Err(bad(&format!("_PRT_{k} has {count} vertices, POSITION {vertices}")));
+            }
+            for (v, c) in floats(data).chunks_exact(4).enumerate() {
+                for j in 0..4 {
+                    if 4 * k + j < coeffs {
+                        transfer[v * coeffs + 4 * k + j] = c[j];
+                    }
+                }
+            }
+        }
+        if transfer.iter().any(|t| !t.is_finite()) {
+            return Err(bad("a transfer coefficient is not finite"));
+        }
+        let indices = &gltf["accessors"][primitive["indices"].as_u64().ok_or_else(|| bad("no indices"))? as usize];
+        let triangles = indices["count"].as_u64().ok_or_else(|| bad("the indices have no count"))? as usize / 3;
+        Ok(TransferBake { name: name.to_string(), order, mode, albedo, positions, triangles, transfer })
+    }
+
+    /// Whether the bake is of `mesh` (`mesh_name` for the message): the same vertices, at the same
+    /// positions (to single precision, as the `.glb` stores them), and the same triangle count.
+    pub fn check_mesh(&self, mesh: &Mesh, mesh_name: &str) -> Result<(), String> {
+        let name = &self.name;
+        if self.positions.len() != mesh.positions.len() || self.triangles != mesh.triangles.len() {
+            return Err(format!(
+                "{name}: the transfer is of a mesh of {} vertices and {} triangles, {mesh_name} has {} and {}",
+                self.positions.len(),
+                self.triangles,
+                mesh.positions.len(),
+                mesh.triangles.len()
+            ));
+        }
+        if let Some(v) = self.positions.iter().zip(&mesh.positions).position(|(a, b)| *a != b.as_vec3().to_array()) {
+            return Err(format!("{name}: vertex {v} is not where {mesh_name} has it: the transfer is of another mesh"));
+        }
+        Ok(())
+    }
+
+    /// Coefficients per vertex, n².
+    pub fn coefficients(&self) -> usize {
+        self.order * self.order
+    }
+}
+
+/// The rotation about +Z by `degrees` (counter-clockwise seen from +Z): azimuth φ → φ + degrees.
+pub fn rotation_about_z(degrees: f64) -> DMat3 {
+    DMat3::from_rotation_z(degrees.to_radians())
+}
+
+/// One frame of relighting: the lighting `light` (RGB SH of highest band ≥ n − 1, in the mesh's
+/// axes, as stored) turned by `rotation` (one SH rotation, Ivanic & Ruedenberg), then
+/// B_v = Σ_i T_i(v) L_i per vertex in single precision, as a GPU would, into `out`.
+pub fn relight(bake: &TransferBake, light: &ShCoeffs, rotation: &ShRotation, out: &mut Vec<[f32; 3]>) {
+    let coeffs = bake.coefficients();
+    let turned = rotation.apply(&light.truncated(bake.order - 1));
+    let l: Vec<[f32; 3]> = turned.rgb.iter().map(|c| c.map(|x| x as f32)).collect();
+    out.clear();
+    out.extend(bake.transfer.chunks_exact(coeffs).map(|t| {
+        let mut b = [0.0f32; 3];
+        for (ti, li) in t.iter().zip(&l) {
+            b[0] += ti * li[0];
+            b[1] += ti * li[1];
+            b[2] += ti * li[2];
+        }
+        b
+    }));
+}
+
+/// Shades a mesh hit by interpolating the per-vertex radiance of [`relight`] with the hit's
+/// barycentrics (Gouraud shading, as the vertex-shader evaluation of PRT is drawn).
+pub struct TransferShader<'a> {
+    radiance: Vec<[f32; 3]>,
+    triangles: &'a [[u32; 3]],
+}
+
+impl<'a> TransferShader<'a> {
+    /// From one frame's per-vertex radiance and the mesh's triangles.
+    pub fn new(radiance: Vec<[f32; 3]>, mesh: &'a Mesh) -> TransferShader<'a> {
+        TransferShader { radiance, triangles: &mesh.triangles }
+    }
+}
+
+impl Shade for TransferShader<'_> {
+    fn shade(&self, hit: &Hit, _wo: DVec3) -> [f64; 3] {
+        let Some((t, u, v)) = hit.triangle else {
+            return [0.0; 3];
+        };
+        let [a, b, c] = self.triangles[t].map(|i| self.radiance[i as usize]);
+        let w = 1.0 - u - v;
+        std::array::from_fn(|k| w * a[k] as f64 + u * b[k] as f64 + v * c[k] as f64)
+    }
+}
