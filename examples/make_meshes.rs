@@ -65,7 +65,7 @@ fn obj(header: &str, positions: &[DVec3], normals: Option<&[DVec3]>, faces: &[[u
 }
 
 fn main() -> std::io::Result<()> {
-    let (p, t) = prtkit::render::mesh::uv_sphere(16, 32);
+    let (p, t) = prtkit::mesh::uv_sphere(16, 32);
     let t: Vec<[usize; 3]> = t.iter().map(|f| f.map(|i| i as usize)).collect();
     let header = "UV sphere, 16 rings x 32 segments, unit radius, exact normals";
     std::fs::write("testdata/meshes/sphere.obj", obj(header, &p, Some(&p), &t, 6))?;

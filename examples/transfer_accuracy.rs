@@ -15,8 +15,8 @@
 //! directions and rays, for the tests).
 
 use glam::DVec3;
+use prtkit::mesh::{uv_sphere, Mesh};
 use prtkit::progress::NoProgress;
-use prtkit::render::mesh::{uv_sphere, Mesh};
 use prtkit::sh::basis::eval_basis_dir;
 use prtkit::sh::legendre::LegendreTable;
 use prtkit::transfer::diffuse::unshadowed_exact;

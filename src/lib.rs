@@ -11,6 +11,7 @@ pub mod factor;
 pub mod ibl;
 pub mod io;
 pub mod limits;
+pub mod mesh;
 pub mod metrics;
 pub mod normals;
 pub mod prefilter;

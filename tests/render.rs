@@ -421,9 +421,9 @@ fn render_panel_places_this_render_where_an_item_says_dash() {
 #[test]
 fn shipped_meshes_load_and_only_the_concave_ones_shadow_themselves() {
     use prtkit::factor::{Domain, Grid};
+    use prtkit::mesh::Mesh;
     use prtkit::progress::NoProgress;
     use prtkit::render::factored::Transport;
-    use prtkit::render::mesh::Mesh;
     use prtkit::render::Scene;
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes");
     let grid = Grid { n: 12, domain: Domain::Hemisphere };

@@ -11,8 +11,8 @@ mod common;
 
 use common::{cmd, stderr};
 use glam::DVec3;
+use prtkit::mesh::{uv_sphere, Mesh};
 use prtkit::progress::NoProgress;
-use prtkit::render::mesh::{uv_sphere, Mesh};
 use prtkit::sh::basis::eval_basis_dir;
 use prtkit::sh::legendre::LegendreTable;
 use prtkit::transfer::stage::{self, Config, Mode};

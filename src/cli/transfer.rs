@@ -6,7 +6,7 @@ use super::common::{Context, Outcome, Stage};
 use super::options::{check_json_output, Execution};
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::Output;
-use crate::render::mesh::Mesh;
+use crate::mesh::Mesh;
 use crate::transfer::stage::{self, Config, Mode};
 use anyhow::{Context as _, Result};
 pub use args::*;

@@ -1,6 +1,6 @@
 //! What the camera sees: an analytic sphere or a triangle mesh, in front of the environment.
 
-use super::mesh::Mesh;
+use crate::mesh::Mesh;
 use glam::DVec3;
 
 /// The object in the scene.

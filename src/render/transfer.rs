@@ -11,9 +11,9 @@
 //! The bake is read from its `.glb` (`docs/formats/transfer.md`), the file an engine loads: its
 //! `POSITION` and `_PRT_k` attributes and the `prtkit.transfer` extras (order, mode, albedo).
 
-use super::mesh::Mesh;
 use super::{Hit, Shade};
 use crate::io::glb;
+use crate::mesh::Mesh;
 use crate::sh::rotate::ShRotation;
 use crate::sh::ShCoeffs;
 use glam::{DMat3, DVec3};

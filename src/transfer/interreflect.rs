@@ -33,8 +33,8 @@
 use super::diffuse::{LocalBasis, PointTransfer};
 use super::directions::Stratified;
 use super::visibility::{barycentrics, Occluders};
+use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::render::mesh::Mesh;
 use glam::DVec3;
 use rayon::prelude::*;
 

@@ -195,7 +195,7 @@ pub fn all() -> Vec<Target> {
             ext: "obj",
             mutate: mutate::lines,
             library: |p| {
-                let mesh = prtkit::render::mesh::Mesh::load(p).map(drop).map_err(err);
+                let mesh = prtkit::mesh::Mesh::load(p).map(drop).map_err(err);
                 let normals = prtkit::normals::sources::NormalSource::read(p, false).map(drop).map_err(err);
                 mesh.and(normals)
             },
@@ -208,7 +208,7 @@ pub fn all() -> Vec<Target> {
             mutate: |rng, d, o| mutate::header_number(rng, d, 8, o),
             library: |p| {
                 // Both PLY readers: the normals' (encode-normals) and the mesh's (render, transfer).
-                let mesh = prtkit::render::mesh::Mesh::load(p).map(drop).map_err(err);
+                let mesh = prtkit::mesh::Mesh::load(p).map(drop).map_err(err);
                 let normals = prtkit::normals::sources::NormalSource::read(p, false).map(drop).map_err(err);
                 normals.and(mesh)
             },

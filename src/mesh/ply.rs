@@ -7,7 +7,7 @@
 
 use glam::DVec3;
 
-/// What a PLY file holds for [`super::mesh::Mesh`]: positions, normals if every vertex has one,
+/// What a PLY file holds for [`super::Mesh`]: positions, normals if every vertex has one,
 /// triangles.
 pub type PlyMesh = (Vec<DVec3>, Option<Vec<DVec3>>, Vec<[u32; 3]>);
 

@@ -1,5 +1,7 @@
-//! Triangle meshes from OBJ files (via `tobj`) or PLY files ([`super::ply`]) with per-vertex normals, and a bounding-volume
+//! Triangle meshes from OBJ files (via `tobj`) or PLY files ([`ply`]) with per-vertex normals, and a bounding-volume
 //! hierarchy for primary rays and visibility (shadow) rays.
+
+pub mod ply;
 
 use glam::DVec3;
 use std::path::Path;
@@ -127,7 +129,7 @@ impl Mesh {
             .map_err(|reason| MeshError::Invalid { path: name, reason })
     }
 
-    /// Reads a PLY file (ASCII or binary; [`super::ply`]): its vertices, their normals when
+    /// Reads a PLY file (ASCII or binary; [`ply`]): its vertices, their normals when
     /// every vertex has `nx ny nz` (else computed), its faces split into triangles.
     pub fn load_ply(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
@@ -140,7 +142,7 @@ impl Mesh {
             }
         })?;
         let (positions, normals, triangles) =
-            super::ply::parse(&bytes).map_err(|reason| invalid(format!("cannot read PLY: {reason}")))?;
+            ply::parse(&bytes).map_err(|reason| invalid(format!("cannot read PLY: {reason}")))?;
         if triangles.is_empty() {
             return Err(invalid("the PLY holds no triangles".into()));
         }
