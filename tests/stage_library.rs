@@ -366,6 +366,20 @@ fn render_library_and_binary_write_the_same_bytes() {
     b.same_image("k.exr", &out.frame.image, 0.0);
 }
 
+#[test]
+fn ibl_library_and_binary_write_the_same_bytes() {
+    use prtkit::ibl::stage::{run, Config};
+    let b = bench();
+    let (argv, _) = b.binary("ibl", &[&b.sky, "-o", "bake", "--size", "32", "--samples", "16", "-q"]);
+    let config = Config { size: 32, samples: 16, source: b.sky.clone(), args: argv, ..Config::default() };
+    let out = run(&config, &b.env(), &NoProgress).unwrap();
+    let names: Vec<&str> = out.files.iter().map(|(name, _)| name.as_str()).collect();
+    assert_eq!(common::entries(&b.root.join("bake")).len(), names.len(), "{names:?}");
+    for (name, bytes) in &out.files {
+        b.same(&format!("bake/{name}"), bytes);
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The examples: each stage through the library alone, reproducing the README's commands.
 
@@ -382,6 +396,9 @@ mod encode_normals_example;
 #[allow(dead_code)]
 #[path = "../examples/factor_brdf.rs"]
 mod factor_brdf_example;
+#[allow(dead_code)]
+#[path = "../examples/ibl.rs"]
+mod ibl_example;
 #[allow(dead_code)]
 #[path = "../examples/prefilter.rs"]
 mod prefilter_example;
@@ -407,6 +424,7 @@ fn every_example_runs_and_writes_what_it_documents() {
     count_terms_example::run(out).unwrap();
     factor_brdf_example::run(out).unwrap();
     render_example::run(out).unwrap();
+    ibl_example::run(out).unwrap();
     encode_normals_example::run(out).unwrap();
     for file in [
         "sky.exr",
@@ -422,6 +440,8 @@ fn every_example_runs_and_writes_what_it_documents() {
         "sphere.normals.json",
         "sphere-decoded.obj",
         "table32.md",
+        "ibl/ibl.json",
+        "ibl/specular.ktx2",
     ] {
         assert!(out.join(file).is_file(), "no {file} among {:?}", common::entries(out));
     }
