@@ -172,11 +172,7 @@ pub struct Summary {
 /// Seconds spent in each step.
 #[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct Timings {
-    /// BRDF coefficients (with the order search).
-    pub brdf_seconds: f64,
-    /// Lighting coefficients to F_B.
-    pub lighting_seconds: f64,
-    /// The SHRM.
+    /// The SHRM: the bright split, the projection, the order search and the SHRM itself.
     pub shrm_seconds: f64,
     /// Reflection maps from the SHRM.
     pub maps_seconds: f64,
