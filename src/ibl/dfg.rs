@@ -41,8 +41,9 @@ use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 
-/// Largest table side accepted (a 4096² RG32F table is 128 MiB).
-pub const MAX_SIZE: usize = 4096;
+/// Largest table side accepted: 1024² texels, each an integral over the hemisphere (8× the
+/// default's side, far past what a shader's bilinear lookup of these smooth functions resolves).
+pub const MAX_SIZE: usize = 1024;
 
 /// Default table side (Filament's and the glTF Sample Viewer's 128²).
 pub const DEFAULT_SIZE: usize = 128;

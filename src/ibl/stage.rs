@@ -309,8 +309,8 @@ impl Config {
         if matches!(self.format, TexelFormat::Rg16Float | TexelFormat::Rg32Float) {
             return Err(Error::Format(self.format.name()));
         }
-        if self.dfg_size == 0 || self.dfg_size > 1024 {
-            return Err(Error::Option(format!("DFG size {} must be in 1..=1024", self.dfg_size)));
+        if self.dfg_size == 0 || self.dfg_size > super::dfg::MAX_SIZE {
+            return Err(Error::Option(format!("DFG size {} must be in 1..={}", self.dfg_size, super::dfg::MAX_SIZE)));
         }
         Ok(())
     }

@@ -464,8 +464,9 @@ fn remainder_shrm(
 impl Prefiltered {
     /// The SHRM file's content: the remainder's SHRM plus the bright part (radially symmetric
     /// BRDFs: its exact map in the single layer; others: projected onto the view basis), global
-    /// or local. With the `nonneg` window, the window is searched on the SHRM's reflection map
-    /// towards +Z first.
+    /// or local, with the window as it stands: the `nonneg` search runs in
+    /// [`Prefiltered::reflection_maps`], so an SHRM made before (or without) reflection maps
+    /// carries the window's own factors and records t = 0.
     pub fn shrm(&mut self, model: &Model, global: bool, progress: &dyn Progress) -> Result<Shrm, PrefilterError> {
         let mut out = self.remainder_shrm.clone();
         if !self.bright.is_empty() && self.bright_harmonics.is_none() {

@@ -222,12 +222,6 @@ pub enum Error {
     Verify(#[from] VerifyError),
 }
 
-/// The grid size for F_B: 2S × S with S = clamp(10·F_B, 32, 512) (§5.2: S ≈ 10F).
-pub fn default_size(f_b: usize) -> (usize, usize) {
-    let s = (10 * f_b).clamp(32, 512).max(f_b + 1);
-    (2 * s, s)
-}
-
 /// Runs `prefilter` with `lighting` (a map, or SH coefficients for the frequency method).
 pub fn run(config: &Config, lighting: Lighting<'_>, progress: &dyn Progress) -> Result<Output, Error> {
     if !(config.epsilon > 0.0 && config.epsilon < 1.0) {
