@@ -377,7 +377,7 @@ impl ConePyramid {
 
     /// The pyramid of `env` (lat-long) down to rows of at least 8 texels. The levels are maps
     /// only: the view-frame passes read one level's texels, so no level pays for a
-    /// [`ConeIntegrator`] it does not use (1.4 ms of a 256×128 pyramid's 1.5 ms).
+    /// [`ConeIntegrator`] it does not use (its tables are most of a pyramid's cost).
     pub fn new(env: &EnvMap) -> Result<Self, AngularError> {
         if env.layout() != Layout::LatLong {
             return Err(AngularError::NotLatLong(env.layout().name()));
@@ -429,7 +429,7 @@ pub fn radial_truncation(u: impl Fn(f64) -> f64, epsilon: f64) -> Truncation {
     // each of 512 equal panels in γ (node spacing ~π/2000, as fine near the axis as a 2000-node
     // rule in cos γ, without solving for its nodes), then the first node where it reaches 1 − ε.
     // The nodes (γ, cos γ, weight × sin γ) are the same for every lobe: computed once, they
-    // leave 2 048 evaluations of u (77 → 16 µs for Phong).
+    // leave 2 048 evaluations of u per lobe.
     const PANELS: usize = 512;
     static NODES: OnceLock<Vec<(f64, f64, f64)>> = OnceLock::new();
     let nodes = NODES.get_or_init(|| {

@@ -242,7 +242,7 @@ impl Model {
     /// integrands are u·P_l (degree d + f) and u² (2d) for a lobe that is a polynomial of degree
     /// d in cos γ on each half ([`Model::lobe_degree`]): those take the fewest nodes that are
     /// exact (rounded up to a multiple of 16, so that a few rules serve every order), the others
-    /// [`RADIAL_NODES`]. Phong s = 8 to band 127: 80 nodes, where 1 024 cost 0.14 ms a bake.
+    /// [`RADIAL_NODES`] (Phong s = 8 to band 127 takes 80 nodes where the fixed rule has 1 024).
     fn radial_nodes(&self, f: usize) -> usize {
         match self.lobe_degree() {
             Some(d) if d <= 2 * RADIAL_NODES => ((d + f) / 2 + 1).max(d + 1).next_multiple_of(16).min(RADIAL_NODES),

@@ -33,8 +33,8 @@ pub fn legendre_polynomials(x: f64, out: &mut [f64]) {
 ///
 /// Each coefficient depends on (l, m) alone and sits at index(l, m) whatever the order, so one
 /// process-wide set serves every table as a prefix ([`Recurrence::shared`]): building it takes
-/// two square roots and two divisions per (l, m), 62 µs at order 127, where a prefilter bake at
-/// that order takes about a millisecond and asks for four tables. The set is kept for the
+/// two square roots and two divisions per (l, m), a real share of a prefilter bake at high order,
+/// which asks for four tables. The set is kept for the
 /// process's life: 16 bytes per (l, m) up to the highest order asked for (0.13 MB at 127), as
 /// much as a table at that order took while it was in use.
 #[derive(Clone, Debug)]

@@ -97,8 +97,7 @@ pub enum TexelQuadrature {
 /// column P̄_l^m, l ≥ m, runs over every row's z at once ([`LegendreTable::column`]), and each
 /// coefficient is its dot product with the rows' Fourier sums. The work per (l, m) is then a
 /// vectorized pass over the rows held in cache, where summing row by row streams the whole
-/// accumulator of (F + 1)² coefficients through memory for every row (order 127 on a 256 × 128
-/// map: 2.9 → 0.85 ms on 2 threads). An order above W/2 (the rows' Nyquist frequency) is an
+/// accumulator of (F + 1)² coefficients through memory for every row. An order above W/2 (the rows' Nyquist frequency) is an
 /// error.
 ///
 /// ```
