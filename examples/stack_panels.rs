@@ -10,10 +10,8 @@ fn main() {
         eprintln!("usage: stack_panels OUT.png ROW.png…");
         std::process::exit(2);
     };
-    let rows: Vec<image::RgbImage> = rows
-        .iter()
-        .map(|p| image::open(p).unwrap_or_else(|e| panic!("{p}: {e}")).to_rgb8())
-        .collect();
+    let rows: Vec<image::RgbImage> =
+        rows.iter().map(|p| image::open(p).unwrap_or_else(|e| panic!("{p}: {e}")).to_rgb8()).collect();
     let width = rows.iter().map(|r| r.width()).max().unwrap_or(0);
     let height = rows.iter().map(|r| r.height()).sum();
     let mut stacked = image::RgbImage::new(width, height);
