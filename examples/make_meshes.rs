@@ -85,6 +85,31 @@ fn main() -> std::io::Result<()> {
         .collect();
     let header = "lower hemisphere shell (a bowl opening to +Z), no normals";
     std::fs::write("testdata/meshes/bowl.obj", obj(header, &bowl, None, &faces, 6))?;
+    // Bowl holding a ball (docs/transfer.md's relit picture): a finer bowl with exact normals
+    // into its inside, and a ball of radius 0.35 resting just above its floor off the axis, so
+    // that the ball shadows the bowl, the bowl the ball, and light bounces between them.
+    let (p, t) = prtkit::render::mesh::uv_sphere(32, 64);
+    let keep: Vec<usize> = (0..p.len()).filter(|&i| p[i].z <= 1e-9).collect();
+    let mut map = vec![usize::MAX; p.len()];
+    for (new, &old) in keep.iter().enumerate() {
+        map[old] = new;
+    }
+    let mut pos: Vec<DVec3> = keep.iter().map(|&i| p[i]).collect();
+    let mut nrm: Vec<DVec3> = pos.iter().map(|v| -*v).collect();
+    let mut faces: Vec<[usize; 3]> = t
+        .iter()
+        .map(|f| f.map(|i| i as usize))
+        .filter(|f| f.iter().all(|&i| map[i] != usize::MAX))
+        .map(|f| [map[f[0]], map[f[2]], map[f[1]]])
+        .collect();
+    let (bp, bt) = prtkit::render::mesh::uv_sphere(16, 32);
+    let base = pos.len();
+    let centre = DVec3::new(0.2, 0.0, -0.6);
+    pos.extend(bp.iter().map(|v| centre + 0.35 * *v));
+    nrm.extend(bp.iter().copied());
+    faces.extend(bt.iter().map(|f| f.map(|i| i as usize + base)));
+    let header = "bowl (lower unit hemisphere, 32 x 64 sphere's half, normals inward) holding a ball (radius 0.35 at 0.2,0,-0.6, 16 x 32)";
+    std::fs::write("testdata/meshes/bowl-ball.obj", obj(header, &pos, Some(&nrm), &faces, 6))?;
     let (p, n, t) = torus_knot(160, 12, 0.11);
     let header = "(2,3) torus knot tube, 160 x 12 vertices, exact normals";
     std::fs::write("testdata/meshes/torus-knot.obj", obj(header, &p, Some(&n), &t, 5))?;

@@ -274,6 +274,140 @@ fn thread_counts_give_the_same_bytes() {
 }
 
 #[test]
+fn hlsl_and_wgsl_snippets_beside_the_glsl_one_and_their_rotation_compiles() {
+    // `--glsl/--hlsl/--wgsl` write the dot product and the SH rotation; GLSL and WGSL go through
+    // naga's front ends and validator at every order (the rotation's band blocks are written out,
+    // so each order is different code). naga has no HLSL front end: the HLSL is checked for its
+    // declarations only.
+    let dir = tempfile::tempdir().unwrap();
+    let validate = |module: &naga::Module, what: &str| {
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+            .validate(module)
+            .unwrap_or_else(|e| panic!("{what}: {e:?}"));
+    };
+    for order in 1..=8usize {
+        let files = ["t.glsl", "t.hlsl", "t.wgsl"].map(|f| dir.path().join(format!("{order}-{f}")));
+        cmd("transfer")
+            .args(["testdata/meshes/bowl.obj", "-q", "--mode", "unshadowed", "-n", &order.to_string(), "--glb"])
+            .arg(dir.path().join("t.glb"))
+            .arg("-o")
+            .arg(dir.path().join("t.json"))
+            .arg("--glsl")
+            .arg(&files[0])
+            .arg("--hlsl")
+            .arg(&files[1])
+            .arg("--wgsl")
+            .arg(&files[2])
+            .assert()
+            .success();
+        let [glsl, hlsl, wgsl] = files.map(|f| std::fs::read_to_string(f).unwrap());
+        let (c, v) = (order * order, (order * order).div_ceil(4));
+        let src = format!(
+            "#version 450\n#define PRTKIT_LIGHT_SH_DECLARED\n\
+             layout(std140, binding = 0) uniform Light {{ vec3 prtkitLightSH[{c}]; }};\n{glsl}layout(location = 0) in vec4 t0;\nlayout(location = 1) in vec3 axis;\n\
+             layout(location = 0) out vec4 o;\nvoid main() {{ vec4 t[{v}]; for (int k = 0; k < {v}; ++k) t[k] = t0; \
+             vec3 turned[{c}]; prtkitRotateSH(mat3(axis, axis.yzx, axis.zxy), prtkitLightSH, turned); \
+             o = vec4(prtkitTransferRadiance(t) + turned[{last}], 1.0); }}\n",
+            last = c - 1
+        );
+        let module = naga::front::glsl::Frontend::default()
+            .parse(&naga::front::glsl::Options::from(naga::ShaderStage::Fragment), &src)
+            .unwrap_or_else(|e| panic!("order {order}: {e:?}\n{src}"));
+        validate(&module, &format!("glsl order {order}"));
+        let src = format!(
+            "{wgsl}@group(0) @binding(0) var<uniform> light: array<vec4<f32>, {c}>;\n\
+             @fragment fn main(@location(0) t0: vec4<f32>, @location(1) axis: vec3<f32>) -> @location(0) vec4<f32> {{\n\
+             var sh: array<vec3<f32>, {c}>;\n for (var i = 0; i < {c}; i++) {{ sh[i] = light[i].xyz; }}\n\
+             let turned = prtkit_rotate_sh(mat3x3<f32>(axis, axis.yzx, axis.zxy), sh);\n\
+             var t: array<vec4<f32>, {v}>;\n for (var k = 0; k < {v}; k++) {{ t[k] = t0; }}\n\
+             return vec4<f32>(prtkit_transfer_radiance(t, turned), 1.0);\n}}\n"
+        );
+        let module =
+            naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("order {order}: {}", e.emit_to_string(&src)));
+        validate(&module, &format!("wgsl order {order}"));
+        assert!(
+            hlsl.contains("float3 prtkitTransferRadiance(float4 transfer[PRTKIT_TRANSFER_VEC4S])")
+                && hlsl.contains(&format!("void prtkitRotateSH(float3x3 R, float3 sh[{c}], out float3 rotated[{c}])")),
+            "{hlsl}"
+        );
+        assert!(!hlsl.contains("vec3") && !hlsl.contains("mat3"), "GLSL type names in the HLSL");
+    }
+}
+
+/// Runs the body of a snippet's SH rotation as text: its `let`/`float` lines and `rotated[i] = …`
+/// lines are sums of products of literals, names, `R[a][b]` and `sh[k]`, evaluated here in
+/// f64 with `sh` one scalar channel; `matrix(a, b)` reads the language's `R[a][b]`.
+fn run_rotation_text(text: &str, sh: &[f64], matrix: impl Fn(usize, usize) -> f64) -> Vec<f64> {
+    let mut names = std::collections::HashMap::new();
+    let mut rotated = vec![f64::NAN; sh.len()];
+    let index = |f: &str, open: &str| -> Vec<usize> {
+        f[open.len()..].trim_end_matches(']').split("][").map(|d| d.parse().unwrap()).collect()
+    };
+    for line in text.lines().map(str::trim) {
+        let Some((lhs, rhs)) = line.strip_suffix(';').and_then(|l| l.split_once(" = ")) else { continue };
+        // Tokens: a sign, then factors joined by `*`, then the next sign, …
+        let expr = match rhs.strip_prefix('-') {
+            Some(rest) => format!("- {rest}"),
+            None => format!("+ {rhs}"),
+        };
+        let mut terms: Vec<f64> = Vec::new();
+        for token in expr.split_whitespace() {
+            match token {
+                "+" => terms.push(1.0),
+                "-" => terms.push(-1.0),
+                "*" => {}
+                f => {
+                    let factor = if let Ok(x) = f.parse::<f64>() {
+                        x
+                    } else if f.starts_with("sh[") {
+                        sh[index(f, "sh[")[0]]
+                    } else if f.starts_with("R[") || f.starts_with("r[") {
+                        let ab = index(f, "R[");
+                        matrix(ab[0], ab[1])
+                    } else {
+                        *names.get(f).unwrap_or_else(|| panic!("{f} used before it is defined"))
+                    };
+                    *terms.last_mut().expect("a sign first") *= factor;
+                }
+            }
+        }
+        let value: f64 = terms.iter().sum();
+        if let Some(i) = lhs.strip_prefix("rotated[") {
+            rotated[i.trim_end_matches(']').parse::<usize>().unwrap()] = value;
+        } else if let Some(name) = lhs.strip_prefix("let ").or_else(|| lhs.strip_prefix("float ")) {
+            names.insert(name.to_string(), value);
+        }
+    }
+    rotated
+}
+
+#[test]
+fn the_snippets_rotation_text_turns_coefficients_as_shrotation_does() {
+    // The emitted text itself (each language's matrix indexing included), evaluated line by
+    // line, against the Rust rotation prtkit relights with: a wrong sign, transposed R or
+    // misplaced band would show at order 8 for a generic rotation.
+    use glam::DMat3;
+    use prtkit::sh::rotate::ShRotation;
+    use prtkit::transfer::shaders::{snippet, Language};
+    let rotation = DMat3::from_axis_angle(DVec3::new(-0.4, 0.7, 0.2).normalize(), 2.3);
+    let rows = rotation.transpose().to_cols_array_2d(); // rows[i][j] = R_ij
+    for order in [1usize, 2, 3, 8] {
+        let sh: Vec<f64> = (0..order * order).map(|i| ((i * 7919) % 13) as f64 / 13.0 - 0.4).collect();
+        let want = ShRotation::new(rotation, order - 1).apply_scalar(&sh);
+        for lang in [Language::Glsl, Language::Hlsl, Language::Wgsl] {
+            let text = snippet(order, lang);
+            let got = run_rotation_text(&text, &sh, |a, b| match lang {
+                Language::Hlsl => rows[a][b],
+                _ => rows[b][a],
+            });
+            for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+                assert!((g - w).abs() < 1e-7, "{lang:?} order {order}, coefficient {i}: {g} vs {w}");
+            }
+        }
+    }
+}
+
+#[test]
 fn bad_meshes_exit_2_naming_the_file_and_write_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let cases = [

@@ -49,7 +49,7 @@ impl Stage for Args {
         check_outputs(
             [(&self.glb, Holds::Glb), (&self.output, Holds::Text)]
                 .into_iter()
-                .chain(self.glsl.iter().map(|g| (g, Holds::Text))),
+                .chain([&self.glsl, &self.hlsl, &self.wgsl].into_iter().flatten().map(|g| (g, Holds::Text))),
         )?;
         let extension = self.mesh.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         if !matches!(extension.as_deref(), Some("obj" | "ply")) {
@@ -77,8 +77,10 @@ impl Stage for Args {
 
         let mut outputs = Outputs::new();
         outputs.bytes(&self.glb, out.glb)?;
-        if let Some(glsl) = &self.glsl {
-            outputs.bytes(glsl, out.glsl.into_bytes())?;
+        for (file, text) in [(&self.glsl, out.glsl), (&self.hlsl, out.hlsl), (&self.wgsl, out.wgsl)] {
+            if let Some(file) = file {
+                outputs.bytes(file, text.into_bytes())?;
+            }
         }
         outputs.json(&self.output, &out.document)?;
         if self.json {

@@ -151,46 +151,103 @@ fn band(r1: &[f64], prev: &[f64], l: isize) -> Vec<f64> {
     let w = 2 * l + 1;
     let wp = 2 * l - 1;
     let coefficients = band_coefficients(l as usize);
-    let r1e = |i: isize, j: isize| r1[((i + 1) * 3 + (j + 1)) as usize];
-    let pe = |a: isize, b: isize| prev[((a + l - 1) * wp + (b + l - 1)) as usize];
-    // P(i, a, b) of the paper.
-    let p = |i: isize, a: isize, b: isize| -> f64 {
-        if b == l {
-            r1e(i, 1) * pe(a, l - 1) - r1e(i, -1) * pe(a, -l + 1)
-        } else if b == -l {
-            r1e(i, 1) * pe(a, -l + 1) + r1e(i, -1) * pe(a, l - 1)
-        } else {
-            r1e(i, 0) * pe(a, b)
-        }
+    let product = |i: isize, j: isize, a: isize, b: isize| {
+        r1[((i + 1) * 3 + (j + 1)) as usize] * prev[((a + l - 1) * wp + (b + l - 1)) as usize]
     };
     let mut out = vec![0.0; (w * w) as usize];
     for m in -l..=l {
         for n in -l..=l {
-            let [u, v, wc] = coefficients.uvw[((m + l) * w + (n + l)) as usize];
-            let mut value = 0.0;
-            if u != 0.0 {
-                value += u * p(0, m, n);
-            }
-            if v != 0.0 {
-                let vv = if m == 0 {
-                    p(1, 1, n) + p(-1, -1, n)
-                } else if m > 0 {
-                    let d1: f64 = if m == 1 { 1.0 } else { 0.0 };
-                    p(1, m - 1, n) * (1.0 + d1).sqrt() - p(-1, -m + 1, n) * (1.0 - d1)
-                } else {
-                    let d1: f64 = if m == -1 { 1.0 } else { 0.0 };
-                    p(1, m + 1, n) * (1.0 - d1) + p(-1, -m - 1, n) * (1.0 + d1).sqrt()
-                };
-                value += v * vv;
-            }
-            if wc != 0.0 {
-                let ww = if m > 0 { p(1, m + 1, n) + p(-1, -m - 1, n) } else { p(1, m - 1, n) - p(-1, -m + 1, n) };
-                value += wc * ww;
-            }
-            out[((m + l) * w + (n + l)) as usize] = value;
+            out[((m + l) * w + (n + l)) as usize] =
+                band_element(coefficients.uvw[((m + l) * w + (n + l)) as usize], l, m, n, &product);
         }
     }
     out
+}
+
+/// The symbolic form of band l ≥ 2: for each element (m, n), row-major by (m + l, n + l), the
+/// terms c · R¹_ij · R^(l−1)_ab it sums, as `(c, (i, j), (a, b))` with like terms merged. The same
+/// recurrence as [`ShRotation::new`] (one code path, [`band_element`]), written out so that a
+/// shader can build the bands of a rotation with no loops or tables (`transfer`'s snippets).
+pub type BandTerm = (f64, (isize, isize), (isize, isize));
+
+/// See [`BandTerm`].
+pub fn band_terms(l: usize) -> Vec<Vec<BandTerm>> {
+    #[derive(Clone, Default)]
+    struct Terms(Vec<BandTerm>);
+    impl std::ops::Add for Terms {
+        type Output = Terms;
+        fn add(mut self, other: Terms) -> Terms {
+            for t in other.0 {
+                match self.0.iter_mut().find(|s| (s.1, s.2) == (t.1, t.2)) {
+                    Some(s) => s.0 += t.0,
+                    None => self.0.push(t),
+                }
+            }
+            self
+        }
+    }
+    impl std::ops::Mul<f64> for Terms {
+        type Output = Terms;
+        fn mul(self, c: f64) -> Terms {
+            Terms(self.0.into_iter().map(|(k, a, b)| (k * c, a, b)).collect())
+        }
+    }
+    assert!(l >= 2, "band_terms builds bands 2 and up");
+    let li = l as isize;
+    let w = 2 * li + 1;
+    let coefficients = band_coefficients(l);
+    let product = |i: isize, j: isize, a: isize, b: isize| Terms(vec![(1.0, (i, j), (a, b))]);
+    let mut out = Vec::with_capacity((w * w) as usize);
+    for m in -li..=li {
+        for n in -li..=li {
+            let Terms(mut terms) =
+                band_element(coefficients.uvw[((m + li) * w + (n + li)) as usize], li, m, n, &product);
+            terms.retain(|t| t.0 != 0.0);
+            out.push(terms);
+        }
+    }
+    out
+}
+
+/// Element (m, n) of band l, Ivanic–Ruedenberg Table 2 with the 1998 corrections, for any value
+/// type: `product(i, j, a, b)` is R¹_ij · R^(l−1)_ab (numbers for [`ShRotation::new`], terms for
+/// [`band_terms`]), `uvw` the element's u, v, w.
+fn band_element<T>(uvw: [f64; 3], l: isize, m: isize, n: isize, product: &impl Fn(isize, isize, isize, isize) -> T) -> T
+where
+    T: Default + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>,
+{
+    // P(i, a, b) of the paper.
+    let p = |i: isize, a: isize, b: isize| -> T {
+        if b == l {
+            product(i, 1, a, l - 1) + product(i, -1, a, -l + 1) * -1.0
+        } else if b == -l {
+            product(i, 1, a, -l + 1) + product(i, -1, a, l - 1)
+        } else {
+            product(i, 0, a, b)
+        }
+    };
+    let [u, v, wc] = uvw;
+    let mut value = T::default();
+    if u != 0.0 {
+        value = value + p(0, m, n) * u;
+    }
+    if v != 0.0 {
+        let vv = if m == 0 {
+            p(1, 1, n) + p(-1, -1, n)
+        } else if m > 0 {
+            let d1: f64 = if m == 1 { 1.0 } else { 0.0 };
+            p(1, m - 1, n) * (1.0 + d1).sqrt() + p(-1, -m + 1, n) * -(1.0 - d1)
+        } else {
+            let d1: f64 = if m == -1 { 1.0 } else { 0.0 };
+            p(1, m + 1, n) * (1.0 - d1) + p(-1, -m - 1, n) * (1.0 + d1).sqrt()
+        };
+        value = value + vv * v;
+    }
+    if wc != 0.0 {
+        let ww = if m > 0 { p(1, m + 1, n) + p(-1, -m - 1, n) } else { p(1, m - 1, n) + p(-1, -m + 1, n) * -1.0 };
+        value = value + ww * wc;
+    }
+    value
 }
 
 #[cfg(test)]

@@ -11,13 +11,14 @@
 //! which depends on the geometry only, so it is baked once and relit at run time for any
 //! low-frequency lighting. This module computes T per vertex: [`diffuse`] holds the two
 //! integrators (exact quadrature without visibility, stratified rays with it), [`directions`]
-//! the stratified ray directions, [`visibility`] the BVH the rays are cast through, [`glsl`] the
-//! run-time dot product, and [`stage`] the `transfer` stage. Interreflected transfer, glossy
-//! transfer, per-texel lightmaps, glTF input and CPCA compression are later slices of issue 32.
+//! the stratified ray directions, [`visibility`] the BVH the rays are cast through,
+//! [`interreflect`] the bounces, [`shaders`] the run-time dot product and SH rotation (GLSL,
+//! HLSL, WGSL), and [`stage`] the `transfer` stage. Glossy transfer, per-texel lightmaps, glTF
+//! input and CPCA compression are later slices of issue 32.
 
 pub mod diffuse;
 pub mod directions;
-pub mod glsl;
 pub mod interreflect;
+pub mod shaders;
 pub mod stage;
 pub mod visibility;

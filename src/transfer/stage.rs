@@ -11,6 +11,7 @@
 use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
 use super::interreflect::{Hits, Storage, Tracer};
+use super::shaders::{snippet, Language};
 use super::visibility::{triangle_area, Occluders};
 use crate::io::glb::{self, Attribute, GlbMesh};
 use crate::io::{Document, Provenance};
@@ -214,8 +215,12 @@ pub struct Output {
     pub document: Document<TransferBody>,
     /// The `.glb` bytes.
     pub glb: Vec<u8>,
-    /// The GLSL snippet.
+    /// The run-time snippets (`shaders`): GLSL, HLSL, WGSL.
     pub glsl: String,
+    /// HLSL.
+    pub hlsl: String,
+    /// WGSL.
+    pub wgsl: String,
     /// The per-vertex transfer, n² values per vertex.
     pub transfer: Vec<f64>,
     /// The `--json` summary.
@@ -448,7 +453,15 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         rays_per_second: if trace_seconds > 0.0 { cast as f64 / trace_seconds } else { 0.0 },
         bounce_seconds,
     };
-    Ok(Output { document, glb, glsl: super::glsl::snippet(n), transfer, summary })
+    Ok(Output {
+        document,
+        glb,
+        glsl: snippet(n, Language::Glsl),
+        hlsl: snippet(n, Language::Hlsl),
+        wgsl: snippet(n, Language::Wgsl),
+        transfer,
+        summary,
+    })
 }
 
 /// The `.glb`: positions, unit normals, the transfer packed four coefficients per `_PRT_k`, and

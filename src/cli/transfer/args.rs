@@ -28,9 +28,18 @@ pub struct Args {
     #[arg(short, long, default_value = "-", value_parser = parse_output)]
     pub output: Output,
 
-    /// Write the run-time GLSL snippet (the dot product with the lighting's SH) to FILE.
+    /// Write the run-time GLSL snippet (the dot product with the lighting's SH, and SH rotation
+    /// of the lighting) to FILE.
     #[arg(long, value_name = "FILE", value_parser = parse_output)]
     pub glsl: Option<Output>,
+
+    /// Write the same run-time snippet in HLSL to FILE.
+    #[arg(long, value_name = "FILE", value_parser = parse_output)]
+    pub hlsl: Option<Output>,
+
+    /// Write the same run-time snippet in WGSL to FILE.
+    #[arg(long, value_name = "FILE", value_parser = parse_output)]
+    pub wgsl: Option<Output>,
 
     /// SH order n: bands 0..n-1, n² coefficients per vertex (1 to 8).
     #[arg(short = 'n', long, default_value_t = 3)]
