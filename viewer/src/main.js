@@ -14,15 +14,19 @@
 //   mode=shrm         shrm=URL (prefilter's prtkit.shrm; its EXR beside it): per-pixel SHRM sphere
 //   mode=normals      codes=URL report=URL decoder=URL (encode-normals' codes, report, --emit-decoder
 //                     glsl) size=WxH: a lat-long table of normals decoded in the shader, lit by sh=URL
-//   (these three: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
+//   mode=prt          glb=URL (transfer --glb) sh=URL (sh-project of the map, order ≥ the bake's n − 1):
+//                     the mesh relit per vertex, B = Σ_i T_i L_i, Gouraud
+//   (these four: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
 //    rotate=DEG turns the lighting about the up axis: SH coefficients rotated every frame)
 //   test=1            no UI, no animation loop: the test script drives window.prtkit
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
 import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { loadPrtkitIbl, PRTKIT_IBL_GLSL, prtkitUniforms } from './prtkit-loader.js';
-import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, loadPrtkitShrm, SHRM_GLSL, loadNormalCodes } from './prtkit-sh.js';
+import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, loadPrtkitShrm, SHRM_GLSL, loadNormalCodes,
+  prtAttribute, transferLightingUniform, prtVertexShader, PRT_FRAGMENT } from './prtkit-sh.js';
 
 const q = new URLSearchParams(location.search);
 const num = (k, d) => (q.has(k) ? Number(q.get(k)) : d);
@@ -180,7 +184,7 @@ function buildSpheres() {
 // --- SH irradiance, SHRM and encoded-normal spheres (prtkit-sh.js) ---------------------------
 // Ray-cast like the split-sum spheres; each mode's shading works in prtkit's frame
 // (prtkitFromWorld: see prtkit-sh.js's header).
-const SH_MODES = ['irradiance', 'shrm', 'normals'];
+const SH_MODES = ['irradiance', 'shrm', 'normals', 'prt'];
 const docs = {}; // what each mode loaded: sh, shrm, codes, decoder
 const shadeBody = {
   irradiance: 'c = prtkitShLambert(prtkitFromWorld * n);',
@@ -229,7 +233,7 @@ function shFragment(mode) {
 let shMaterial = null;
 async function setupShMode() {
   const mode = state.mode;
-  if (mode === 'irradiance' || mode === 'normals') {
+  if (mode === 'irradiance' || mode === 'normals' || mode === 'prt') {
     const url = q.get('sh');
     if (!url) throw new Error(`mode=${mode} needs sh=URL (a prtkit.sh document from sh-project)`);
     docs.sh ??= await loadPrtkitSh(url);
@@ -258,11 +262,38 @@ async function setupShMode() {
     envTurn: { value: 0 },
     codes: { value: docs.codes?.texture ?? null },
   };
-  shMaterial = new THREE.ShaderMaterial({ uniforms, vertexShader: sphereVertex, fragmentShader: shFragment(mode), side: THREE.BackSide });
   spheres.clear();
-  spheres.add(new THREE.Mesh(sphereBox, shMaterial));
+  if (mode === 'prt') {
+    spheres.add(await prtMesh(uniforms));
+  } else {
+    shMaterial = new THREE.ShaderMaterial({ uniforms, vertexShader: sphereVertex, fragmentShader: shFragment(mode), side: THREE.BackSide });
+    spheres.add(new THREE.Mesh(sphereBox, shMaterial));
+  }
   scene.add(spheres);
   if (q.get('src')) scene.background = await loadEquirect(q.get('src'));
+}
+// mode=prt: the transfer .glb (positions in prtkit's frame) placed in three's world by the inverse
+// (transpose) of prtkitFromWorld, so the lighting SH stays in prtkit's frame as render has it.
+async function prtMesh(uniforms) {
+  const url = q.get('glb');
+  if (!url) throw new Error('mode=prt needs glb=URL (a transfer --glb bake) and sh=URL (sh-project of the map)');
+  docs.prt ??= await new GLTFLoader().loadAsync(url);
+  let mesh = null;
+  docs.prt.scene.traverse((o) => { if (o.isMesh) mesh = o; });
+  if (!mesh) throw new Error(`${url}: no mesh`);
+  const bake = mesh.userData['prtkit.transfer'];
+  let K = 0;
+  while (mesh.geometry.attributes[prtAttribute(K)]) K++;
+  if (!bake || K === 0) throw new Error(`${url}: not a transfer bake (no prtkit.transfer extras or _PRT_k attributes)`);
+  if (K > 15) throw new Error(`${url}: ${K} _PRT_k attributes; position + 15 is WebGL2's guaranteed 16 (n ≤ 7 bands here)`);
+  if (docs.sh.coefficients.length < bake.order ** 2) throw new Error(`sh: order ${docs.sh.order} < the bake's ${bake.order} bands − 1`);
+  document.getElementById('source').textContent = `${url.split('/').pop()}: n = ${bake.order}, ${bake.mode}`;
+  uniforms.shLighting = { value: transferLightingUniform([], 4 * K) };
+  shMaterial = new THREE.ShaderMaterial({ uniforms, vertexShader: prtVertexShader(K), fragmentShader: PRT_FRAGMENT, side: THREE.DoubleSide });
+  const object = new THREE.Mesh(mesh.geometry, shMaterial);
+  object.matrixAutoUpdate = false;
+  object.matrix.setFromMatrix3(prtkitFromWorld(state.frame).transpose());
+  return object;
 }
 // Every frame: the lighting turned by state.rotate about the up axis. For SH lighting the
 // coefficients themselves are rotated (rotateShZ, any order); the SHRM's lookup turns (β − γ).
@@ -271,7 +302,8 @@ function updateShUniforms() {
   const turn = rotation();
   u.exposureScale.value = exposureScale();
   u.prtkitFromWorld.value = prtkitFromWorld(state.frame);
-  if (docs.sh) u.shIrradiance.value = irradianceUniform(rotateShZ(docs.sh.coefficients, turn), num('albedo', 1));
+  if (docs.sh && u.shLighting) u.shLighting.value = transferLightingUniform(rotateShZ(docs.sh.coefficients, turn), u.shLighting.value.length);
+  else if (docs.sh) u.shIrradiance.value = irradianceUniform(rotateShZ(docs.sh.coefficients, turn), num('albedo', 1));
   u.envTurn.value = turn;
   scene.backgroundIntensity = exposureScale();
   // three's equirect background turns the map by +angle about +Y; prtkit's +Z turn by γ is a turn
@@ -420,7 +452,7 @@ if (!test) {
   const rebuild = async () => { await setup(); };
   el('mode').onchange = (e) => { state.mode = e.target.value; placeCamera(); controls.update(); rebuild(); };
   el('frame').onchange = (e) => { state.frame = e.target.value; rebuild(); };
-  for (const id of ['r', 'm', 'exposure', 'rotate']) el(id).oninput = (e) => { state[id] = Number(e.target.value); if (ibl) updateUniforms(); };
+  for (const id of ['r', 'm', 'exposure', 'rotate']) el(id).oninput = (e) => { state[id] = Number(e.target.value); if (ibl || SH_MODES.includes(state.mode)) updateUniforms(); };
   el('diffuse').onchange = (e) => { state.diffuse = e.target.value; if (ibl) updateUniforms(); };
   addEventListener('resize', () => {
     camera.aspect = innerWidth / innerHeight;

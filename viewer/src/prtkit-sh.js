@@ -304,3 +304,45 @@ export async function loadNormalCodes(codesUrl, reportUrl, width, height) {
   texture.needsUpdate = true;
   return { report, texture };
 }
+
+// ---- PRT relighting (transfer --glb) --------------------------------------------------------
+
+/**
+ * The transfer .glb's vec4 attributes as three.js names them: GLTFLoader lower-cases the names
+ * it does not know, so `_PRT_k` arrives as geometry attribute `_prt_k`.
+ */
+export const prtAttribute = (k) => `_prt_${k}`;
+
+/**
+ * The lighting uniform of the PRT vertex shader: the (rotated) lighting SH of the bake's n bands,
+ * zero-padded to the 4K coefficients the K attributes hold.
+ */
+export function transferLightingUniform(coefficients, count) {
+  return Array.from({ length: count }, (_, i) => new THREE.Vector3(...(coefficients[i] ?? [0, 0, 0])));
+}
+
+/**
+ * GLSL vertex shader of PRT relighting (docs/formats/transfer.md): B = Σ_i T_i L_i at the vertex,
+ * four coefficients per attribute (one mat4x3 of lighting times one vec4 of transfer), passed on
+ * as a varying and interpolated over the triangle (Gouraud, as `render --shading transfer`).
+ * K attributes beside position: WebGL2 guarantees 16 vertex attributes, so K ≤ 15 (n ≤ 7 bands).
+ */
+export function prtVertexShader(K) {
+  const attributes = Array.from({ length: K }, (_, k) => `attribute vec4 ${prtAttribute(k)};`).join('\n');
+  const sum = Array.from({ length: K }, (_, k) =>
+    `  c += mat4x3(shLighting[${4 * k}], shLighting[${4 * k + 1}], shLighting[${4 * k + 2}], shLighting[${4 * k + 3}]) * ${prtAttribute(k)};`).join('\n');
+  return /* glsl */ `
+${attributes}
+uniform vec3 shLighting[${4 * K}]; // L_i, turned by the environment rotation
+varying vec3 vRadiance;
+void main() {
+  vec3 c = vec3(0.0);
+${sum}
+  vRadiance = c;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+}`;
+}
+export const PRT_FRAGMENT = /* glsl */ `
+uniform float exposureScale;
+varying vec3 vRadiance;
+void main() { gl_FragColor = linearToOutputTexel(vec4(vRadiance * exposureScale, 1.0)); }`;

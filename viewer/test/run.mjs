@@ -336,10 +336,70 @@ async function shTests() {
   figures.frame_ms_640x360_sh = times;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|sh runs one group (development); both by default.
+// ---- PRT relighting (mode=prt) against render --shading transfer ------------------------------
+// The torus knot (its loops shadow each other) baked by `transfer` (shadowed, n = 5), relit in the
+// page from sh-project's SH of the sky (order 4, the bake's bands) against render's CPU relighting
+// of the same .glb, with the environment as stored and turned 60° (SH rotation in both).
+// Compared over the mesh's pixels less a one-pixel rim (the two rasterizers' silhouettes differ).
+function meshMask(img) {
+  const { width: w, height: h } = img;
+  const lit = (x, y) => x >= 0 && y >= 0 && x < w && y < h && [0, 1, 2].some((c) => img.rgba[4 * (y * w + x) + c] !== 0);
+  const mask = new Array(w * h).fill(false);
+  for (let y = 0; y < h; y++) for (let x = 0; x < w; x++) {
+    mask[y * w + x] = [[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]].every(([dx, dy]) => lit(x + dx, y + dy));
+  }
+  return mask;
+}
+async function prtTests() {
+  const dir = join(out, 'prt');
+  rmSync(dir, { recursive: true, force: true });
+  mkdirSync(dir, { recursive: true });
+  const sky = join(dir, 'sky.exr');
+  run('sample-shader', ['testdata/shaders/sky.sl', '--latlong', '256x128', '-o', sky, '-q']);
+  const mesh = 'testdata/meshes/torus-knot.obj', glb = join(dir, 'knot5.glb');
+  run('transfer', [mesh, '-n', '5', '--mode', 'shadowed', '--rays', '256', '--glb', glb, '-o', join(dir, 'knot5.json'), '-q']);
+  run('sh-project', [sky, '-F', '4', '-o', join(dir, 'sky4.sh.json'), '-q']);
+  const eye = [2.2, -3.4, 2.4], RESP = '200x200', EXP = '-2';
+  const pageCam = (frame) => ({ eye: toPage(eye, frame), target: '0,0,0', fov: String(FOV), res: RESP, exposure: EXP });
+  const params = { mode: 'prt', glb: url(glb), sh: url(join(dir, 'sky4.sh.json')) };
+  const fig = {};
+  for (const deg of [0, 60]) {
+    const png = join(out, `prt-${deg}-render.png`);
+    run('render', [sky, '--scene', mesh, '--shading', 'transfer', '--transfer', glb, '--env-rotation', String(deg),
+      '--eye', eye.join(','), '--target', '0,0,0', '--fov', String(FOV), '--res', RESP, '--png', png, '--exposure', EXP, '-q']);
+    const ref = readPng(png);
+    for (const frame of ['three', 'gl']) {
+      let img = (await view({ ...params, rotate: String(deg), frame, ...pageCam(frame) })).image;
+      if (frame === 'three') img = mirrorX(img);
+      writePng(join(out, `prt-${deg}-viewer-${frame}.png`), img);
+      writePng(join(out, `prt-${deg}-diff-${frame}-x8.png`), diffImage(img, ref));
+      const c = compare(img, ref, meshMask(img));
+      fig[`turned${deg}_${frame}`] = c.psnr;
+      check(`prt knot n = 5, environment turned ${deg}° (${frame} frame) vs render --shading transfer`, c.psnr >= 35,
+        `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+    }
+    if (deg === 0) continue;
+    // Negative controls: the SH rotation's sign reversed, and the frame's x flip dropped.
+    const reversed = mirrorX((await view({ ...params, rotate: String(-deg), ...pageCam('three') })).image);
+    const r = compare(reversed, ref, meshMask(reversed));
+    fig.reversed = r.psnr;
+    check(`prt turned −${deg}° instead of ${deg}° fails`, r.psnr < 30, `PSNR ${r.psnr.toFixed(2)} dB (< 30)`);
+    const flipped = mirrorX((await view({ ...params, rotate: String(deg), frame: 'gl', ...pageCam('three') })).image);
+    const f = compare(flipped, ref, meshMask(flipped));
+    fig.x_flipped = f.psnr;
+    check('prt with the x flip dropped (gl frame, three\'s camera) fails', f.psnr < 30, `PSNR ${f.psnr.toFixed(2)} dB (< 30)`);
+  }
+  const r = await view({ ...params, rotate: '30', src: url(sky), eye: toPage([2.6, -4, 2.8], 'three'), target: '0,0,0', fov: '32', res: '640x360', exposure: EXP }, { bench: 20 });
+  writePng(join(out, 'mode-prt.png'), r.image);
+  fig.frame_ms_640x360 = r.ms;
+  console.log(`     frame time prt (n = 5, knot) 640×360: ${r.ms.toFixed(1)} ms (CPU, SwiftShader)`);
+  figures.prt = fig;
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|sh|prt runs one group (development); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
-  if (only !== 'sh') {
+  if (only !== 'sh' && only !== 'prt') {
   // 1. Skybox (specular.ktx2 level 0 in the viewer) against three.js's own view of the source map.
   const skyViews = [
     { name: 'front', eye: [0, -4, 0.3], fov: 60 },
@@ -435,7 +495,8 @@ try {
   }
   figures.frame_ms_640x360 = times;
   }
-  if (only !== 'ibl') await shTests();
+  if (only !== 'ibl' && only !== 'prt') await shTests();
+  if (only !== 'ibl' && only !== 'sh') await prtTests();
 } catch (e) {
   check('viewer pages', false, e.stack ?? String(e));
 } finally {
