@@ -88,7 +88,7 @@ fn main() -> std::io::Result<()> {
     // Bowl holding a ball (docs/transfer.md's relit picture): a finer bowl with exact normals
     // into its inside, and a ball of radius 0.35 resting just above its floor off the axis, so
     // that the ball shadows the bowl, the bowl the ball, and light bounces between them.
-    let (p, t) = prtkit::render::mesh::uv_sphere(32, 64);
+    let (p, t) = prtkit::mesh::uv_sphere(32, 64);
     let keep: Vec<usize> = (0..p.len()).filter(|&i| p[i].z <= 1e-9).collect();
     let mut map = vec![usize::MAX; p.len()];
     for (new, &old) in keep.iter().enumerate() {
@@ -102,7 +102,7 @@ fn main() -> std::io::Result<()> {
         .filter(|f| f.iter().all(|&i| map[i] != usize::MAX))
         .map(|f| [map[f[0]], map[f[2]], map[f[1]]])
         .collect();
-    let (bp, bt) = prtkit::render::mesh::uv_sphere(16, 32);
+    let (bp, bt) = prtkit::mesh::uv_sphere(16, 32);
     let base = pos.len();
     let centre = DVec3::new(0.2, 0.0, -0.6);
     pos.extend(bp.iter().map(|v| centre + 0.35 * *v));
