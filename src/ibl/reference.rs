@@ -314,9 +314,8 @@ struct Slope {
 
 impl Slope {
     fn of(lobe: &SplitSumLobe) -> Slope {
-        let a2 = lobe.ggx().alpha() * lobe.ggx().alpha();
-        let mut slope =
-            Slope { scale: a2 / (PI * lobe.normalization()), a: 0.5 * (a2 + 1.0), b: 0.5 * (a2 - 1.0), peak: 0.0 };
+        let (a2, scale) = kernel_constants(lobe);
+        let mut slope = Slope { scale, a: 0.5 * (a2 + 1.0), b: 0.5 * (a2 - 1.0), peak: 0.0 };
         // The peak by a scan, then golden-section search in the bracket around the best sample.
         let steps = 1024;
         let h = FRAC_PI_2 / steps as f64;
@@ -440,6 +439,13 @@ pub struct LobeIntegral {
     kernel: HalfChord,
 }
 
+/// α² and the factor α²/(π Z) of the normalized split-sum kernel, which [`HalfChord`] and
+/// [`Slope`] write as rational functions of the angle's cosine.
+fn kernel_constants(lobe: &SplitSumLobe) -> (f64, f64) {
+    let a2 = lobe.ggx().alpha() * lobe.ggx().alpha();
+    (a2, a2 / (PI * lobe.normalization()))
+}
+
 /// The split-sum kernel as a function of u = 1 − R·ω (`ggx`'s module docs): with
 /// cos² θ_h = 1 − u/2, D = α² / (π (α² cos² θ_h + sin² θ_h)²), so
 /// k = scale · (1 − u) / (α² + (1 − α²) u/2)² for u < 1, zero beyond. Both terms of the
@@ -454,12 +460,8 @@ struct HalfChord {
 
 impl HalfChord {
     fn of(lobe: &SplitSumLobe) -> HalfChord {
-        let a2 = lobe.ggx().alpha() * lobe.ggx().alpha();
-        HalfChord {
-            scale: (a2 / (PI * lobe.normalization())) as f32,
-            alpha2: a2 as f32,
-            slope: (0.5 * (1.0 - a2)) as f32,
-        }
+        let (a2, scale) = kernel_constants(lobe);
+        HalfChord { scale: scale as f32, alpha2: a2 as f32, slope: (0.5 * (1.0 - a2)) as f32 }
     }
 
     #[inline]
