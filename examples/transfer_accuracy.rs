@@ -57,7 +57,7 @@ fn unshadowed(small: bool) {
 }
 
 /// A bowl (the lower unit hemisphere, normals facing its inside) holding a ball of radius 0.35.
-fn bowl_and_ball() -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
+pub fn bowl_and_ball() -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
     let (rings, segments) = (12usize, 24usize);
     let mut p = Vec::new();
     for r in 0..=rings {
@@ -89,7 +89,7 @@ fn bowl_and_ball() -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
 
 /// Shadowed transfer at one point by brute force: every triangle (double-precision
 /// Möller–Trumbore) for every direction of `directions` (world axes, with weights).
-fn brute_force(
+pub fn brute_force(
     p: &[DVec3],
     tris: &[[u32; 3]],
     origin: DVec3,

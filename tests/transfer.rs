@@ -23,40 +23,15 @@ use std::path::Path;
 /// 0, −π/24, 0, π/64, 0.
 const A_HAT: [f64; 8] = [PI, 2.0 * PI / 3.0, PI / 4.0, 0.0, -PI / 24.0, 0.0, PI / 64.0, 0.0];
 
+// The bowl-and-ball scene and the brute-force integral of the accuracy example, compiled into
+// this test (its `main` unused here), so the test and the published figures use one copy.
+#[allow(dead_code)]
+#[path = "../examples/transfer_accuracy.rs"]
+mod accuracy;
+use accuracy::{bowl_and_ball, brute_force};
+
 fn band(i: usize) -> usize {
     (i as f64).sqrt().floor() as usize
-}
-
-/// A bowl (the lower unit hemisphere, normals facing its inside) holding a ball of radius 0.35
-/// resting near its bottom: two objects that shadow themselves and each other.
-fn bowl_and_ball() -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
-    let (rings, segments) = (12usize, 24usize);
-    let mut p = Vec::new();
-    for r in 0..=rings {
-        let theta = PI / 2.0 + PI / 2.0 * r as f64 / rings as f64;
-        for s in 0..segments {
-            let phi = 2.0 * PI * s as f64 / segments as f64;
-            p.push(DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()));
-        }
-    }
-    let mut n: Vec<DVec3> = p.iter().map(|v| -*v).collect();
-    let mut t = Vec::new();
-    let at = |r: usize, s: usize| (r * segments + s % segments) as u32;
-    for r in 0..rings {
-        for s in 0..segments {
-            t.push([at(r, s), at(r + 1, s), at(r + 1, s + 1)]);
-            t.push([at(r, s), at(r + 1, s + 1), at(r, s + 1)]);
-        }
-    }
-    let (sp, st) = uv_sphere(10, 20);
-    let base = p.len() as u32;
-    let centre = DVec3::new(0.2, 0.0, -0.6);
-    for v in &sp {
-        p.push(centre + 0.35 * *v);
-        n.push(*v);
-    }
-    t.extend(st.iter().map(|tri| tri.map(|i| i + base)));
-    (p, n, t)
 }
 
 fn write_obj(path: &Path, p: &[DVec3], n: &[DVec3], t: &[[u32; 3]]) {
@@ -109,48 +84,6 @@ fn unshadowed_sphere_is_the_clamped_cosine_convolution() {
     );
     assert_eq!(error.visible_fraction, 1.0);
     assert!((rms - error.relative_rms).abs() < 1e-12 && rms < 0.01, "{rms}");
-}
-
-/// Brute-force shadowed transfer at one point: every triangle tested for every direction of a
-/// Gauss–Legendre (μ = z) × equally spaced φ rule in world axes.
-fn brute_force(
-    p: &[DVec3],
-    tris: &[[u32; 3]],
-    origin: DVec3,
-    normal: DVec3,
-    order: usize,
-    directions: &[(DVec3, f64)],
-) -> Vec<f64> {
-    let table = LegendreTable::new(order - 1);
-    let mut y = vec![0.0; order * order];
-    let mut t = vec![0.0; order * order];
-    for &(d, w) in directions {
-        let cos = normal.dot(d);
-        if cos <= 0.0 {
-            continue;
-        }
-        let blocked = tris.iter().any(|tri| {
-            let [a, b, c] = tri.map(|i| p[i as usize]);
-            let (e1, e2) = (b - a, c - a);
-            let pv = d.cross(e2);
-            let det = e1.dot(pv);
-            if det.abs() < 1e-300 {
-                return false;
-            }
-            let tv = origin - a;
-            let u = tv.dot(pv) / det;
-            let qv = tv.cross(e1);
-            let v = d.dot(qv) / det;
-            (0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && e2.dot(qv) / det > 0.0
-        });
-        if !blocked {
-            eval_basis_dir(&table, d, &mut y);
-            for i in 0..y.len() {
-                t[i] += w * cos * y[i] / PI;
-            }
-        }
-    }
-    t
 }
 
 #[test]
