@@ -138,32 +138,41 @@ fn shadowed_bowl_matches_a_brute_force_integral() {
     }
 }
 
+/// `transfer OBJ ARGS` with `--threads 1` and `--threads 2`, each into its own folder under the
+/// same names (the manifest names its .glb): per run the .glb, the manifest without its
+/// provenance (which records the thread count) and the GLSL snippet.
+fn bakes_per_thread_count(dir: &Path, obj: &Path, args: &[&str]) -> Vec<(Vec<u8>, serde_json::Value, Vec<u8>)> {
+    ["1", "2"]
+        .iter()
+        .map(|threads| {
+            let out = dir.join(threads);
+            std::fs::create_dir(&out).unwrap();
+            let (glb, json, glsl) = (out.join("t.glb"), out.join("t.json"), out.join("t.glsl"));
+            cmd("transfer")
+                .arg(obj)
+                .args(args)
+                .args(["-q", "--threads", threads, "--glb"])
+                .arg(&glb)
+                .arg("-o")
+                .arg(&json)
+                .arg("--glsl")
+                .arg(&glsl)
+                .assert()
+                .success();
+            let mut doc: serde_json::Value = common::read(&json);
+            doc.as_object_mut().unwrap().remove("provenance");
+            (std::fs::read(&glb).unwrap(), doc, std::fs::read(&glsl).unwrap())
+        })
+        .collect()
+}
+
 #[test]
 fn thread_counts_give_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
     let (p, n, t) = bowl_and_ball();
     let obj = dir.path().join("scene.obj");
     write_obj(&obj, &p, &n, &t);
-    let mut outputs = Vec::new();
-    for threads in ["1", "2"] {
-        // The same names in two folders: the manifest names its .glb.
-        let out = dir.path().join(threads);
-        std::fs::create_dir(&out).unwrap();
-        let (glb, json, glsl) = (out.join("t.glb"), out.join("t.json"), out.join("t.glsl"));
-        cmd("transfer")
-            .arg(&obj)
-            .args(["-n", "5", "--rays", "512", "-q", "--threads", threads, "--glb"])
-            .arg(&glb)
-            .arg("-o")
-            .arg(&json)
-            .arg("--glsl")
-            .arg(&glsl)
-            .assert()
-            .success();
-        let mut doc: serde_json::Value = common::read(&json);
-        doc.as_object_mut().unwrap().remove("provenance"); // names the thread count
-        outputs.push((std::fs::read(&glb).unwrap(), doc, std::fs::read(&glsl).unwrap()));
-    }
+    let outputs = bakes_per_thread_count(dir.path(), &obj, &["-n", "5", "--rays", "512"]);
     assert!(outputs[0] == outputs[1], "outputs differ between --threads 1 and 2");
 
     // The .glb holds the transfer as documented: _PRT_k = coefficients 4k..4k+3, zero padded.
@@ -497,36 +506,12 @@ fn interreflected_bowl_is_shadowed_plus_bounces_and_thread_independent() {
     let dir = tempfile::tempdir().unwrap();
     let obj = dir.path().join("scene.obj");
     write_obj(&obj, &p, &n, &t);
-    let mut outputs = Vec::new();
-    for threads in ["1", "2"] {
-        let out = dir.path().join(threads);
-        std::fs::create_dir(&out).unwrap();
-        cmd("transfer")
-            .arg(&obj)
-            .args([
-                "-n",
-                "4",
-                "--rays",
-                "256",
-                "--mode",
-                "interreflected",
-                "--bounces",
-                "3",
-                "-q",
-                "--threads",
-                threads,
-            ])
-            .arg("--glb")
-            .arg(out.join("t.glb"))
-            .arg("-o")
-            .arg(out.join("t.json"))
-            .assert()
-            .success();
-        let mut doc: serde_json::Value = common::read(&out.join("t.json"));
-        doc.as_object_mut().unwrap().remove("provenance");
-        assert_eq!(doc["interreflection"]["bounces"], 3);
-        outputs.push((std::fs::read(out.join("t.glb")).unwrap(), doc));
-    }
+    let outputs = bakes_per_thread_count(
+        dir.path(),
+        &obj,
+        &["-n", "4", "--rays", "256", "--mode", "interreflected", "--bounces", "3"],
+    );
+    assert_eq!(outputs[0].1["interreflection"]["bounces"], 3);
     assert!(outputs[0] == outputs[1], "interreflected outputs differ between --threads 1 and 2");
 }
 
