@@ -115,25 +115,34 @@ pub fn box_latlong(img: &RgbImage, width: usize, height: usize) -> RgbImage {
     let columns = overlaps(&phi(w), &phi(width));
     let (z_in, z_out) = (z(h), z(height));
     let rows = overlaps(&z_in, &z_out);
-    let mut wide = vec![[0.0f64; 3]; h * width];
-    for y in 0..h {
-        for &(x_out, x_in, len) in &columns {
-            let v = img.get(x_in, y);
-            for c in 0..3 {
-                wide[y * width + x_out][c] += v[c] as f64 * len * width as f64;
-            }
-        }
-    }
-    let mut out = vec![[0.0f64; 3]; height * width];
+    // Each output row from its input rows, side by side: an input row's columns are filtered
+    // once per output row it overlaps (at most two when shrinking).
+    let mut sources = vec![Vec::new(); height];
     for &(y_out, y_in, len) in &rows {
-        let share = len / (z_out[y_out + 1] - z_out[y_out]);
-        for x in 0..width {
-            for c in 0..3 {
-                out[y_out * width + x][c] += wide[y_in * width + x][c] * share;
-            }
-        }
+        sources[y_out].push((y_in, len / (z_out[y_out + 1] - z_out[y_out])));
     }
-    RgbImage { width, height, pixels: out.iter().map(|p| p.map(|v| v as f32)).collect() }
+    let pixels = sources
+        .par_iter()
+        .flat_map_iter(|sources| {
+            let (mut out, mut wide) = (vec![[0.0f64; 3]; width], vec![[0.0f64; 3]; width]);
+            for &(y_in, share) in sources {
+                wide.fill([0.0; 3]);
+                for &(x_out, x_in, len) in &columns {
+                    let v = img.get(x_in, y_in);
+                    for c in 0..3 {
+                        wide[x_out][c] += v[c] as f64 * len * width as f64;
+                    }
+                }
+                for (o, w) in out.iter_mut().zip(&wide) {
+                    for c in 0..3 {
+                        o[c] += w[c] * share;
+                    }
+                }
+            }
+            out.into_iter().map(|p| p.map(|v| v as f32))
+        })
+        .collect();
+    RgbImage { width, height, pixels }
 }
 
 #[cfg(test)]

@@ -27,8 +27,9 @@ pub struct IblBody {
     /// readers given a map check that it is the one baked (absent in bakes before it was added).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source_hash: Option<String>,
-    /// What the levels' errors were measured against when it is not the input itself (a large
-    /// input box-filtered, `ibl::reference`); absent when it is the input.
+    /// What the levels' errors were measured against when it is not the texel-by-texel sum over
+    /// the input (a large input box-filtered, or summed on two levels, `ibl::reference`);
+    /// absent when it is.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub measured_against: Option<String>,
     /// The output frame.
@@ -114,9 +115,10 @@ pub struct Level {
     pub rms_rel_error: Option<f64>,
     /// Texels sampled for the errors.
     pub samples: usize,
-    /// When the reference is the input box-filtered (`measured_against`): max over the sampled
-    /// texels of the bound on what the filtering changes, relative like the errors; the error
-    /// against the input itself is within this of the stated one.
+    /// When the reference is bounded (`measured_against`: the input box-filtered, or summed on
+    /// two levels): max over the sampled texels of the bound on how far it may be from the
+    /// texel-by-texel sum over the input, relative like the errors; the error against that sum
+    /// is within this of the stated one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_bound: Option<f64>,
     /// The most negative texel component before packing (0 when none).

@@ -588,10 +588,10 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
         for (b, m) in levels.into_iter().zip(measured) {
             b.level.max_rel_error = Some(m.max_rel_error);
             b.level.rms_rel_error = Some(m.rms_rel_error);
-            b.level.reference_bound = reference.is_filtered().then_some(m.reference_bound);
+            b.level.reference_bound = reference.is_bounded().then_some(m.reference_bound);
             b.level.samples = m.samples;
         }
-        measured_against = reference.is_filtered().then(|| reference.describe());
+        measured_against = reference.is_bounded().then(|| reference.describe());
     }
     timings.measure = t_measure.elapsed().as_secs_f64();
 
