@@ -681,42 +681,41 @@ impl Coarse {
                 (p1.sin() - p0.sin(), p0.cos() - p1.cos(), p1 - p0)
             })
             .collect();
-        let per_row: Vec<Vec<([f64; 3], [f64; 3], [DVec3; 3])>> = (0..geometry.height)
-            .into_par_iter()
-            .map(|y| {
-                (0..geometry.width)
-                    .map(|x| {
-                        let texels =
-                            || (f * y..f * (y + 1)).flat_map(move |fy| (f * x..f * (x + 1)).map(move |fx| (fy, fx)));
-                        let (mut energy, mut area) = ([0.0; 3], 0.0);
-                        for (fy, fx) in texels() {
-                            let omega = rows[fy].2;
-                            area += omega;
-                            (0..3).for_each(|c| energy[c] += omega * radiance[fy * fine.width + fx][c] as f64);
-                        }
-                        let mean = energy.map(|e| e / area);
-                        let (mut spread, mut moment) = ([0.0; 3], [DVec3::ZERO; 3]);
-                        for (fy, fx) in texels() {
-                            let ((sin2, sin_cos, omega), (dx, dy, dphi)) = (rows[fy], columns[fx]);
-                            let first = DVec3::new(sin2 * dx, sin2 * dy, sin_cos * dphi);
-                            for c in 0..3 {
-                                let d = radiance[fy * fine.width + fx][c] as f64 - mean[c];
-                                spread[c] += omega * d.abs();
-                                moment[c] += d * first;
-                            }
-                        }
-                        (mean, spread, moment)
-                    })
-                    .collect()
+        // Per coarse texel: L̄_T, D_T and M_T.
+        let blocks: Vec<(usize, usize)> =
+            (0..geometry.height).flat_map(|y| (0..geometry.width).map(move |x| (x, y))).collect();
+        let stats: Vec<_> = blocks
+            .par_iter()
+            .map(|&(x, y)| {
+                let texels = || (f * y..f * (y + 1)).flat_map(move |fy| (f * x..f * (x + 1)).map(move |fx| (fy, fx)));
+                let (mut energy, mut area) = ([0.0; 3], 0.0);
+                for (fy, fx) in texels() {
+                    let omega = rows[fy].2;
+                    area += omega;
+                    (0..3).for_each(|c| energy[c] += omega * radiance[fy * fine.width + fx][c] as f64);
+                }
+                let mean = energy.map(|e| e / area);
+                let (mut spread, mut moment) = ([0.0; 3], [DVec3::ZERO; 3]);
+                for (fy, fx) in texels() {
+                    let ((sin2, sin_cos, omega), (dx, dy, dphi)) = (rows[fy], columns[fx]);
+                    let first = DVec3::new(sin2 * dx, sin2 * dy, sin_cos * dphi);
+                    for c in 0..3 {
+                        let d = radiance[fy * fine.width + fx][c] as f64 - mean[c];
+                        spread[c] += omega * d.abs();
+                        moment[c] += d * first;
+                    }
+                }
+                (mean, spread, moment)
             })
             .collect();
-        let texels: Vec<_> = per_row.into_iter().flatten().collect();
         Some(Arc::new(Coarse {
             geometry,
             factor: f,
-            radiance: Arc::new(texels.iter().map(|t| t.0.map(|v| v as f32)).collect()),
-            deviation: texels.iter().map(|t| t.1).collect(),
-            moment: texels.iter().map(|t| t.2).collect(),
+            radiance: Arc::new(
+                stats.iter().map(|t: &([f64; 3], [f64; 3], [DVec3; 3])| t.0.map(|v| v as f32)).collect(),
+            ),
+            deviation: stats.iter().map(|t| t.1).collect(),
+            moment: stats.iter().map(|t| t.2).collect(),
             radius: (0..geometry.height).map(|y| angular_radius(geometry, y).sin_cos()).map(|(s, c)| (c, s)).collect(),
             centres: (0..geometry.height)
                 .flat_map(|y| (0..geometry.width).map(move |x| geometry.texel_direction(x, y)))
