@@ -536,3 +536,47 @@ fn render_shrm_window_nonneg_removes_negative_pixels_of_a_view_dependent_shrm() 
     assert!(found[0].0.is_none() && found[0].1 > 0, "raw view bands: {found:?}");
     assert!(found[1].0.unwrap() > 0.0 && found[1].1 == 0, "nonneg: {found:?}");
 }
+
+#[test]
+fn render_env_rotation_turns_the_background_with_the_lighting() {
+    // `--env-rotation` turns the environment, L'(ω) = L(R⁻¹ω): a background pixel along the
+    // camera ray d must show the stored map along R⁻¹d, as the object is lit, not along d.
+    use prtkit::envmap::EnvMap;
+    use prtkit::progress::NoProgress;
+    use prtkit::render::stage::{run, Config, Shading};
+    use prtkit::render::{Camera, Scene};
+    let env = EnvMap::latlong(common::sky_image(64, 32)).unwrap();
+    let camera = Camera::look_at(DVec3::new(0.0, -4.0, 1.0), DVec3::ZERO, 60.0, 32, 32).unwrap();
+    let degrees = 37.0;
+    let config = Config {
+        brdf: prtkit::brdf::Brdf::parse("lambert").unwrap(),
+        shading: Shading::Reference { integrand: prtkit::render::reference::Integrand::BrdfCosine },
+        camera,
+        env_rotation: degrees,
+        compare: None,
+        panel: None,
+        label: None,
+        exposure: 0.0,
+        output_name: None,
+        args: Vec::new(),
+    };
+    let frame = run(&config, &env, &Scene::unit_sphere(), &NoProgress).unwrap().frame;
+    let from_turned = glam::DMat3::from_rotation_z(-f64::to_radians(degrees));
+    let (mut background, mut moved) = (0, 0);
+    for y in 0..32 {
+        for x in 0..32 {
+            if frame.mask[y * 32 + x] {
+                continue;
+            }
+            let d = camera.ray(x, y);
+            let (got, want, stored) = (frame.image.get(x, y), env.lookup(from_turned * d), env.lookup(d));
+            for c in 0..3 {
+                assert!((got[c] - want[c]).abs() <= 1e-5 * want[c].abs().max(1.0), "({x}, {y}): {got:?} vs {want:?}");
+            }
+            background += 1;
+            moved += usize::from((stored[0] - want[0]).abs() > 1e-2);
+        }
+    }
+    // The check has teeth: most of the background differs from the unturned map.
+    assert!(background > 300 && moved > background / 2, "{background} background pixels, {moved} moved");
+}

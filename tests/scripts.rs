@@ -196,6 +196,7 @@ fn reproduce_fig6() {
     assert!(error.iter().all(|&e| e > 0.0 && e < 1.0), "relative errors: {error:?}");
     for r in &run.rows {
         assert!(num(r, "psnr") > 10.0, "{r}");
+        assert!(num(r, "seconds") > 0.0 && num(r, "reference_seconds") > 0.0, "{r}");
     }
     let section = run.section("render.md");
     for r in &run.rows {

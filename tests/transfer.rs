@@ -525,6 +525,10 @@ fn render_metrics(args: &[&str], dir: &Path) -> Metrics {
     Metrics { rel_error: at("rel_error"), max_rel_error: at("max_rel_error"), transfer: v["transfer"].clone() }
 }
 
+fn read_image(path: &Path) -> prtkit::io::RgbImage {
+    prtkit::io::image::read_image(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 /// What the tests read of `render --json`.
 #[derive(Debug)]
 struct Metrics {
@@ -646,8 +650,16 @@ fn a_turned_environment_is_one_sh_rotation() {
     let view = ["--scene", bowl.to_str().unwrap(), "--res", "48x48", "--eye", "0,0.01,3.5", "--target", "0,0,-0.3"];
     let relit = ["--shading", "transfer", "--transfer", "b.glb"];
     render_metrics(&[&["rolled.pfm"][..], &view, &relit, &["-o", "rolled.exr"]].concat(), dir.path());
-    let turned = [&["sky.pfm"][..], &view, &relit, &["--env-rotation", "90", "--compare", "rolled.exr"]].concat();
+    let turned =
+        [&["sky.pfm"][..], &view, &relit, &["--env-rotation", "90", "--compare", "rolled.exr", "-o", "turned.exr"]]
+            .concat();
     let m = render_metrics(&turned, dir.path());
+    // The comparison covers the object; the background turns with the lighting too.
+    let (a, b) = (read_image(&dir.path().join("turned.exr")), read_image(&dir.path().join("rolled.exr")));
+    let worst =
+        a.pixels.iter().flatten().zip(b.pixels.iter().flatten()).map(|(x, y)| (x - y).abs() / y.abs().max(1e-2));
+    let worst = worst.fold(0.0f32, f32::max);
+    assert!(worst < 1e-3, "--env-rotation 90 vs the rolled map, whole image: largest relative difference {worst:e}");
     let unturned = [&["sky.pfm"][..], &view, &relit, &["--compare", "rolled.exr"]].concat();
     let other = render_metrics(&unturned, dir.path());
     eprintln!(

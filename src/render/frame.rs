@@ -5,7 +5,7 @@ use super::{Camera, Hit, Scene};
 use crate::envmap::EnvMap;
 use crate::io::RgbImage;
 use crate::progress::Progress;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
 /// A shading mode: outgoing radiance at a hit towards `wo` (unit, towards the viewer).
@@ -35,6 +35,21 @@ pub struct Frame {
 
 /// Renders `scene` through `camera` with `shader`, the environment behind.
 pub fn render(scene: &Scene, camera: &Camera, env: &EnvMap, shader: &dyn Shade, progress: &dyn Progress) -> Frame {
+    render_turned(scene, camera, env, DMat3::IDENTITY, shader, progress)
+}
+
+/// [`render`] under the environment turned by `rotation`, L'(ω) = L(R⁻¹ω) (the turn the
+/// shader applies to its lighting, `render --env-rotation`): the background the camera sees
+/// along d is the map's radiance along Rᵀd, so that it matches what lights the object.
+pub fn render_turned(
+    scene: &Scene,
+    camera: &Camera,
+    env: &EnvMap,
+    rotation: DMat3,
+    shader: &dyn Shade,
+    progress: &dyn Progress,
+) -> Frame {
+    let from_turned = rotation.transpose();
     let (w, h) = (camera.width, camera.height);
     progress.start("render", h as u64);
     let rows: Vec<(Vec<[f32; 3]>, Vec<bool>)> = (0..h)
@@ -51,7 +66,7 @@ pub fn render(scene: &Scene, camera: &Camera, env: &EnvMap, shader: &dyn Shade, 
                         mask.push(true);
                     }
                     None => {
-                        px.push(env.lookup(d));
+                        px.push(env.lookup(from_turned * d));
                         mask.push(false);
                     }
                 }

@@ -28,7 +28,7 @@ pub mod stage;
 pub mod transfer;
 
 pub use camera::Camera;
-pub use frame::{render, Frame, Shade, Sum};
+pub use frame::{render, render_turned, Frame, Shade, Sum};
 pub use scene::{Hit, Scene};
 
 use glam::DVec3;

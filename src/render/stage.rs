@@ -10,7 +10,7 @@ use super::panel::{layout, layout_grid, Cell};
 use super::reference::{Integrand, Reference};
 use super::reflection::ShrmShader;
 use super::transfer::TransferBake;
-use super::{render, Camera, Frame, Scene, Shade, Sum};
+use super::{render, render_turned, Camera, Frame, Scene, Sum};
 use crate::brdf::Brdf;
 use crate::envmap::bright::{split, BrightRule};
 use crate::envmap::EnvMap;
@@ -141,8 +141,8 @@ pub struct Config {
     pub shading: Shading,
     /// The camera.
     pub camera: Camera,
-    /// The environment turned by this many degrees about +Z (transfer and reference; the
-    /// background is drawn as stored).
+    /// The environment turned by this many degrees about +Z (transfer and reference), the
+    /// background with it.
     pub env_rotation: f64,
     /// A reference render to compare with (same size), and its name.
     pub compare: Option<(String, RgbImage)>,
@@ -507,11 +507,12 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 median_frames_per_second: 1.0 / times[RELIGHT_FRAMES / 2],
             });
             let shader = super::transfer::TransferShader::new(radiance, mesh);
-            (render(scene, &config.camera, env, &shader, progress), format!("transfer {} n={}", bake.mode, bake.order))
+            let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
+            (frame, format!("transfer {} n={}", bake.mode, bake.order))
         }
         Shading::Reference { integrand } => {
             let shader = Reference::new(env, brdf.clone(), *integrand, scene).map_err(bad)?.turned(turn);
-            (render(scene, &config.camera, env, &shader as &dyn Shade, progress), "reference".to_string())
+            (render_turned(scene, &config.camera, env, turn, &shader, progress), "reference".to_string())
         }
     };
     summary.seconds = start.elapsed().as_secs_f64();

@@ -77,7 +77,7 @@ pub struct Args {
 
     /// transfer and reference: turn the environment by DEG degrees about +Z (counter-clockwise
     /// seen from above: azimuth φ goes to φ + DEG), -360 to 360; transfer turns its SH lighting
-    /// by one SH rotation. The background is drawn as stored.
+    /// by one SH rotation. The background turns with it.
     #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_hyphen_values = true)]
     pub env_rotation: f64,
 
