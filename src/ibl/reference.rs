@@ -10,7 +10,8 @@
 //! is a direct cone sum ([`LobeIntegral`]): no FFT, no pyramid, no interpolation, none of the
 //! code of either bake path.
 //!
-//! **Two levels.** A grid of 512 columns or more is summed on two levels: its 8 × 8 blocks are
+//! **Two levels.** A grid of 512 columns or more is summed on two levels: its blocks of 8 × 8
+//! texels (more on grids wider than 1024 columns, so that the blocks form a 128-column grid) are
 //! taken whole, each as its mean radiance plus the first-order term of its first moment, which
 //! is exact to second order in the block's size ([`LobeIntegral`]); the blocks the horizon
 //! crosses, those over which the kernel curves too much, and those whose remainder bound is
@@ -60,9 +61,9 @@ use std::sync::Arc;
 /// Texel-rule tolerance of the reference (ten times stricter than the bake's).
 pub const REFERENCE_RULE_TOLERANCE: f64 = 1e-5;
 
-/// The largest lat-long grid [`Reference::lobe`] sums (the 1024 × 512 of the shared probes);
-/// larger inputs are box-filtered down to it, with the bound of the module docs.
-pub const REFERENCE_MAX_TEXELS: usize = 1024 * 512;
+/// The largest lat-long grid [`Reference::lobe`] sums; larger inputs are box-filtered down to
+/// it, with the bound of the module docs.
+pub const REFERENCE_MAX_TEXELS: usize = 2048 * 1024;
 
 /// Error of a level against the reference on sampled texels.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -95,7 +96,7 @@ struct Grid {
     deviations: Vec<Deviation>,
     /// Blocks of [`BLOCK`] × [`BLOCK`] texels, for the bound.
     blocks: Vec<Block>,
-    /// This grid box-filtered by [`COARSE_FACTOR`], for the two-level sum ([`LobeIntegral`]).
+    /// This grid box-filtered, for the two-level sum ([`LobeIntegral`]).
     coarse: Option<Arc<Coarse>>,
 }
 
@@ -276,7 +277,7 @@ impl Grid {
         // With a coarse level the fine rule need only be exact where the fine grid is summed
         // whatever the radiance: inside the coarse texels that are always refined. The other
         // texels' weight still counts in the total the tolerance is a share of: it enters once,
-        // from the midpoint rule, the same for every rule compared.
+        // the same for every rule compared.
         let probes = probe_axes(grid).map(DVec3::normalize);
         let choice = match &self.coarse {
             None => choose_rule(REFERENCE_RULE_TOLERANCE, |rule| {
@@ -299,8 +300,9 @@ impl Grid {
                             .collect()
                     })
                     .collect();
+                // The kernel's weight is 1 at each probe.
                 let midpoint = fine(&TexelRule::new(1).expect("one sub-sample is a rule"));
-                let mut rest: f64 = probes.iter().map(|&axis| midpoint.at_weight(axis)).sum();
+                let mut rest = probes.len() as f64;
                 for (blocks, &axis) in refined.iter().zip(&probes) {
                     midpoint.within(coarse, blocks, axis, |_, _, w| rest -= w.iter().sum::<f64>());
                 }
@@ -507,8 +509,13 @@ fn angular_radius(grid: LatLong, y: usize) -> f64 {
     radius
 }
 
-/// Fine texels per coarse texel edge in the two-level sum.
+/// Fine texels per coarse texel edge in the two-level sum, at least: wider grids keep a coarse
+/// level of [`COARSE_WIDTH`] columns.
 const COARSE_FACTOR: usize = 8;
+
+/// The coarse level's width for grids wider than [`COARSE_FACTOR`] times it: the coarse pass
+/// costs a few operations per coarse texel and sample, so it stays this size.
+const COARSE_WIDTH: usize = 128;
 
 /// Grids narrower than this are summed texel by texel alone: the coarse level would save little.
 const TWO_LEVEL_MIN_WIDTH: usize = 512;
@@ -633,7 +640,7 @@ impl LobeIntegral {
     }
 }
 
-/// A grid box-filtered by [`COARSE_FACTOR`], with what the two-level sum needs of each coarse
+/// A grid box-filtered by its factor (at least [`COARSE_FACTOR`]), with what the two-level sum needs of each coarse
 /// texel T: its mean radiance L̄_T, its spread D_T and its first moment M_T ([`LobeIntegral`]).
 struct Coarse {
     geometry: LatLong,
@@ -658,7 +665,7 @@ struct Span {
 impl Coarse {
     /// The coarse level of a fine grid, when it is wide enough and divides by the factor.
     fn of(fine: LatLong, radiance: &[[f32; 3]]) -> Option<Arc<Coarse>> {
-        let f = COARSE_FACTOR;
+        let f = COARSE_FACTOR.max(fine.width / COARSE_WIDTH);
         if fine.width < TWO_LEVEL_MIN_WIDTH || fine.width % f != 0 || fine.height % f != 0 {
             return None;
         }
@@ -901,13 +908,6 @@ impl ConeSum {
         // The texels kept cover the kernel's whole support and the kernel is normalized (∫ k dω =
         // 1), so the sum needs no division: its weight is 1 up to the rule's tolerance.
         acc
-    }
-
-    /// Σ_t ∫_t k dω over the cone of `axis`: the kernel's weight as this rule sees it.
-    fn at_weight(&self, axis: DVec3) -> f64 {
-        let mut total = 0.0;
-        self.texel_integrals(axis, |_, _, w| total += w);
-        total
     }
 
     /// Calls `visit(y, x, ∫_t k dω)` for every texel t = (x, y) whose centre is within the cone
