@@ -9,6 +9,7 @@ pub mod glb;
 pub mod gpu_format;
 pub mod image;
 pub mod ktx2;
+pub mod obj;
 pub mod pfm;
 pub mod png;
 pub mod read;

@@ -5,7 +5,7 @@
 //! size and value encoding, the OBJ text with the `vn` lines replaced, the PLY file with only the
 //! normal properties rewritten (binary: patched in place; ascii: the three tokens replaced).
 
-use crate::io::{IoError, RgbImage};
+use crate::io::{obj, IoError, RgbImage};
 use std::path::Path;
 
 /// Input format, chosen by extension (`.exr`, `.obj`, `.ply`; anything else is raw f32 xyz).
@@ -36,7 +36,7 @@ impl SourceFormat {
 #[derive(Clone, Debug)]
 enum Kind {
     Exr { width: usize, height: usize, unorm: bool },
-    Obj { text: String, lines: Vec<(usize, usize, usize)> },
+    Obj { text: String, lines: Vec<obj::VnLine> },
     Ply(PlyLayout),
     Raw,
 }
@@ -59,10 +59,12 @@ impl NormalSource {
                 Ok(NormalSource { normals, kind: Kind::Exr { width: image.width, height: image.height, unorm } })
             }
             SourceFormat::Obj => {
-                let bytes = read_whole(path, "OBJ")?;
-                let text = String::from_utf8(bytes)
-                    .map_err(|e| IoError::invalid(path, "OBJ", format!("not UTF-8 text: {e}")))?;
-                read_obj(path, text)
+                let text = obj::read(path)?;
+                let vn = obj::vertex_normals(&text).map_err(|e| IoError::invalid(path, "OBJ", e.to_string()))?;
+                if vn.normals.is_empty() {
+                    return Err(IoError::invalid(path, "OBJ", "no vertex normals (vn lines)"));
+                }
+                Ok(NormalSource { normals: vn.normals, kind: Kind::Obj { text, lines: vn.lines } })
             }
             SourceFormat::Ply => read_ply(path, read_whole(path, "PLY")?),
             SourceFormat::Raw => {
@@ -76,7 +78,7 @@ impl NormalSource {
     pub fn locate(&self, index: usize) -> String {
         match &self.kind {
             Kind::Exr { width, .. } if *width > 0 => format!("pixel ({}, {})", index % width, index / width),
-            Kind::Obj { lines, .. } => lines.get(index).map_or(String::new(), |l| format!("line {}", l.0)),
+            Kind::Obj { lines, .. } => lines.get(index).map_or(String::new(), |l| format!("line {}", l.line)),
             Kind::Ply(l) => match &l.lines {
                 Some(lines) => lines.get(index).map_or(String::new(), |n| format!("line {n}")),
                 None => format!("vertex {index}"),
@@ -96,7 +98,7 @@ impl NormalSource {
                 let image = RgbImage { width: *width, height: *height, pixels };
                 crate::io::exr::encode_layers(&[("", &image)]).map_err(|e| IoError::invalid(path, "OpenEXR", e))
             }
-            Kind::Obj { text, lines } => Ok(obj_write_back(text, lines, decoded).into_bytes()),
+            Kind::Obj { text, lines } => Ok(obj::replace_vertex_normals(text, lines, decoded).into_bytes()),
             Kind::Ply(layout) => Ok(layout.write_back(decoded)),
             Kind::Raw => Ok(raw_to_bytes(decoded)),
         }
@@ -134,53 +136,6 @@ pub fn raw_to_bytes(normals: &[[f32; 3]]) -> Vec<u8> {
 /// A shortest round-trip float for text formats.
 fn fmt_f32(x: f32) -> String {
     format!("{x}")
-}
-
-fn read_obj(path: &Path, text: String) -> Result<NormalSource, IoError> {
-    let mut normals = Vec::new();
-    let mut lines = Vec::new();
-    let mut start = 0usize;
-    for (i, line) in text.split_inclusive('\n').enumerate() {
-        let line_no = i + 1;
-        let body = line.trim_end_matches(['\n', '\r']);
-        let trimmed = body.trim_start();
-        if let Some(rest) = trimmed.strip_prefix("vn").filter(|r| r.starts_with([' ', '\t'])) {
-            let mut v = [0f32; 3];
-            let mut tokens = rest.split_whitespace();
-            for (k, c) in v.iter_mut().enumerate() {
-                let token = tokens.next().ok_or_else(|| {
-                    IoError::invalid(
-                        path,
-                        "OBJ",
-                        format!("line {line_no}, column {}: vn needs 3 numbers, found {k}", body.len() + 1),
-                    )
-                })?;
-                let col = body.find(token).map_or(1, |c| c + 1);
-                *c = token.parse().map_err(|_| {
-                    IoError::invalid(path, "OBJ", format!("line {line_no}, column {col}: {token:?} is not a number"))
-                })?;
-            }
-            normals.push(v);
-            lines.push((line_no, start, start + body.len()));
-        }
-        start += line.len();
-    }
-    if normals.is_empty() {
-        return Err(IoError::invalid(path, "OBJ", "no vertex normals (vn lines)"));
-    }
-    Ok(NormalSource { normals, kind: Kind::Obj { text, lines } })
-}
-
-fn obj_write_back(text: &str, lines: &[(usize, usize, usize)], decoded: &[[f32; 3]]) -> String {
-    let mut out = String::with_capacity(text.len());
-    let mut pos = 0;
-    for (&(_, a, b), n) in lines.iter().zip(decoded) {
-        out.push_str(&text[pos..a]);
-        out.push_str(&format!("vn {} {} {}", fmt_f32(n[0]), fmt_f32(n[1]), fmt_f32(n[2])));
-        pos = b;
-    }
-    out.push_str(&text[pos..]);
-    out
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
