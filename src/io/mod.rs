@@ -11,6 +11,7 @@ pub mod image;
 pub mod ktx2;
 pub mod obj;
 pub mod pfm;
+pub mod ply;
 pub mod png;
 pub mod read;
 pub mod rgbe;

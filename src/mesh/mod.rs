@@ -1,7 +1,5 @@
-//! Triangle meshes from OBJ files (via `tobj`) or PLY files ([`ply`]) with per-vertex normals, and a bounding-volume
-//! hierarchy for primary rays and visibility (shadow) rays.
-
-pub mod ply;
+//! Triangle meshes from OBJ or PLY files (read by [`crate::io::obj`] and [`crate::io::ply`]) with
+//! per-vertex normals, and a bounding-volume hierarchy for primary rays and visibility (shadow) rays.
 
 use crate::io::obj::ObjError;
 use glam::DVec3;
@@ -101,20 +99,14 @@ impl Mesh {
         Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })
     }
 
-    /// Reads a PLY file (ASCII or binary; [`ply`]): its vertices, their normals when
+    /// Reads a PLY file (ASCII or binary; [`crate::io::ply`]): its vertices, their normals when
     /// every vertex has `nx ny nz` (else computed), its faces split into triangles.
     pub fn load_ply(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
         let invalid = |reason: String| MeshError::Invalid { path: name.clone(), reason };
-        let bytes = crate::io::read_bytes(path, "PLY", crate::limits::max_file_bytes(), |start| {
-            if start.starts_with(b"ply") {
-                Ok(())
-            } else {
-                Err("no 'ply' magic".into())
-            }
-        })?;
+        let bytes = crate::io::ply::read(path)?;
         let (positions, normals, triangles) =
-            ply::parse(&bytes).map_err(|reason| invalid(format!("cannot read PLY: {reason}")))?;
+            crate::io::ply::parse(&bytes).map_err(|reason| invalid(format!("cannot read PLY: {reason}")))?;
         if triangles.is_empty() {
             return Err(invalid("the PLY holds no triangles".into()));
         }
