@@ -1,5 +1,5 @@
-//! File formats: HDR images (OpenEXR, Radiance `.hdr`, PFM), tone-mapped PNG, JSON documents,
-//! and atomic writes. Everything that touches a file format lives here, once.
+//! File formats: HDR images (OpenEXR, Radiance `.hdr`, PFM), tone-mapped PNG, meshes (OBJ, PLY),
+//! JSON documents, and atomic writes. Everything that touches a file format lives here, once.
 
 pub mod atomic;
 pub mod dds;
