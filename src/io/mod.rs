@@ -1,5 +1,5 @@
-//! File formats: HDR images (OpenEXR, Radiance `.hdr`, PFM), tone-mapped PNG, JSON documents,
-//! and atomic writes. Everything that touches a file format lives here, once.
+//! File formats: HDR images (OpenEXR, Radiance `.hdr`, PFM), tone-mapped PNG, meshes (OBJ, PLY),
+//! JSON documents, and atomic writes. Everything that touches a file format lives here, once.
 
 pub mod atomic;
 pub mod dds;
@@ -9,7 +9,9 @@ pub mod glb;
 pub mod gpu_format;
 pub mod image;
 pub mod ktx2;
+pub mod obj;
 pub mod pfm;
+pub mod ply;
 pub mod png;
 pub mod read;
 pub mod rgbe;

@@ -1,8 +1,7 @@
-//! Triangle meshes from OBJ files (via `tobj`) or PLY files ([`ply`]) with per-vertex normals, and a bounding-volume
-//! hierarchy for primary rays and visibility (shadow) rays.
+//! Triangle meshes from OBJ or PLY files (read by [`crate::io::obj`] and [`crate::io::ply`]) with
+//! per-vertex normals, and a bounding-volume hierarchy for primary rays and visibility (shadow) rays.
 
-pub mod ply;
-
+use crate::io::obj::ObjError;
 use glam::DVec3;
 use std::path::Path;
 
@@ -76,73 +75,38 @@ pub struct MeshHit {
 
 impl Mesh {
     /// Reads a mesh file: PLY by its extension ([`Mesh::load_ply`]), else OBJ (all its objects,
-    /// triangulated). The file is read whole (at most
-    /// [`crate::limits::max_file_bytes`]) and its geometry lines are checked first, so that an
-    /// error names the line and column ([`check_obj`]); `tobj` then builds the mesh.
+    /// triangulated) through [`crate::io::obj`], which reads the file whole (at most
+    /// [`crate::limits::max_file_bytes`]) and checks its geometry lines first, so that an error
+    /// names the line and column.
     pub fn load(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
         if path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
             return Self::load_ply(path);
         }
-        let load_error = |reason: String| MeshError::Load { path: name.clone(), reason };
-        let text = crate::io::read_text(path, "OBJ", crate::limits::max_file_bytes(), |_| Ok(()))?;
-        let text = text.as_str();
-        check_obj(text).map_err(|(line, column, reason)| MeshError::At { path: name.clone(), line, column, reason })?;
-        let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
-        // Materials are not used: the loader refuses them (tobj keeps that apart from the geometry).
-        let (models, _) =
-            tobj::load_obj_buf(&mut std::io::Cursor::new(text), &options, |_| Err(tobj::LoadError::OpenFileFailed))
-                .map_err(|e| load_error(e.to_string()))?;
-        let mut positions = Vec::new();
-        let mut normals = Vec::new();
-        let mut triangles = Vec::new();
-        let mut all_have_normals = true;
-        for m in &models {
-            let mesh = &m.mesh;
-            let base = positions.len() as u32;
-            let nv = mesh.positions.len() / 3;
-            for c in mesh.positions.chunks_exact(3) {
-                positions.push(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
-            }
-            if mesh.normals.len() == mesh.positions.len() && nv > 0 {
-                for c in mesh.normals.chunks_exact(3) {
-                    normals.push(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
-                }
-            } else {
-                all_have_normals = false;
-                normals.extend(std::iter::repeat_n(DVec3::ZERO, nv));
-            }
-            for t in mesh.indices.chunks_exact(3) {
-                if t.iter().any(|&i| i as usize >= nv) {
-                    return Err(MeshError::Invalid { path: name, reason: "a face index is out of range".into() });
-                }
-                triangles.push([base + t[0], base + t[1], base + t[2]]);
-            }
-        }
+        let text = crate::io::obj::read(path)?;
+        let geometry = crate::io::obj::geometry(&text).map_err(|e| match e {
+            ObjError::At { line, column, reason } => MeshError::At { path: name.clone(), line, column, reason },
+            ObjError::Load(reason) => MeshError::Load { path: name.clone(), reason },
+            ObjError::FaceIndex => MeshError::Invalid { path: name.clone(), reason: e.to_string() },
+        })?;
+        let crate::io::obj::Geometry { positions, normals, triangles } = geometry;
         if triangles.is_empty() {
             return Err(MeshError::Empty(name));
         }
         if positions.iter().any(|p| !p.is_finite()) {
             return Err(MeshError::Invalid { path: name, reason: "a vertex position is not finite".into() });
         }
-        Mesh::new(positions, if all_have_normals { Some(normals) } else { None }, triangles)
-            .map_err(|reason| MeshError::Invalid { path: name, reason })
+        Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })
     }
 
-    /// Reads a PLY file (ASCII or binary; [`ply`]): its vertices, their normals when
+    /// Reads a PLY file (ASCII or binary; [`crate::io::ply`]): its vertices, their normals when
     /// every vertex has `nx ny nz` (else computed), its faces split into triangles.
     pub fn load_ply(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
         let invalid = |reason: String| MeshError::Invalid { path: name.clone(), reason };
-        let bytes = crate::io::read_bytes(path, "PLY", crate::limits::max_file_bytes(), |start| {
-            if start.starts_with(b"ply") {
-                Ok(())
-            } else {
-                Err("no 'ply' magic".into())
-            }
-        })?;
+        let bytes = crate::io::ply::read(path)?;
         let (positions, normals, triangles) =
-            ply::parse(&bytes).map_err(|reason| invalid(format!("cannot read PLY: {reason}")))?;
+            crate::io::ply::parse(&bytes).map_err(|reason| invalid(format!("cannot read PLY: {reason}")))?;
         if triangles.is_empty() {
             return Err(invalid("the PLY holds no triangles".into()));
         }
@@ -195,107 +159,6 @@ impl Mesh {
     pub fn extent(&self) -> f64 {
         self.extent
     }
-}
-
-/// Checks the lines of an OBJ that make geometry, in the terms `tobj` reads them: `v` with
-/// three finite coordinates (then nothing, a non-zero w or r g b), `vt` with two numbers, `vn`
-/// with three, and `f` with at least three vertices `v`, `v/vt`, `v//vn` or `v/vt/vn` whose
-/// indices (1-based, or negative: relative to the end) refer to elements defined above.
-/// Returns the first problem as (line, column, reason), both 1-based.
-pub fn check_obj(text: &str) -> Result<(), (usize, usize, String)> {
-    let mut counts = [0usize; 3]; // v, vt, vn defined so far
-    for (i, line) in text.lines().enumerate() {
-        let n = i + 1;
-        // Tokens with their 1-based columns in characters.
-        let mut tokens: Vec<(usize, &str)> = Vec::new();
-        let mut start = None;
-        for (col, (byte, c)) in line.char_indices().enumerate() {
-            match (c.is_whitespace(), start) {
-                (false, None) => start = Some((col + 1, byte)),
-                (true, Some((col0, b0))) => {
-                    tokens.push((col0, &line[b0..byte]));
-                    start = None;
-                }
-                _ => {}
-            }
-        }
-        if let Some((col0, b0)) = start {
-            tokens.push((col0, &line[b0..]));
-        }
-        let end = line.chars().count() + 1;
-        let at = |k: usize, reason: String| (n, tokens.get(k).map_or(end, |t| t.0), reason);
-        let number = |k: usize, what: &str| -> Result<f32, (usize, usize, String)> {
-            let Some(&(_, t)) = tokens.get(k) else {
-                return Err(at(k, format!("{what} needs more numbers")));
-            };
-            match t.parse::<f32>() {
-                Ok(x) if x.is_finite() => Ok(x),
-                Ok(_) => Err(at(k, format!("{t:?} is not a finite 32-bit number"))),
-                Err(_) => Err(at(k, format!("{t:?} is not a number"))),
-            }
-        };
-        match tokens.first().map(|t| t.1) {
-            Some("v") => {
-                let xyz = [number(1, "v")?, number(2, "v")?, number(3, "v")?];
-                match tokens.len() {
-                    4 => {}
-                    5 => {
-                        let w = number(4, "v")?;
-                        if xyz.iter().any(|c| !(c / w).is_finite()) {
-                            return Err(at(4, format!("w = {w} makes the position infinite or undefined")));
-                        }
-                    }
-                    7 => {
-                        for k in 4..7 {
-                            number(k, "v")?;
-                        }
-                    }
-                    _ => return Err(at(4, "v takes x y z, then nothing, w, or r g b".into())),
-                }
-                counts[0] += 1;
-            }
-            Some("vt") => {
-                number(1, "vt")?;
-                number(2, "vt")?;
-                counts[1] += 1;
-            }
-            Some("vn") => {
-                for k in 1..4 {
-                    number(k, "vn")?;
-                }
-                counts[2] += 1;
-            }
-            Some(kw @ ("f" | "l")) => {
-                if kw == "f" && tokens.len() < 4 {
-                    return Err(at(
-                        tokens.len(),
-                        format!("a face needs at least 3 vertices, found {}", tokens.len() - 1),
-                    ));
-                }
-                for k in 1..tokens.len() {
-                    let parts: Vec<&str> = tokens[k].1.split('/').collect();
-                    if parts.len() > 3 || parts[0].is_empty() {
-                        return Err(at(k, format!("{:?} is not v, v/vt, v//vn or v/vt/vn", tokens[k].1)));
-                    }
-                    for (slot, part) in parts.iter().enumerate().filter(|(_, p)| !p.is_empty()) {
-                        let what = ["vertex", "texture coordinate", "normal"][slot];
-                        let index: i64 =
-                            part.parse().map_err(|_| at(k, format!("{what} index {part:?} is not an integer")))?;
-                        let count = counts[slot] as i64;
-                        let resolved = if index < 0 { count.checked_add(index) } else { index.checked_sub(1) };
-                        if index == 0 || !resolved.is_some_and(|r| (0..count).contains(&r)) {
-                            return Err(at(
-                                k,
-                                format!("{what} index {index} is out of range ({count} defined above this line)"),
-                            ));
-                        }
-                    }
-                }
-            }
-            _ => {}
-        }
-    }
-    Ok(())
 }
 
 /// Vertex normals as the normalized sum of the adjacent faces' cross products (area-weighted).
@@ -485,19 +348,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn obj_errors_name_the_line_and_column() {
-        let e = |text: &str| check_obj(text).err();
-        assert_eq!(e("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf -1 -2 -3\n"), None);
-        assert_eq!(e("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2 3\n").map(|x| (x.0, x.1)), Some((4, 3)));
-        assert_eq!(e("v 0 0 0\nv 0 0 0\nv 0 0 0\n\n  f 1 2 4\n").map(|x| (x.0, x.1)), Some((5, 9)));
-        assert!(e("v 0 0 0\nf 1 0 1\n").is_some_and(|x| x.1 == 5 && x.2.contains("vertex index 0")));
-        assert!(e("v 0 0 0\nf 1 -2 1\n").is_some_and(|x| x.2.contains("out of range (1 defined")));
-        assert!(e("v 0 0 1e39\n").is_some_and(|x| (x.0, x.1) == (1, 7) && x.2.contains("finite")));
-        assert!(e("v 0 0 1 0\n").is_some_and(|x| x.2.contains("w = 0")));
-        assert!(e("v 0 0\n").is_some_and(|x| x.1 == 6 && x.2.contains("needs more numbers")));
-        assert!(e("vn 0 x 1\n").is_some_and(|x| x.1 == 6));
-        assert!(e("v 0 0 0\nf 1 1\n").is_some_and(|x| x.2.contains("at least 3")));
-        assert!(e("v 0 0 0\nf 1/2/3/4 1 1\n").is_some_and(|x| x.1 == 3));
+    fn obj_errors_name_the_file_line_and_column() {
         // Through the loader: the message is path:line:column.
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("m.obj");

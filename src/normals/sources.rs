@@ -1,11 +1,12 @@
 //! Where normals come from and go back to: EXR normal maps, OBJ `vn` lines, PLY vertex
 //! `nx ny nz` properties (ascii, binary little- and big-endian), and raw little-endian f32 xyz.
 //!
-//! Each reader keeps what it needs to write decoded normals back *in the same format*: the EXR
-//! size and value encoding, the OBJ text with the `vn` lines replaced, the PLY file with only the
+//! The formats are read in [`crate::io`] (`io::obj`, `io::ply`, `io::image`), the one home of each;
+//! a source keeps what it needs to write decoded normals back *in the same format*: the EXR size
+//! and value encoding, the OBJ text with the `vn` lines replaced, the PLY file with only the
 //! normal properties rewritten (binary: patched in place; ascii: the three tokens replaced).
 
-use crate::io::{IoError, RgbImage};
+use crate::io::{obj, ply, IoError, RgbImage};
 use std::path::Path;
 
 /// Input format, chosen by extension (`.exr`, `.obj`, `.ply`; anything else is raw f32 xyz).
@@ -36,8 +37,8 @@ impl SourceFormat {
 #[derive(Clone, Debug)]
 enum Kind {
     Exr { width: usize, height: usize, unorm: bool },
-    Obj { text: String, lines: Vec<(usize, usize, usize)> },
-    Ply(PlyLayout),
+    Obj { text: String, lines: Vec<obj::VnLine> },
+    Ply(ply::NormalLayout),
     Raw,
 }
 
@@ -59,12 +60,17 @@ impl NormalSource {
                 Ok(NormalSource { normals, kind: Kind::Exr { width: image.width, height: image.height, unorm } })
             }
             SourceFormat::Obj => {
-                let bytes = read_whole(path, "OBJ")?;
-                let text = String::from_utf8(bytes)
-                    .map_err(|e| IoError::invalid(path, "OBJ", format!("not UTF-8 text: {e}")))?;
-                read_obj(path, text)
+                let text = obj::read(path)?;
+                let vn = obj::vertex_normals(&text).map_err(|e| IoError::invalid(path, "OBJ", e.to_string()))?;
+                if vn.normals.is_empty() {
+                    return Err(IoError::invalid(path, "OBJ", "no vertex normals (vn lines)"));
+                }
+                Ok(NormalSource { normals: vn.normals, kind: Kind::Obj { text, lines: vn.lines } })
             }
-            SourceFormat::Ply => read_ply(path, read_whole(path, "PLY")?),
+            SourceFormat::Ply => {
+                let ply::PlyNormals { normals, layout } = ply::vertex_normals(path, ply::read(path)?)?;
+                Ok(NormalSource { normals, kind: Kind::Ply(layout) })
+            }
             SourceFormat::Raw => {
                 let bytes = read_whole(path, "raw f32 xyz")?;
                 Ok(NormalSource { normals: raw_from_bytes(path, &bytes)?, kind: Kind::Raw })
@@ -76,11 +82,8 @@ impl NormalSource {
     pub fn locate(&self, index: usize) -> String {
         match &self.kind {
             Kind::Exr { width, .. } if *width > 0 => format!("pixel ({}, {})", index % width, index / width),
-            Kind::Obj { lines, .. } => lines.get(index).map_or(String::new(), |l| format!("line {}", l.0)),
-            Kind::Ply(l) => match &l.lines {
-                Some(lines) => lines.get(index).map_or(String::new(), |n| format!("line {n}")),
-                None => format!("vertex {index}"),
-            },
+            Kind::Obj { lines, .. } => lines.get(index).map_or(String::new(), |l| format!("line {}", l.line)),
+            Kind::Ply(layout) => layout.locate(index),
             _ => format!("normal {index}"),
         }
     }
@@ -96,7 +99,7 @@ impl NormalSource {
                 let image = RgbImage { width: *width, height: *height, pixels };
                 crate::io::exr::encode_layers(&[("", &image)]).map_err(|e| IoError::invalid(path, "OpenEXR", e))
             }
-            Kind::Obj { text, lines } => Ok(obj_write_back(text, lines, decoded).into_bytes()),
+            Kind::Obj { text, lines } => Ok(obj::replace_vertex_normals(text, lines, decoded).into_bytes()),
             Kind::Ply(layout) => Ok(layout.write_back(decoded)),
             Kind::Raw => Ok(raw_to_bytes(decoded)),
         }
@@ -134,349 +137,6 @@ pub fn raw_to_bytes(normals: &[[f32; 3]]) -> Vec<u8> {
 /// A shortest round-trip float for text formats.
 fn fmt_f32(x: f32) -> String {
     format!("{x}")
-}
-
-fn read_obj(path: &Path, text: String) -> Result<NormalSource, IoError> {
-    let mut normals = Vec::new();
-    let mut lines = Vec::new();
-    let mut start = 0usize;
-    for (i, line) in text.split_inclusive('\n').enumerate() {
-        let line_no = i + 1;
-        let body = line.trim_end_matches(['\n', '\r']);
-        let trimmed = body.trim_start();
-        if let Some(rest) = trimmed.strip_prefix("vn").filter(|r| r.starts_with([' ', '\t'])) {
-            let mut v = [0f32; 3];
-            let mut tokens = rest.split_whitespace();
-            for (k, c) in v.iter_mut().enumerate() {
-                let token = tokens.next().ok_or_else(|| {
-                    IoError::invalid(
-                        path,
-                        "OBJ",
-                        format!("line {line_no}, column {}: vn needs 3 numbers, found {k}", body.len() + 1),
-                    )
-                })?;
-                let col = body.find(token).map_or(1, |c| c + 1);
-                *c = token.parse().map_err(|_| {
-                    IoError::invalid(path, "OBJ", format!("line {line_no}, column {col}: {token:?} is not a number"))
-                })?;
-            }
-            normals.push(v);
-            lines.push((line_no, start, start + body.len()));
-        }
-        start += line.len();
-    }
-    if normals.is_empty() {
-        return Err(IoError::invalid(path, "OBJ", "no vertex normals (vn lines)"));
-    }
-    Ok(NormalSource { normals, kind: Kind::Obj { text, lines } })
-}
-
-fn obj_write_back(text: &str, lines: &[(usize, usize, usize)], decoded: &[[f32; 3]]) -> String {
-    let mut out = String::with_capacity(text.len());
-    let mut pos = 0;
-    for (&(_, a, b), n) in lines.iter().zip(decoded) {
-        out.push_str(&text[pos..a]);
-        out.push_str(&format!("vn {} {} {}", fmt_f32(n[0]), fmt_f32(n[1]), fmt_f32(n[2])));
-        pos = b;
-    }
-    out.push_str(&text[pos..]);
-    out
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum PlyEncoding {
-    Ascii,
-    Little,
-    Big,
-}
-
-#[derive(Clone, Debug)]
-struct PlyProperty {
-    name: String,
-    scalar: Option<usize>,
-    list: Option<(usize, usize)>,
-    float_kind: Option<bool>,
-}
-
-#[derive(Clone, Debug)]
-struct PlyElement {
-    name: String,
-    count: usize,
-    props: Vec<PlyProperty>,
-}
-
-/// Everything needed to patch normals back into a PLY file.
-#[derive(Clone, Debug)]
-struct PlyLayout {
-    bytes: Vec<u8>,
-    encoding: PlyEncoding,
-    /// Binary: byte offset of each vertex's nx, ny, nz and whether they are f64.
-    offsets: Vec<[usize; 3]>,
-    double: [bool; 3],
-    /// Ascii: (line start, line end, token indices of nx ny nz) per vertex, and line numbers.
-    ascii: Vec<(usize, usize, [usize; 3])>,
-    lines: Option<Vec<usize>>,
-}
-
-fn ply_type_size(t: &str) -> Option<(usize, bool)> {
-    Some(match t {
-        "char" | "int8" | "uchar" | "uint8" => (1, false),
-        "short" | "int16" | "ushort" | "uint16" => (2, false),
-        "int" | "int32" | "uint" | "uint32" => (4, false),
-        "float" | "float32" => (4, true),
-        "double" | "float64" => (8, true),
-        _ => return None,
-    })
-}
-
-fn read_ply(path: &Path, bytes: Vec<u8>) -> Result<NormalSource, IoError> {
-    let bad = |msg: String| IoError::invalid(path, "PLY", msg);
-    let end = find(&bytes, b"end_header").ok_or_else(|| bad("no end_header line".into()))?;
-    let body_start = bytes[end..]
-        .iter()
-        .position(|&b| b == b'\n')
-        .map(|p| end + p + 1)
-        .ok_or_else(|| bad("header not terminated".into()))?;
-    let header = std::str::from_utf8(&bytes[..end]).map_err(|_| bad("header is not text".into()))?;
-    let mut encoding = None;
-    let mut elements: Vec<PlyElement> = Vec::new();
-    // Body line numbers: the header's lines, then `end_header`, then the first data line.
-    let header_lines = header.lines().count() + 2;
-    for (i, line) in header.lines().enumerate() {
-        let t: Vec<&str> = line.split_whitespace().collect();
-        let at = |msg: &str| bad(format!("line {}: {msg}", i + 1));
-        match t.first().copied() {
-            Some("ply") if i == 0 => {}
-            _ if i == 0 => return Err(at("missing 'ply' magic")),
-            Some("format") => {
-                encoding = Some(match t.get(1).copied() {
-                    Some("ascii") => PlyEncoding::Ascii,
-                    Some("binary_little_endian") => PlyEncoding::Little,
-                    Some("binary_big_endian") => PlyEncoding::Big,
-                    other => return Err(at(&format!("unknown format {other:?}"))),
-                })
-            }
-            Some("element") => {
-                let count =
-                    t.get(2).and_then(|c| c.parse().ok()).ok_or_else(|| at("element needs a name and a count"))?;
-                elements.push(PlyElement { name: t.get(1).unwrap_or(&"").to_string(), count, props: Vec::new() });
-            }
-            Some("property") => {
-                let el = elements.last_mut().ok_or_else(|| at("property before any element"))?;
-                if t.get(1) == Some(&"list") {
-                    let c = t.get(2).and_then(|x| ply_type_size(x)).ok_or_else(|| at("bad list count type"))?;
-                    let v = t.get(3).and_then(|x| ply_type_size(x)).ok_or_else(|| at("bad list item type"))?;
-                    let name = t.get(4).ok_or_else(|| at("list property needs a name"))?;
-                    el.props.push(PlyProperty {
-                        name: name.to_string(),
-                        scalar: None,
-                        list: Some((c.0, v.0)),
-                        float_kind: None,
-                    });
-                } else {
-                    let ty = t.get(1).and_then(|x| ply_type_size(x)).ok_or_else(|| at("unknown property type"))?;
-                    let name = t.get(2).ok_or_else(|| at("property needs a name"))?;
-                    let double = if ty.1 { Some(ty.0 == 8) } else { None };
-                    el.props.push(PlyProperty {
-                        name: name.to_string(),
-                        scalar: Some(ty.0),
-                        list: None,
-                        float_kind: double,
-                    });
-                }
-            }
-            _ => {}
-        }
-    }
-    let encoding = encoding.ok_or_else(|| bad("no format line".into()))?;
-    let vi = elements.iter().position(|e| e.name == "vertex").ok_or_else(|| bad("no vertex element".into()))?;
-    let vertex = &elements[vi];
-    let mut idx = [0usize; 3];
-    for (k, name) in ["nx", "ny", "nz"].iter().enumerate() {
-        idx[k] = vertex
-            .props
-            .iter()
-            .position(|p| p.name == *name)
-            .ok_or_else(|| bad(format!("vertex element has no {name} property")))?;
-        if vertex.props[idx[k]].float_kind.is_none() {
-            return Err(IoError::unsupported(path, "PLY", format!("{name} is not float or double")));
-        }
-    }
-    let double = idx.map(|i| vertex.props[i].float_kind == Some(true));
-    let n = vertex.count;
-    // A vertex count larger than the bytes can hold is garbage; refuse before allocating.
-    if n > bytes.len() {
-        return Err(bad(format!("vertex count {n} exceeds the file size")));
-    }
-    let mut normals = Vec::with_capacity(n);
-    let mut layout =
-        PlyLayout { bytes: Vec::new(), encoding, offsets: Vec::new(), double, ascii: Vec::new(), lines: None };
-    match encoding {
-        PlyEncoding::Ascii => {
-            let text = std::str::from_utf8(&bytes[body_start..]).map_err(|_| bad("ascii body is not text".into()))?;
-            let mut line_no = header_lines;
-            let mut pos = body_start;
-            let mut lines = text.split_inclusive('\n');
-            let mut line_numbers = Vec::with_capacity(n);
-            // Skip elements before the vertices, one line each.
-            let before = elements[..vi].iter().fold(0usize, |acc, e| acc.saturating_add(e.count));
-            for _ in 0..before {
-                let l = lines.next().ok_or_else(|| bad("file ends before the vertex element".into()))?;
-                pos += l.len();
-                line_no += 1;
-            }
-            for v in 0..n {
-                let l = lines.next().ok_or_else(|| bad(format!("file ends at vertex {v} of {n}")))?;
-                let body = l.trim_end_matches(['\n', '\r']);
-                let tokens: Vec<&str> = body.split_whitespace().collect();
-                let mut value = [0f32; 3];
-                for k in 0..3 {
-                    let tok = tokens
-                        .get(idx[k])
-                        .ok_or_else(|| bad(format!("line {line_no}: vertex {v} has only {} values", tokens.len())))?;
-                    let col = body.find(tok).map_or(1, |c| c + 1);
-                    value[k] = tok
-                        .parse()
-                        .map_err(|_| bad(format!("line {line_no}, column {col}: {tok:?} is not a number")))?;
-                }
-                if vertex.props.iter().any(|p| p.list.is_some()) {
-                    return Err(IoError::unsupported(path, "PLY", "list properties in the vertex element"));
-                }
-                normals.push(value);
-                layout.ascii.push((pos, pos + body.len(), idx));
-                line_numbers.push(line_no);
-                pos += l.len();
-                line_no += 1;
-            }
-            layout.lines = Some(line_numbers);
-        }
-        PlyEncoding::Little | PlyEncoding::Big => {
-            let mut pos = body_start;
-            let read_uint = |pos: usize, size: usize| -> Option<usize> {
-                let b = bytes.get(pos..pos + size)?;
-                let mut v = 0usize;
-                for k in 0..size {
-                    let byte = if encoding == PlyEncoding::Little { b[size - 1 - k] } else { b[k] };
-                    v = (v << 8) | byte as usize;
-                }
-                Some(v)
-            };
-            for (ei, el) in elements.iter().enumerate() {
-                if ei > vi {
-                    break;
-                }
-                // Every element with properties takes at least one byte: a larger count is
-                // garbage (and would loop for ever).
-                if el.props.is_empty() {
-                    continue;
-                }
-                if el.count > bytes.len() {
-                    return Err(bad(format!("element {} count {} exceeds the file size", el.name, el.count)));
-                }
-                for v in 0..el.count {
-                    let mut offs = [0usize; 3];
-                    for (pi, p) in el.props.iter().enumerate() {
-                        if let Some(size) = p.scalar {
-                            if ei == vi {
-                                for k in 0..3 {
-                                    if idx[k] == pi {
-                                        offs[k] = pos;
-                                    }
-                                }
-                            }
-                            pos += size;
-                        } else if let Some((cs, vs)) = p.list {
-                            let count = read_uint(pos, cs)
-                                .ok_or_else(|| bad(format!("truncated in element {} #{v}", el.name)))?;
-                            // A garbled count must not wrap the offset back into the file.
-                            pos = count.checked_mul(vs).and_then(|n| n.checked_add(pos + cs)).ok_or_else(|| {
-                                bad(format!("list length {count} in element {} #{v} overflows", el.name))
-                            })?;
-                        }
-                        if pos > bytes.len() {
-                            return Err(bad(format!("truncated in element {} #{v} of {}", el.name, el.count)));
-                        }
-                    }
-                    if ei == vi {
-                        let mut value = [0f32; 3];
-                        for k in 0..3 {
-                            value[k] = read_float(&bytes, offs[k], double[k], encoding == PlyEncoding::Little);
-                        }
-                        normals.push(value);
-                        layout.offsets.push(offs);
-                    }
-                }
-            }
-        }
-    }
-    layout.bytes = bytes;
-    if normals.is_empty() {
-        return Err(bad("no vertices".into()));
-    }
-    Ok(NormalSource { normals, kind: Kind::Ply(layout) })
-}
-
-fn read_float(bytes: &[u8], pos: usize, double: bool, little: bool) -> f32 {
-    if double {
-        let mut b = [0u8; 8];
-        b.copy_from_slice(&bytes[pos..pos + 8]);
-        (if little { f64::from_le_bytes(b) } else { f64::from_be_bytes(b) }) as f32
-    } else {
-        let mut b = [0u8; 4];
-        b.copy_from_slice(&bytes[pos..pos + 4]);
-        if little {
-            f32::from_le_bytes(b)
-        } else {
-            f32::from_be_bytes(b)
-        }
-    }
-}
-
-impl PlyLayout {
-    fn write_back(&self, decoded: &[[f32; 3]]) -> Vec<u8> {
-        match self.encoding {
-            PlyEncoding::Ascii => {
-                let mut out = Vec::with_capacity(self.bytes.len());
-                let mut pos = 0;
-                for (&(a, b, idx), n) in self.ascii.iter().zip(decoded) {
-                    out.extend_from_slice(&self.bytes[pos..a]);
-                    let line = String::from_utf8_lossy(&self.bytes[a..b]);
-                    let mut tokens: Vec<String> = line.split_whitespace().map(str::to_string).collect();
-                    for k in 0..3 {
-                        tokens[idx[k]] = fmt_f32(n[k]);
-                    }
-                    out.extend_from_slice(tokens.join(" ").as_bytes());
-                    pos = b;
-                }
-                out.extend_from_slice(&self.bytes[pos..]);
-                out
-            }
-            PlyEncoding::Little | PlyEncoding::Big => {
-                let little = self.encoding == PlyEncoding::Little;
-                let mut out = self.bytes.clone();
-                for (offs, n) in self.offsets.iter().zip(decoded) {
-                    for k in 0..3 {
-                        let p = offs[k];
-                        if self.double[k] {
-                            let v = n[k] as f64;
-                            out[p..p + 8].copy_from_slice(&if little { v.to_le_bytes() } else { v.to_be_bytes() });
-                        } else {
-                            out[p..p + 4].copy_from_slice(&if little {
-                                n[k].to_le_bytes()
-                            } else {
-                                n[k].to_be_bytes()
-                            });
-                        }
-                    }
-                }
-                out
-            }
-        }
-    }
-}
-
-fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
-    hay.windows(needle.len()).position(|w| w == needle)
 }
 
 /// Writes normals alone in the format of `path`'s extension (used by `--decode`): `.obj` as
