@@ -392,22 +392,18 @@ impl Grid {
     }
 }
 
-/// |dk/dγ| of the split-sum kernel on [0, π/2]: with c = cos γ and k = scale · c / (a + b c)²
-/// ([`HalfChord`]'s constants in terms of c: a = (α² + 1)/2, b = (α² − 1)/2),
-/// |dk/dγ| = sin γ · scale (a − b c) / (a + b c)³. It rises from 0 at γ = 0 to one peak γ* and
-/// falls after it (or rises all the way, α = 1), so its maximum over an interval is at γ* when
-/// the interval holds it and at an end otherwise (`the_slope_has_one_peak`).
+/// |dk/dγ| of the split-sum kernel on [0, π/2]: with k = f(cos γ) ([`Curve`]),
+/// |dk/dγ| = sin γ · f'(cos γ). It rises from 0 at γ = 0 to one peak γ* and falls after it (or
+/// rises all the way, α = 1), so its maximum over an interval is at γ* when the interval holds it
+/// and at an end otherwise (`the_slope_has_one_peak`).
 struct Slope {
-    scale: f64,
-    a: f64,
-    b: f64,
+    curve: Curve,
     peak: f64,
 }
 
 impl Slope {
     fn of(lobe: &SplitSumLobe) -> Slope {
-        let (a2, scale) = kernel_constants(lobe);
-        let mut slope = Slope { scale, a: 0.5 * (a2 + 1.0), b: 0.5 * (a2 - 1.0), peak: 0.0 };
+        let mut slope = Slope { curve: Curve::of(lobe), peak: 0.0 };
         // The peak by a scan, then golden-section search in the bracket around the best sample.
         let steps = 1024;
         let h = FRAC_PI_2 / steps as f64;
@@ -429,8 +425,7 @@ impl Slope {
     /// |dk/dγ| at γ ∈ [0, π/2].
     fn at(&self, gamma: f64) -> f64 {
         let (s, c) = gamma.sin_cos();
-        let t = self.a + self.b * c;
-        s * self.scale * (self.a - self.b * c) / (t * t * t)
+        s * self.curve.first(c)
     }
 
     /// max |dk/dγ| over [a, b] ⊂ [0, π/2].
@@ -743,9 +738,9 @@ impl Coarse {
     }
 }
 
-/// The split-sum kernel as a function of s = cos γ on (0, 1] (zero below): with [`Slope`]'s
-/// constants, f = scale · s/(a + b s)², f' = scale (a − b s)/(a + b s)³ and
-/// f'' = −2 b scale (2a − b s)/(a + b s)⁴. As b ≤ 0 < a, |f''| grows with s, so its largest
+/// The split-sum kernel as a function of s = cos γ on (0, 1] (zero below): [`HalfChord`]'s
+/// kernel with a = (α² + 1)/2, b = (α² − 1)/2, f = scale · s/(a + b s)²,
+/// f' = scale (a − b s)/(a + b s)³ and f'' = −2 b scale (2a − b s)/(a + b s)⁴. As b ≤ 0 < a, |f''| grows with s, so its largest
 /// value over a texel is at the texel's largest s.
 #[derive(Clone, Copy, Debug)]
 struct Curve {
@@ -1254,6 +1249,32 @@ mod tests {
         }
         let flat = Coarse::of(fine, &vec![[1.0; 3]; w * h]).unwrap();
         assert!(flat.moment.iter().all(|m| m[0].length() < 1e-15) && flat.deviation.iter().all(|d| d[0] < 1e-15));
+    }
+
+    /// `Curve`'s f' and |f''| are the kernel's derivatives in s = cos γ (central differences of
+    /// `SplitSumLobe::kernel`), and |f''| grows with s, as the remainder bound assumes.
+    #[test]
+    fn the_curve_has_the_kernels_derivatives() {
+        for r in [0.05, 0.2, 0.5, 0.9] {
+            let lobe = SplitSumLobe::new(r).unwrap();
+            let curve = Curve::of(&lobe);
+            let f = |s: f64| lobe.kernel(s);
+            let mut last = 0.0;
+            for s in [0.05f64, 0.2, 0.5, 0.8, 0.95, 0.99] {
+                let h = 1e-4 * (1.0 - s).min(s);
+                let first = (f(s + h) - f(s - h)) / (2.0 * h);
+                let second = (f(s + h) - 2.0 * f(s) + f(s - h)) / (h * h);
+                assert!(
+                    (curve.first(s) - first).abs() <= 1e-5 * first.abs(),
+                    "r {r} s {s}: f' {} vs {first}",
+                    curve.first(s)
+                );
+                let got = curve.second_magnitude(s);
+                assert!((got - second.abs()).abs() <= 1e-3 * got, "r {r} s {s}: |f''| {got} vs {second}");
+                assert!(got >= last, "r {r} s {s}: |f''| falls");
+                last = got;
+            }
+        }
     }
 
     /// |dk/dγ| has one peak on [0, π/2] (what `Slope::max_over` relies on), `Slope::at` is the
