@@ -517,6 +517,11 @@ fn interreflected_bowl_is_shadowed_plus_bounces_and_thread_independent() {
 
 /// `render --json`'s metrics against `--compare`.
 /// (PSNR is `null` when the images are equal, so the summary is read as JSON values.)
+/// Runs `transfer ARGS` in `dir` and expects success.
+fn transfer_in(dir: &Path, args: &[&str]) {
+    cmd("transfer").args(args).current_dir(dir).assert().success();
+}
+
 fn render_metrics(args: &[&str], dir: &Path) -> Metrics {
     let out = cmd("render").args(args).args(["-q", "--json"]).current_dir(dir).output().unwrap();
     assert!(out.status.success(), "render {args:?}: {}", stderr(&out));
@@ -555,24 +560,10 @@ fn relit_unshadowed_sphere_is_the_irradiance_shading() {
     let dir = tempfile::tempdir().unwrap();
     common::sky_pfm(dir.path(), 64, 32);
     write_sphere(dir.path(), 96, 192);
-    cmd("transfer")
-        .args([
-            "sphere.obj",
-            "-n",
-            "3",
-            "--mode",
-            "unshadowed",
-            "--albedo",
-            "0.7",
-            "-q",
-            "--glb",
-            "s.glb",
-            "-o",
-            "s.json",
-        ])
-        .current_dir(dir.path())
-        .assert()
-        .success();
+    transfer_in(
+        dir.path(),
+        &["sphere.obj", "-n", "3", "--mode", "unshadowed", "--albedo", "0.7", "-q", "--glb", "s.glb", "-o", "s.json"],
+    );
     let view = ["--scene", "sphere.obj", "--res", "96x96", "--brdf", "lambert:albedo=0.7"];
     let irradiance =
         [&["sky.pfm"][..], &view, &["--shading", "irradiance", "-F", "2", "--window", "none", "-o", "i.exr"]].concat();
@@ -605,12 +596,10 @@ fn relit_shadowed_bowl_approaches_the_reference_with_visibility() {
     render_metrics(&[&["sky.pfm"][..], &view, &["--shading", "reference", "-o", "r.exr"]].concat(), dir.path());
     let mut errors = Vec::new();
     for n in ["2", "4", "8"] {
-        cmd("transfer")
-            .arg(&bowl)
-            .args(["-n", n, "--rays", "4096", "-q", "--glb", "b.glb", "-o", "b.json"])
-            .current_dir(dir.path())
-            .assert()
-            .success();
+        transfer_in(
+            dir.path(),
+            &[bowl.to_str().unwrap(), "-n", n, "--rays", "4096", "-q", "--glb", "b.glb", "-o", "b.json"],
+        );
         let args =
             [&["sky.pfm"][..], &view, &["--shading", "transfer", "--transfer", "b.glb", "--compare", "r.exr"]].concat();
         let m = render_metrics(&args, dir.path());
@@ -641,12 +630,10 @@ fn a_turned_environment_is_one_sh_rotation() {
     }
     common::write_pfm(dir.path(), "rolled.pfm", &rolled);
     let bowl = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes/bowl.obj");
-    cmd("transfer")
-        .arg(&bowl)
-        .args(["-n", "5", "--rays", "512", "-q", "--glb", "b.glb", "-o", "b.json"])
-        .current_dir(dir.path())
-        .assert()
-        .success();
+    transfer_in(
+        dir.path(),
+        &[bowl.to_str().unwrap(), "-n", "5", "--rays", "512", "-q", "--glb", "b.glb", "-o", "b.json"],
+    );
     let view = ["--scene", bowl.to_str().unwrap(), "--res", "48x48", "--eye", "0,0.01,3.5", "--target", "0,0,-0.3"];
     let relit = ["--shading", "transfer", "--transfer", "b.glb"];
     render_metrics(&[&["rolled.pfm"][..], &view, &relit, &["-o", "rolled.exr"]].concat(), dir.path());
@@ -683,11 +670,7 @@ fn a_bake_of_another_mesh_is_refused() {
     common::sky_pfm(dir.path(), 16, 8);
     let bowl = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes/bowl.obj");
     write_sphere(dir.path(), 8, 16);
-    cmd("transfer")
-        .args(["sphere.obj", "-q", "--rays", "16", "--glb", "s.glb", "-o", "s.json"])
-        .current_dir(dir.path())
-        .assert()
-        .success();
+    transfer_in(dir.path(), &["sphere.obj", "-q", "--rays", "16", "--glb", "s.glb", "-o", "s.json"]);
     std::fs::write(dir.path().join("junk.glb"), b"glTF not really").unwrap();
     let cases: [(&[&str], &str); 5] = [
         (&["--scene", bowl.to_str().unwrap(), "--transfer", "s.glb"], "s.glb: the transfer is of a mesh of"),
@@ -763,12 +746,10 @@ fn ply_and_obj_of_one_mesh_bake_the_same_transfer() {
     }
     assert!(baked[0] == baked[1], "the PLY's transfer differs from the OBJ's");
     // And through the binary: a PLY is baked like an OBJ.
-    cmd("transfer")
-        .arg(&ply)
-        .args(["-n", "3", "--rays", "64", "-q", "--glb", "t.glb", "-o", "t.json"])
-        .current_dir(dir.path())
-        .assert()
-        .success();
+    transfer_in(
+        dir.path(),
+        &[ply.to_str().unwrap(), "-n", "3", "--rays", "64", "-q", "--glb", "t.glb", "-o", "t.json"],
+    );
     let doc: serde_json::Value = common::read(&dir.path().join("t.json"));
     assert_eq!(
         (doc["mesh"]["vertices"].as_u64(), doc["mesh"]["normals"].as_str()),
