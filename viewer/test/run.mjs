@@ -172,15 +172,21 @@ const toPage = (e, frame) => (frame === 'three' ? mul(THREE_FROM_GL, mul(M, e)) 
 const FOV = 32, RES = '160x160';
 
 
-// ---- SH irradiance, SHRMs, encoded normals (mode=irradiance|shrm|normals) ----------------------
-// The map: sample-shader's sky (a sun at (0.45, 0.25, 0.6), nothing symmetric in x or y, so a
-// mirrored or turned frame shows), 256×128, made here.
-async function shTests() {
-  const dir = join(out, 'sh');
+// A fresh directory out/NAME holding sample-shader's sky, 256×128, as sky.exr.
+function skyIn(name) {
+  const dir = join(out, name);
   rmSync(dir, { recursive: true, force: true });
   mkdirSync(dir, { recursive: true });
   const sky = join(dir, 'sky.exr');
   run('sample-shader', ['testdata/shaders/sky.sl', '--latlong', '256x128', '-o', sky, '-q']);
+  return { dir, sky };
+}
+
+// ---- SH irradiance, SHRMs, encoded normals (mode=irradiance|shrm|normals) ----------------------
+// The map: sample-shader's sky (a sun at (0.45, 0.25, 0.6), nothing symmetric in x or y, so a
+// mirrored or turned frame shows), 256×128, made here.
+async function shTests() {
+  const { dir, sky } = skyIn('sh');
   // The SH document is projected from convert's PFM copy of the map, the file the rotation test
   // turns (the EXR's and the PFM's projections differ by 5e-4 relative; the turn itself is exact).
   run('convert', [sky, '-o', join(dir, 'sky.pfm'), '-q']);
@@ -351,11 +357,7 @@ function meshMask(img) {
   return mask;
 }
 async function prtTests() {
-  const dir = join(out, 'prt');
-  rmSync(dir, { recursive: true, force: true });
-  mkdirSync(dir, { recursive: true });
-  const sky = join(dir, 'sky.exr');
-  run('sample-shader', ['testdata/shaders/sky.sl', '--latlong', '256x128', '-o', sky, '-q']);
+  const { dir, sky } = skyIn('prt');
   const mesh = 'testdata/meshes/torus-knot.obj', glb = join(dir, 'knot5.glb');
   run('transfer', [mesh, '-n', '5', '--mode', 'shadowed', '--rays', '256', '--glb', glb, '-o', join(dir, 'knot5.json'), '-q']);
   run('sh-project', [sky, '-F', '4', '-o', join(dir, 'sky4.sh.json'), '-q']);
