@@ -205,11 +205,6 @@ impl Reference {
         self.grid.lobe(lobe)
     }
 
-    /// B(R) at one direction R of prtkit's frame.
-    pub fn texel(&self, axis: DVec3, lobe: &SplitSumLobe) -> [f64; 3] {
-        self.lobe(lobe).at(axis)
-    }
-
     /// Measures `level` (cube frame; `env_from_cube` takes its directions to prtkit's frame) on
     /// `samples` texels at a fixed stride.
     pub fn measure(&self, level: &CubeMap, lobe: &SplitSumLobe, env_from_cube: DMat3, samples: usize) -> Measured {
