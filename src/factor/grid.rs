@@ -50,11 +50,15 @@ impl Grid {
     /// cos θ at the midpoint of bin j, decreasing from the pole: 1 − (j+½)·h with h = 2/n on the
     /// sphere and 1/n on the hemisphere.
     pub fn cos_theta(&self, j: usize) -> f64 {
-        let span = match self.domain {
+        1.0 - (j as f64 + 0.5) * self.span() / self.n as f64
+    }
+
+    /// The range of cos θ the grid covers: 2 on the sphere, 1 on the hemisphere.
+    pub fn span(&self) -> f64 {
+        match self.domain {
             Domain::Sphere => 2.0,
             Domain::Hemisphere => 1.0,
-        };
-        1.0 - (j as f64 + 0.5) * span / self.n as f64
+        }
     }
 
     /// φ at the midpoint of bin k: (k+½)·2π/n.
@@ -82,6 +86,49 @@ impl Grid {
             Domain::Hemisphere => 2.0 * PI,
         };
         area / self.len() as f64
+    }
+}
+
+/// The samples of every grid cell in the frame of a point, for integrals over the cells:
+/// `sub`×`sub` directions uniform in (cos θ, φ) inside each cell (equal solid angles), so that a
+/// cell's lighting is a box prefilter of the environment over the cell (point samples alias
+/// bright sources), and each sample's weight, [max(cos θ, 0)] ΔΩ / sub² (the cosine when the
+/// factors do not hold it). `render --shading factored` gathers the lighting at them and
+/// `transfer --factors` projects the SH basis onto them: the same cells and weights, so a glossy
+/// bake relit by band-limited lighting is what the factored render computes.
+pub struct CellSamples {
+    /// sub² samples per cell.
+    pub per_cell: usize,
+    /// The directions, cell after cell.
+    pub dirs: Vec<DVec3>,
+    /// Their weights.
+    pub weights: Vec<f64>,
+}
+
+impl CellSamples {
+    /// `sub`×`sub` samples in every cell of `grid`, weighted by max(cos θ, 0) when `cosine`.
+    pub fn new(grid: &Grid, sub: usize, cosine: bool) -> Self {
+        let (n, span) = (grid.n, grid.span());
+        let dirs: Vec<DVec3> = (0..grid.len())
+            .flat_map(|c| {
+                let (j, k) = (c / n, c % n);
+                (0..sub * sub).map(move |s| {
+                    let z = 1.0 - (j as f64 + ((s / sub) as f64 + 0.5) / sub as f64) * span / n as f64;
+                    let phi = (k as f64 + ((s % sub) as f64 + 0.5) / sub as f64) * 2.0 * PI / n as f64;
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    DVec3::new(r * phi.cos(), r * phi.sin(), z)
+                })
+            })
+            .collect();
+        let weight = grid.cell_solid_angle() / (sub * sub) as f64;
+        let weights = dirs.iter().map(|d| if cosine { d.z.max(0.0) * weight } else { weight }).collect();
+        CellSamples { per_cell: sub * sub, dirs, weights }
+    }
+
+    /// The samples of cell `c`: (direction, weight).
+    pub fn of_cell(&self, c: usize) -> impl Iterator<Item = (&DVec3, &f64)> {
+        let r = c * self.per_cell..(c + 1) * self.per_cell;
+        self.dirs[r.clone()].iter().zip(&self.weights[r])
     }
 }
 

@@ -22,7 +22,7 @@ pub mod stage;
 pub mod svd;
 
 pub use channel::Channel;
-pub use grid::{Domain, Grid};
+pub use grid::{CellSamples, Domain, Grid};
 pub use svd::{factor, FactorError, Factorization, Method, Sampling};
 
 #[cfg(test)]

@@ -121,7 +121,7 @@ pub enum FactorError {
 }
 
 /// The result: singular values (descending) and optionally the leading factor functions.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Factorization {
     /// Singular values σ_k of the weighted matrix, descending (all of them, or the leading ones
     /// for the randomized method).

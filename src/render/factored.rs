@@ -16,7 +16,7 @@
 
 use super::{Hit, Scene, Shade};
 use crate::envmap::EnvMap;
-use crate::factor::{Factorization, Grid};
+use crate::factor::{CellSamples, Factorization, Grid};
 use crate::prefilter::shrm::texel_frame;
 use crate::progress::Progress;
 use crate::sphere::{self, LatLong};
@@ -146,6 +146,31 @@ impl Factored {
         s
     }
 
+    /// The shader of a mesh whose c_k per vertex (`coeffs[vertex * K + k]`, σ_k folded in) were
+    /// computed elsewhere: relit from a glossy `transfer` bake, c_k = Σ_j T_kj L_j.
+    pub fn from_vertex_coefficients(
+        f: &Factorization,
+        terms: usize,
+        triangles: Vec<[u32; 3]>,
+        coeffs: Vec<[f64; 3]>,
+    ) -> Self {
+        let k = terms.min(f.h.len());
+        Factored {
+            sigma: vec![1.0; k],
+            h: f.h[..k].iter().map(|h| with_pole_values(h, f.grid.n)).collect(),
+            grid: f.grid,
+            transport: Transport {
+                support: Support::Vertices,
+                frames: Vec::new(),
+                visible: Vec::new(),
+                words: 0,
+                triangles,
+            },
+            cosine: false,
+            coeffs,
+        }
+    }
+
     /// Number of terms K.
     pub fn terms(&self) -> usize {
         self.sigma.len()
@@ -163,11 +188,7 @@ impl Factored {
 /// the pole, and a bilinear lookup there would take h along whatever φ rounding gives (a
 /// dark dot where the view meets the normal). The hemisphere's horizon side clamps.
 fn h_taps(grid: &Grid, wo: DVec3) -> [(usize, f64); 5] {
-    let n = grid.n;
-    let span = match grid.domain {
-        crate::factor::Domain::Sphere => 2.0,
-        crate::factor::Domain::Hemisphere => 1.0,
-    };
+    let (n, span) = (grid.n, grid.span());
     let z = wo.z.clamp(-1.0, 1.0).max(1.0 - span);
     let raw = (1.0 - z) / span * n as f64 - 0.5;
     let fj = raw.clamp(0.0, (n - 1) as f64);
@@ -206,46 +227,6 @@ fn with_pole_values(h: &[f64], n: usize) -> Vec<f64> {
 /// Points per block of the projection: the block's lighting matrix (cells × 3·BLOCK) stays
 /// small (1024 cells: 1.5 MB) while the product with G is large enough to run at GEMM speed.
 const BLOCK: usize = 64;
-
-/// The lighting samples of every grid cell, in the frame of a point: `sub`×`sub` directions
-/// uniform in (cos θ, φ) inside each cell (equal solid angles), so that a cell's lighting is a
-/// box prefilter of the environment over the cell (point samples alias bright sources), and
-/// each sample's weight, [max(cos θ, 0)] ΔΩ / sub².
-struct CellSamples {
-    per_cell: usize,
-    dirs: Vec<DVec3>,
-    weights: Vec<f64>,
-}
-
-impl CellSamples {
-    fn new(grid: &Grid, sub: usize, cosine: bool) -> Self {
-        let n = grid.n;
-        let span = match grid.domain {
-            crate::factor::Domain::Sphere => 2.0,
-            crate::factor::Domain::Hemisphere => 1.0,
-        };
-        let dirs: Vec<DVec3> = (0..grid.len())
-            .flat_map(|c| {
-                let (j, k) = (c / n, c % n);
-                (0..sub * sub).map(move |s| {
-                    let z = 1.0 - (j as f64 + ((s / sub) as f64 + 0.5) / sub as f64) * span / n as f64;
-                    let phi = (k as f64 + ((s % sub) as f64 + 0.5) / sub as f64) * 2.0 * PI / n as f64;
-                    let r = (1.0 - z * z).max(0.0).sqrt();
-                    DVec3::new(r * phi.cos(), r * phi.sin(), z)
-                })
-            })
-            .collect();
-        let weight = grid.cell_solid_angle() / (sub * sub) as f64;
-        let weights = dirs.iter().map(|d| if cosine { d.z.max(0.0) * weight } else { weight }).collect();
-        CellSamples { per_cell: sub * sub, dirs, weights }
-    }
-
-    /// The samples of cell `c`: (direction, weight).
-    fn of_cell(&self, c: usize) -> impl Iterator<Item = (&DVec3, &f64)> {
-        let r = c * self.per_cell..(c + 1) * self.per_cell;
-        self.dirs[r.clone()].iter().zip(&self.weights[r])
-    }
-}
 
 /// The environment as a lat-long map whose width is a multiple of the normal table's, for the
 /// sphere's rings. The table's frames are R_z(φ_x)·R_y(θ_y) ([`texel_frame`]), and
