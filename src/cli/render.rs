@@ -33,14 +33,7 @@ impl Args {
                 Shading::Shrm { shrm, body: Box::new(body), window: self.window.unwrap_or_default() }
             }
             ShadingArg::Factored => {
-                let factors = match &self.factors {
-                    Some(doc) => {
-                        let (body, factorization) = crate::factor::document::load(doc)?;
-                        let name = doc.display().to_string();
-                        Some(Box::new(StoredFactors { name, factorization, cosine: body.cosine, brdf: body.brdf }))
-                    }
-                    None => None,
-                };
+                let factors = self.stored_factors()?;
                 Shading::Factored {
                     terms: self.terms,
                     factors,
@@ -78,10 +71,18 @@ impl Args {
                 })?;
                 let bake = crate::render::transfer::TransferBake::from_glb(&file.display().to_string(), &bytes)
                     .map_err(anyhow::Error::msg)?;
-                Shading::Transfer { bake: Box::new(bake) }
+                Shading::Transfer { bake: Box::new(bake), factors: self.stored_factors()? }
             }
             ShadingArg::Reference => Shading::Reference { integrand: self.integrand },
         })
+    }
+
+    /// The factorization `--factors` names, read back with its factor file.
+    fn stored_factors(&self) -> Result<Option<Box<StoredFactors>>> {
+        let Some(doc) = &self.factors else { return Ok(None) };
+        let (body, factorization) = crate::factor::document::load(doc)?;
+        let name = doc.display().to_string();
+        Ok(Some(Box::new(StoredFactors { name, factorization, cosine: body.cosine, brdf: body.brdf })))
     }
 
     /// The panel items: `LABEL=FILE.exr` read, `LABEL=-` for this render.

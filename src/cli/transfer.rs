@@ -7,7 +7,7 @@ use super::options::{check_json_output, Execution};
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::Output;
 use crate::mesh::Mesh;
-use crate::transfer::stage::{self, Config, Mode};
+use crate::transfer::stage::{self, Config, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES};
 use anyhow::{Context as _, Result};
 pub use args::*;
 
@@ -24,7 +24,17 @@ impl TryFrom<&Args> for Config {
             Output::File(path) => path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
             Output::Stdout => "-".into(),
         };
+        let glossy = match &args.factors {
+            Some(doc) => Some(glossy_config(args, doc)?),
+            None => {
+                if args.terms.is_some() || args.energy.is_some() || args.cell_samples.is_some() {
+                    anyhow::bail!("-K, --energy and --cell-samples are for glossy transfer (--factors FACTOR.json)");
+                }
+                None
+            }
+        };
         Ok(Config {
+            glossy,
             order: args.order,
             mode: args.mode,
             rays: args.rays,
@@ -37,6 +47,47 @@ impl TryFrom<&Args> for Config {
             args: std::env::args().collect(),
         })
     }
+}
+
+/// Default energy fraction K must reach when -K is not given.
+const DEFAULT_ENERGY: f64 = 0.99;
+
+/// The glossy bake's factorization, read back from `factor-brdf`'s document, and its K.
+fn glossy_config(args: &Args, doc: &std::path::Path) -> Result<GlossyConfig> {
+    if args.terms.is_some() && args.energy.is_some() {
+        anyhow::bail!("-K and --energy both choose the number of terms: give one");
+    }
+    let (body, factorization) = crate::factor::document::load(doc)?;
+    let name = doc.display().to_string();
+    let stored = factorization.g.len();
+    let (terms, terms_reason) = match (args.terms, args.energy) {
+        (Some(k), _) => (k, format!("-K {k}")),
+        (None, energy) => {
+            let fraction = energy.unwrap_or(DEFAULT_ENERGY);
+            if !(fraction > 0.0 && fraction <= 1.0) {
+                anyhow::bail!("--energy {fraction} must be in (0, 1]");
+            }
+            let want = factorization.terms_for(fraction);
+            let k = want.min(stored);
+            let reason = if want <= stored {
+                format!("the fewest terms holding {:.4} of the BRDF matrix's energy (--energy)", fraction)
+            } else {
+                format!(
+                    "{fraction} of the energy needs {want} terms; the factor file holds {stored} (factor-brdf --terms {want})"
+                )
+            };
+            (k, reason)
+        }
+    };
+    Ok(GlossyConfig {
+        factorization,
+        cosine: body.cosine,
+        terms,
+        terms_reason,
+        cell_samples: args.cell_samples.unwrap_or(DEFAULT_CELL_SAMPLES),
+        factors: name,
+        brdf: body.brdf,
+    })
 }
 
 impl Stage for Args {

@@ -88,6 +88,8 @@ pub enum Shading {
     Transfer {
         /// The bake, read from its `.glb`.
         bake: Box<TransferBake>,
+        /// The factorization a glossy bake was made with (`--factors`), for h_k.
+        factors: Option<Box<StoredFactors>>,
     },
     /// Ground truth: a sum over every environment texel.
     Reference {
@@ -239,6 +241,9 @@ pub struct RelightSummary {
     pub order: usize,
     /// Its mode.
     pub mode: String,
+    /// Terms K of a glossy bake (1: diffuse): dot products per vertex.
+    #[serde(default = "one")]
+    pub terms: usize,
     /// Vertices relit per frame.
     pub vertices: usize,
     /// Frames timed: each an SH rotation of the lighting and the dot product at every vertex
@@ -248,6 +253,10 @@ pub struct RelightSummary {
     pub frames_per_second: f64,
     /// 1 / the median frame's seconds.
     pub median_frames_per_second: f64,
+}
+
+fn one() -> usize {
+    1
 }
 
 /// Most degrees `--env-rotation` turns the environment by, either way.
@@ -465,50 +474,90 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 }
             }
         }
-        Shading::Transfer { bake } => {
+        Shading::Transfer { bake, factors } => {
             let Scene::Mesh(mesh) = scene else {
                 return Err(
                     bad("--shading transfer relights a mesh: --scene FILE.obj, the mesh the bake is of".into()),
                 );
             };
             bake.check_mesh(mesh, "the --scene mesh").map_err(bad)?;
-            let Brdf::Lambert(m) = brdf else {
-                return Err(bad(format!(
-                    "--shading transfer relights the diffuse transfer; --brdf {} is not lambert",
-                    brdf.spec()
-                )));
+            // The BRDF the bake holds must be --brdf's (the reference and the labels use it).
+            let glossy_factors = match (&bake.glossy, factors) {
+                (Some(glossy), Some(stored)) => {
+                    glossy.check_factors(&bake.name, &stored.factorization, &stored.name).map_err(bad)?;
+                    if brdf.spec() != glossy.brdf {
+                        return Err(bad(format!(
+                            "{}: the transfer holds {}, --brdf says {}",
+                            bake.name,
+                            glossy.brdf,
+                            brdf.spec()
+                        )));
+                    }
+                    Some(&stored.factorization)
+                }
+                (Some(glossy), None) => {
+                    return Err(bad(format!(
+                        "{}: a glossy transfer: relighting it needs h_k, --factors {} (the document it was baked from)",
+                        bake.name, glossy.factors
+                    )))
+                }
+                (None, Some(_)) => {
+                    return Err(bad(format!("{}: a diffuse transfer; --factors is for glossy bakes", bake.name)))
+                }
+                (None, None) => {
+                    let Brdf::Lambert(m) = brdf else {
+                        return Err(bad(format!(
+                            "{}: a diffuse transfer relights a lambert BRDF; --brdf {} is not lambert",
+                            bake.name,
+                            brdf.spec()
+                        )));
+                    };
+                    if m.albedo != bake.albedo {
+                        return Err(bad(format!(
+                            "{}: the transfer was baked with albedo {}, --brdf says {}",
+                            bake.name,
+                            bake.albedo,
+                            brdf.spec()
+                        )));
+                    }
+                    None
+                }
             };
-            if m.albedo != bake.albedo {
-                return Err(bad(format!(
-                    "{}: the transfer was baked with albedo {}, --brdf says {}",
-                    bake.name,
-                    bake.albedo,
-                    brdf.spec()
-                )));
-            }
             // The lighting's SH at the bake's bands, projected once; each frame turns it and
-            // takes the dot products.
+            // takes the dot products (K per vertex for a glossy bake).
             let light = crate::sh::project::project(env, bake.order - 1, progress)?;
-            let mut radiance = Vec::new();
+            let mut relit = Vec::new();
             let mut times = Vec::with_capacity(RELIGHT_FRAMES);
             for _ in 0..RELIGHT_FRAMES {
                 let t = Instant::now();
                 let rotation = crate::sh::rotate::ShRotation::new(turn, bake.order - 1);
-                super::transfer::relight(bake, &light, &rotation, &mut radiance);
+                super::transfer::relight(bake, &light, &rotation, &mut relit);
                 times.push(t.elapsed().as_secs_f64().max(1e-9));
             }
             times.sort_by(f64::total_cmp);
             summary.transfer = Some(RelightSummary {
                 order: bake.order,
                 mode: bake.mode.clone(),
+                terms: bake.terms(),
                 vertices: mesh.positions.len(),
                 frames: RELIGHT_FRAMES,
                 frames_per_second: 1.0 / times[0],
                 median_frames_per_second: 1.0 / times[RELIGHT_FRAMES / 2],
             });
-            let shader = super::transfer::TransferShader::new(radiance, mesh);
-            let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
-            (frame, format!("transfer {} n={}", bake.mode, bake.order))
+            match glossy_factors {
+                // B(x, ω_o) = Σ_k h_k(F_xᵀ ω_o) c_k(x), c_k interpolated over the triangle.
+                Some(f) => {
+                    let coeffs = relit.iter().map(|c| c.map(f64::from)).collect();
+                    let shader = Factored::from_vertex_coefficients(f, bake.terms(), mesh.triangles.clone(), coeffs);
+                    let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
+                    (frame, format!("transfer glossy {} n={} K={}", bake.mode, bake.order, bake.terms()))
+                }
+                None => {
+                    let shader = super::transfer::TransferShader::new(relit, mesh);
+                    let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
+                    (frame, format!("transfer {} n={}", bake.mode, bake.order))
+                }
+            }
         }
         Shading::Reference { integrand } => {
             let shader = Reference::new(env, brdf.clone(), *integrand, scene).map_err(bad)?.turned(turn);

@@ -34,8 +34,65 @@ pub struct TransferBake {
     pub positions: Vec<[f32; 3]>,
     /// Triangles in the file.
     pub triangles: usize,
-    /// n² coefficients per vertex, vertex after vertex.
+    /// n² coefficients per vertex (K·n², term-major, for glossy bakes), vertex after vertex.
     pub transfer: Vec<f32>,
+    /// What a glossy bake was factored with (absent for diffuse bakes).
+    pub glossy: Option<GlossyBake>,
+}
+
+/// The factorization a glossy bake records (the `.glb` extras' `glossy`), checked against the
+/// factors `render --factors` reads to evaluate h_k.
+#[derive(Clone, Debug, serde::Deserialize)]
+pub struct GlossyBake {
+    /// Terms K.
+    pub terms: usize,
+    /// The factored BRDF's spec.
+    pub brdf: String,
+    /// The factor document the bake read.
+    pub factors: String,
+    /// The factors' grid.
+    pub domain: crate::factor::Domain,
+    /// Its bins n.
+    pub resolution: usize,
+    /// Whether the factors hold the cosine.
+    pub cosine: bool,
+    /// σ_0 … σ_{K−1}, folded into the transfer.
+    pub singular_values: Vec<f64>,
+}
+
+impl GlossyBake {
+    /// Whether `f` (read from `factors_name`) is the factorization this bake was made with: the
+    /// same grid and the same leading singular values (to the f32 the file keeps the factors in).
+    pub fn check_factors(
+        &self,
+        bake: &str,
+        f: &crate::factor::Factorization,
+        factors_name: &str,
+    ) -> Result<(), String> {
+        if f.grid.n != self.resolution || f.grid.domain != self.domain {
+            return Err(format!(
+                "{bake} was baked on a {} grid of {} bins ({}); {factors_name} is a {} grid of {}",
+                self.domain, self.resolution, self.factors, f.grid.domain, f.grid.n
+            ));
+        }
+        if f.h.len() < self.terms {
+            return Err(format!("{bake} has {} terms; {factors_name} holds {}", self.terms, f.h.len()));
+        }
+        let same = self
+            .singular_values
+            .iter()
+            .zip(&f.singular_values)
+            .all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(1e-300));
+        if !same {
+            return Err(format!(
+                "{bake} was baked from {} (σ_0 = {:.6e}); {factors_name} is another factorization (σ_0 = {:.6e})",
+                self.factors,
+                self.singular_values.first().copied().unwrap_or(0.0),
+                f.singular_values.first().copied().unwrap_or(0.0)
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl TransferBake {
@@ -51,6 +108,21 @@ impl TransferBake {
             return Err(bad(&format!("order {order} is outside 1..={}", crate::transfer::stage::MAX_ORDER)));
         }
         let mode = extras["mode"].as_str().ok_or_else(|| bad("no extras.prtkit.transfer.mode"))?.to_string();
+        let glossy = match extras.get("glossy") {
+            None => None,
+            Some(g) => Some(
+                serde_json::from_value::<GlossyBake>(g.clone())
+                    .map_err(|e| bad(&format!("extras.prtkit.transfer.glossy: {e}")))?,
+            ),
+        };
+        if let Some(g) = &glossy {
+            if !(1..=crate::limits::MAX_FACTOR_RESOLUTION.pow(2)).contains(&g.terms)
+                || g.singular_values.len() != g.terms
+            {
+                return Err(bad(&format!("glossy terms {} with {} singular values", g.terms, g.singular_values.len())));
+            }
+        }
+        let terms = glossy.as_ref().map_or(1, |g| g.terms);
         let albedo = extras["albedo"].as_f64().filter(|a| a.is_finite()).ok_or_else(|| bad("no finite albedo"))?;
         let primitive = &mesh["primitives"][0];
         let attributes = &primitive["attributes"];
@@ -74,7 +146,9 @@ impl TransferBake {
         };
         let (vertices, data) = accessor(&attributes["POSITION"], "VEC3")?;
         let positions: Vec<[f32; 3]> = floats(data).chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        let coeffs = order * order;
+        let coeffs = terms * order * order;
+        crate::limits::check_memory("the transfer", (vertices as u128) * (coeffs as u128) * 4)
+            .map_err(|e| bad(&e.to_string()))?;
         let mut transfer = vec![0.0f32; vertices * coeffs];
         for k in 0..coeffs.div_ceil(4) {
             let (count, data) = accessor(&attributes[format!("_PRT_{k}")], "VEC4")?;
@@ -94,7 +168,7 @@ impl TransferBake {
         }
         let indices = &gltf["accessors"][primitive["indices"].as_u64().ok_or_else(|| bad("no indices"))? as usize];
         let triangles = indices["count"].as_u64().ok_or_else(|| bad("the indices have no count"))? as usize / 3;
-        Ok(TransferBake { name: name.to_string(), order, mode, albedo, positions, triangles, transfer })
+        Ok(TransferBake { name: name.to_string(), order, mode, albedo, positions, triangles, transfer, glossy })
     }
 
     /// Whether the bake is of `mesh` (`mesh_name` for the message): the same vertices, at the same
@@ -116,9 +190,14 @@ impl TransferBake {
         Ok(())
     }
 
-    /// Coefficients per vertex, n².
+    /// Coefficients per vertex and term, n².
     pub fn coefficients(&self) -> usize {
         self.order * self.order
+    }
+
+    /// Terms K (1 for diffuse bakes).
+    pub fn terms(&self) -> usize {
+        self.glossy.as_ref().map_or(1, |g| g.terms)
     }
 }
 
@@ -130,6 +209,7 @@ pub fn rotation_about_z(degrees: f64) -> DMat3 {
 /// One frame of relighting: the lighting `light` (RGB SH of highest band ≥ n − 1, in the mesh's
 /// axes, as stored) turned by `rotation` (one SH rotation, Ivanic & Ruedenberg), then
 /// B_v = Σ_i T_i(v) L_i per vertex in single precision, as a GPU would, into `out`.
+/// For a glossy bake, the values are c_k per vertex and term (vertex-major): K dot products.
 pub fn relight(bake: &TransferBake, light: &ShCoeffs, rotation: &ShRotation, out: &mut Vec<[f32; 3]>) {
     let coeffs = bake.coefficients();
     let turned = rotation.apply(&light.truncated(bake.order - 1));

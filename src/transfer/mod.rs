@@ -18,6 +18,7 @@
 
 pub mod diffuse;
 pub mod directions;
+pub mod glossy;
 pub mod interreflect;
 pub mod shaders;
 pub mod stage;

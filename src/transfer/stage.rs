@@ -10,9 +10,11 @@
 
 use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
+use super::glossy::Glossy;
 use super::interreflect::{Hits, Storage, Tracer};
 use super::shaders::{snippet, Language};
 use super::visibility::{triangle_area, Occluders};
+use crate::factor::Factorization;
 use crate::io::glb::{self, Attribute, GlbMesh};
 use crate::io::{Document, Provenance};
 use crate::limits::LimitError;
@@ -34,6 +36,10 @@ pub const MAX_RAYS: usize = 1 << 20;
 /// every hit; a white furnace of albedo 0.9 keeps 0.9¹⁶ ≈ 19 % of the first bounce's energy at
 /// the 16th, so more bounces only matter for albedos near 1.
 pub const MAX_BOUNCES: usize = 16;
+/// Most basis samples per factor cell along each axis (as `render --cell-samples`).
+pub const MAX_CELL_SAMPLES: usize = 8;
+/// Basis samples per factor cell along each axis by default (as `render --cell-samples`).
+pub const DEFAULT_CELL_SAMPLES: usize = 2;
 /// Vertices per unit of progress and per parallel work item.
 const CHUNK: usize = 64;
 
@@ -74,6 +80,28 @@ pub struct Config {
     pub glb_name: String,
     /// The command line, for provenance.
     pub args: Vec<String>,
+    /// Glossy, view-dependent transfer through a factorization (`--factors`), else diffuse.
+    pub glossy: Option<GlossyConfig>,
+}
+
+/// What a glossy bake is made from: `factor-brdf`'s factorization, read back as `render
+/// --factors` reads it, and how many of its terms to keep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GlossyConfig {
+    /// The factorization (its leading terms at least).
+    pub factorization: Factorization,
+    /// Whether max(cos θ_i, 0) is folded into it.
+    pub cosine: bool,
+    /// Terms K kept.
+    pub terms: usize,
+    /// Why K is what it is, in words (given, or the energy fraction it reaches).
+    pub terms_reason: String,
+    /// Samples of the basis per cell along each axis.
+    pub cell_samples: usize,
+    /// The factor document's name, as given.
+    pub factors: String,
+    /// The factored BRDF's canonical spec.
+    pub brdf: String,
 }
 
 impl Default for Config {
@@ -89,6 +117,7 @@ impl Default for Config {
             source: String::new(),
             glb_name: String::new(),
             args: Vec::new(),
+            glossy: None,
         }
     }
 }
@@ -117,8 +146,41 @@ pub struct TransferBody {
     pub glb: GlbInfo,
     /// In which axes the SH basis is evaluated.
     pub frame: String,
-    /// The integration error of the direct part, measured (shadowed and interreflected modes).
+    /// The integration error of the direct part, measured (diffuse shadowed and interreflected
+    /// modes).
     pub error: Option<ErrorFigures>,
+    /// The glossy transfer's factorization (absent for diffuse transfer).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glossy: Option<GlossyInfo>,
+}
+
+/// How a glossy transfer was made and how it is relit (`docs/formats/transfer.md`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct GlossyInfo {
+    /// Terms K: the transfer is a K × n² matrix per vertex.
+    pub terms: usize,
+    /// Why K, in words.
+    pub terms_reason: String,
+    /// Energy fraction of the BRDF matrix the K terms hold (Σ_{k<K} σ_k² / Σ σ²).
+    pub energy: f64,
+    /// ‖M − M_K‖_F / ‖M‖_F = √(1 − energy): the factorization's own relative error (Eckart–Young).
+    pub relative_frobenius_error: f64,
+    /// σ_0 … σ_{K−1}, folded into the transfer (h_k is relit unscaled).
+    pub singular_values: Vec<f64>,
+    /// The factored BRDF.
+    pub brdf: String,
+    /// The `prtkit.factor` document whose factor file holds g_k and h_k.
+    pub factors: String,
+    /// Its grid: `sphere` or `hemisphere`.
+    pub domain: crate::factor::Domain,
+    /// Its bins n along cos θ and φ.
+    pub resolution: usize,
+    /// Whether the factors hold max(cos θ_i, 0) (else the transfer applies it).
+    pub cosine: bool,
+    /// Samples of the basis per cell along each axis.
+    pub cell_samples: usize,
+    /// How B is evaluated at run time, in words.
+    pub relighting: String,
 }
 
 /// How T was integrated.
@@ -301,17 +363,40 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         return Err(Error::ZeroArea(name.clone()));
     }
 
+    let glossy = match &config.glossy {
+        Some(g) => Some(glossy_integrator(config, g)?),
+        None => None,
+    };
+
     let coeffs = n * n;
+    let per_vertex = glossy.as_ref().map_or(coeffs, Glossy::values_per_vertex);
     let vertices = mesh.positions.len();
     let offset = config.offset * mesh.extent();
     let start = Instant::now();
-    let mut transfer = vec![0.0; vertices * coeffs];
+    let mut transfer = vec![0.0; vertices * per_vertex];
     let mut error = None;
     let mut interreflection = None;
     let mut trace_seconds = 0.0;
     let mut bounce_seconds = 0.0;
-    match config.mode {
-        Mode::Unshadowed => {
+    let mut rays_per_vertex = config.rays;
+    match (config.mode, &glossy) {
+        (_, Some(glossy)) => {
+            let occluders = (config.mode == Mode::Shadowed).then(|| Occluders::new(&mesh.positions, &mesh.triangles));
+            rays_per_vertex = if occluders.is_some() { glossy.rays() } else { 0 };
+            progress.start(if occluders.is_some() { "visibility" } else { "transfer (unshadowed)" }, vertices as u64);
+            // Chunks of vertices side by side; each vertex's sums run in the cells' fixed order.
+            transfer.par_chunks_mut(CHUNK * per_vertex).enumerate().for_each(|(c, out)| {
+                for (k, t) in out.chunks_exact_mut(per_vertex).enumerate() {
+                    let v = c * CHUNK + k;
+                    let occluders = occluders.as_ref().map(|o| (o, offset));
+                    glossy.integrate(mesh.positions[v], mesh.normals[v], occluders, t);
+                }
+                progress.advance((out.len() / per_vertex) as u64);
+            });
+            progress.finish();
+            trace_seconds = start.elapsed().as_secs_f64();
+        }
+        (Mode::Unshadowed, None) => {
             progress.start("transfer (unshadowed)", vertices as u64);
             transfer.par_chunks_mut(CHUNK * coeffs).enumerate().for_each(|(c, out)| {
                 for (k, t) in out.chunks_exact_mut(coeffs).enumerate() {
@@ -321,7 +406,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
             });
             progress.finish();
         }
-        Mode::Shadowed => {
+        (Mode::Shadowed, None) => {
             let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
             let directions = Stratified::new(config.rays, config.seed);
             let integrator = Shadowed::new(&directions, n, &occluders);
@@ -346,7 +431,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
             }
             error = Some(integration_error(mesh, &points, n, config.rays, config.albedo));
         }
-        Mode::Interreflected => {
+        (Mode::Interreflected, None) => {
             let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
             let directions = Stratified::new(config.rays, config.seed);
             let tracer = Tracer::new(mesh, &occluders, &directions, n, offset);
@@ -387,16 +472,21 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     }
     let seconds = start.elapsed().as_secs_f64();
 
-    let attributes: Vec<String> = (0..coeffs.div_ceil(4)).map(|k| format!("_PRT_{k}")).collect();
-    let (method, rays, description) = match config.mode {
-        Mode::Unshadowed => (
+    let attributes: Vec<String> = (0..per_vertex.div_ceil(4)).map(|k| format!("_PRT_{k}")).collect();
+    let (method, rays, description) = match (config.mode, &glossy) {
+        (mode, Some(glossy)) => (
+            "factor grid cells",
+            rays_per_vertex,
+            config.glossy.as_ref().map(|g| glossy_description(g, mode, glossy.rays())).unwrap_or_default(),
+        ),
+        (Mode::Unshadowed, None) => (
             "exact quadrature",
             0,
             "8 Gauss-Legendre nodes in n.w times 18 equally spaced azimuths about the normal: exact for the \
              band-limited integrand, so T_lm = (albedo/pi) A_l Y_lm(n) to rounding"
                 .to_string(),
         ),
-        Mode::Shadowed | Mode::Interreflected => (
+        (Mode::Shadowed | Mode::Interreflected, None) => (
             "stratified rays",
             config.rays,
             format!(
@@ -407,9 +497,10 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
             ),
         ),
     };
+    let glossy_info = config.glossy.as_ref().map(|g| glossy_info(g, n));
     let body = TransferBody {
         order: n,
-        coefficients: coeffs,
+        coefficients: per_vertex,
         mode: config.mode,
         interreflection,
         albedo: config.albedo,
@@ -430,21 +521,29 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         glb: GlbInfo {
             file: config.glb_name.clone(),
             attributes: attributes.clone(),
-            packing: format!(
-                "_PRT_k is a float VEC4 holding coefficients 4k..4k+3 in index order i = l(l+1)+m; \
-                 {} coefficients, zeros pad the last attribute",
-                coeffs
-            ),
+            packing: match &glossy_info {
+                None => format!(
+                    "_PRT_k is a float VEC4 holding coefficients 4k..4k+3 in index order i = l(l+1)+m; \
+                     {coeffs} coefficients, zeros pad the last attribute"
+                ),
+                Some(g) => format!(
+                    "_PRT_k is a float VEC4 holding values 4k..4k+3 of the {} x {coeffs} matrix, term-major: value \
+                     t*{coeffs} + i is term t's coefficient i = l(l+1)+m (sigma_t folded in); {per_vertex} values, \
+                     zeros pad the last attribute",
+                    g.terms
+                ),
+            },
         },
         frame: "the mesh file's own axes (positions as stored): the SH basis is evaluated with x, y, z as \
                 stored, so lighting SH must be expressed in those axes (prtkit's +Z-up documents apply as they are \
                 when the mesh's +Z is up; a +Y-up glTF asset needs the lighting rotated)"
             .into(),
         error,
+        glossy: glossy_info,
     };
-    let glb = glb::encode(&glb_mesh(mesh, &transfer, coeffs, &body)).map_err(Error::Glb)?;
+    let glb = glb::encode(&glb_mesh(mesh, &transfer, per_vertex, &body)).map_err(Error::Glb)?;
     let document = Document::new(FORMAT, VERSION, Provenance::new("transfer", &config.args, vec![name.clone()]), body);
-    let cast = if config.mode == Mode::Unshadowed { 0 } else { vertices * config.rays };
+    let cast = if config.mode == Mode::Unshadowed { 0 } else { vertices * rays_per_vertex };
     let summary = Summary {
         vertices,
         rays,
@@ -467,6 +566,18 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
 /// The `.glb`: positions, unit normals, the transfer packed four coefficients per `_PRT_k`, and
 /// the manifest's body in the mesh's `extras` (so that the file explains itself).
 fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody) -> GlbMesh {
+    let mut extras = serde_json::json!({ "order": body.order, "mode": body.mode, "albedo": body.albedo });
+    if let Some(g) = &body.glossy {
+        extras["glossy"] = serde_json::json!({
+            "terms": g.terms,
+            "brdf": g.brdf,
+            "factors": g.factors,
+            "domain": g.domain,
+            "resolution": g.resolution,
+            "cosine": g.cosine,
+            "singular_values": g.singular_values,
+        });
+    }
     let vertices = mesh.positions.len();
     let mut attributes = vec![Attribute {
         name: "NORMAL".into(),
@@ -488,7 +599,64 @@ fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody) -
         attributes,
         triangles: mesh.triangles.clone(),
         generator: format!("prtkit {} transfer", env!("CARGO_PKG_VERSION")),
-        extras: serde_json::json!({ "prtkit.transfer": { "order": body.order, "mode": body.mode, "albedo": body.albedo } }),
+        extras: serde_json::json!({ "prtkit.transfer": extras }),
+    }
+}
+
+/// The integrator of a glossy bake, after checking what the factorization can give.
+fn glossy_integrator(config: &Config, g: &GlossyConfig) -> Result<Glossy, Error> {
+    if config.mode == Mode::Interreflected {
+        return Err(Error::Parameter(
+            "glossy transfer (--factors) is unshadowed or shadowed; its interreflections are not built".into(),
+        ));
+    }
+    let stored = g.factorization.g.len().min(g.factorization.h.len());
+    if g.terms == 0 || g.terms > stored {
+        return Err(Error::Parameter(format!(
+            "{}: --terms {} is outside 1..={stored}, the terms the factor file holds",
+            g.factors, g.terms
+        )));
+    }
+    if !(1..=MAX_CELL_SAMPLES).contains(&g.cell_samples) {
+        return Err(Error::Parameter(format!("--cell-samples {} is outside 1..={MAX_CELL_SAMPLES}", g.cell_samples)));
+    }
+    Ok(Glossy::new(&g.factorization, g.terms, g.cosine, config.order, g.cell_samples))
+}
+
+/// How a glossy bake integrates, in words.
+fn glossy_description(g: &GlossyConfig, mode: Mode, cells: usize) -> String {
+    let (n, sub) = (g.factorization.grid.n, g.cell_samples);
+    format!(
+        "over the {cells} cells of the factors' {n}x{n} (cos theta, phi) grid in the normal's frame F = Rz(phi_n) \
+         Ry(theta_n): T_kj = sigma_k sum_c V(c) g_k(c) sum_s w_s Y_j(F w_cs), {sub}x{sub} basis samples per cell \
+         weighted by the cell's solid angle{}; {}",
+        if g.cosine { "" } else { " times max(cos theta, 0)" },
+        if mode == Mode::Shadowed { "V(c) by one ray along the cell's centre" } else { "V = 1 (unshadowed)" }
+    )
+}
+
+/// The manifest's account of a glossy bake.
+fn glossy_info(g: &GlossyConfig, order: usize) -> GlossyInfo {
+    let f = &g.factorization;
+    let energy = f.cumulative_energy().get(g.terms - 1).copied().unwrap_or(1.0);
+    GlossyInfo {
+        terms: g.terms,
+        terms_reason: g.terms_reason.clone(),
+        energy,
+        relative_frobenius_error: f.reconstruction_error(g.terms),
+        singular_values: f.singular_values[..g.terms].to_vec(),
+        brdf: g.brdf.clone(),
+        factors: g.factors.clone(),
+        domain: f.grid.domain,
+        resolution: f.grid.n,
+        cosine: g.cosine,
+        cell_samples: g.cell_samples,
+        relighting: format!(
+            "B(x, w_o) = sum_k h_k(F^T w_o) c_k(x), c_k = sum_i T_ki L_i over the {} coefficients of the lighting; \
+             F = Rz(phi_n) Ry(theta_n) of the normal's spherical angles (its columns: the direction of increasing \
+             theta, of increasing phi, the normal); h_k bilinear on the factor file's grid",
+            order * order
+        ),
     }
 }
 

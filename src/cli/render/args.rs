@@ -20,7 +20,8 @@ pub enum ShadingArg {
     /// From an `ibl` bake (--ibl), with the split sum a glTF/PBR engine uses; --brdf gltf:….
     Ibl,
     /// From a `transfer` bake (--transfer FILE.glb): the per-vertex dot product of the transfer
-    /// with the environment's SH, interpolated over the triangles; --scene the baked mesh.
+    /// with the environment's SH, interpolated over the triangles; --scene the baked mesh. A
+    /// glossy bake also needs --factors: B = Σ_k h_k(ω_o) (T_k · L).
     Transfer,
     /// Ground truth: sum over every environment texel of L ρ cos (× visibility on meshes).
     Reference,
@@ -100,6 +101,7 @@ pub struct Args {
 
     /// factored: a prtkit.factor document written by `factor-brdf --factors FILE.exr` (names
     /// the EXR beside it, so a file: not `-`). Without it the BRDF is factored here, on the hemisphere with the cosine folded in.
+    /// transfer: the document a glossy bake was made from (its h_k are evaluated per pixel).
     #[arg(long, value_name = "FACTOR.json")]
     pub factors: Option<PathBuf>,
 

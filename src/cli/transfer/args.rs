@@ -6,12 +6,15 @@ use crate::transfer::stage::Mode;
 use clap::Parser;
 use std::path::PathBuf;
 
-/// Bake a mesh's diffuse precomputed radiance transfer (Sloan, Kautz & Snyder 2002).
+/// Bake a mesh's precomputed radiance transfer: diffuse (Sloan, Kautz & Snyder 2002) or glossy
+/// through the in-out factorization (Mahajan, Tseng & Ramamoorthi 2008).
 ///
 /// Reads an OBJ or PLY mesh (every object in it; they shadow each other) and writes, per vertex, the
 /// transfer vector T_i = (albedo/π) ∫ V(x,ω) max(n·ω,0) Y_i(ω) dω, so that a renderer relights it
 /// under any SH lighting L as B = Σ_i T_i L_i: a `.glb` with the transfer as `_PRT_k` vertex
-/// attributes, a `prtkit.transfer` manifest and, optionally, the GLSL of the dot product.
+/// attributes, a `prtkit.transfer` manifest and, optionally, the GLSL of the dot product. With
+/// --factors, a K × n² matrix per vertex for a glossy, view-dependent BRDF instead:
+/// B(x,ω_o) = Σ_k h_k(ω_o) (T_k · L).
 #[derive(Debug, Parser)]
 #[command(name = "transfer", version)]
 pub struct Args {
@@ -72,6 +75,28 @@ pub struct Args {
     /// diagonal (stated in the manifest with its absolute value).
     #[arg(long, default_value_t = 1e-4)]
     pub offset: f64,
+
+    /// Glossy, view-dependent transfer: the `prtkit.factor` document `factor-brdf --factors
+    /// FILE.exr` wrote (the BRDF's in-out factorization, read back as `render --factors` reads
+    /// it). Per vertex a K × n² matrix T with B(x,ω_o) = Σ_k h_k(ω_o) (T_k · L) (Mahajan et al.
+    /// 2008, eq. 4); unshadowed or shadowed (one ray per cell of the factors' grid)
+    #[arg(long, value_name = "FACTOR.json")]
+    pub factors: Option<PathBuf>,
+
+    /// With --factors: terms K to keep (at most those the factor file holds). Default: the
+    /// fewest holding --energy of the BRDF matrix's energy
+    #[arg(short = 'K', long, value_name = "K")]
+    pub terms: Option<usize>,
+
+    /// With --factors and no -K: the energy fraction K must reach (the factor document's
+    /// cumulative energy; `count-terms` predicts the same figure)
+    #[arg(long, value_name = "F")]
+    pub energy: Option<f64>,
+
+    /// With --factors: samples of the SH basis per grid cell along each axis (1 to 8; as
+    /// `render --cell-samples`)
+    #[arg(long, value_name = "S")]
+    pub cell_samples: Option<usize>,
 
     /// Print a JSON summary (vertices, rays, seconds, rays per second) on stdout.
     #[arg(long)]

@@ -1,0 +1,288 @@
+//! Glossy transfer (`transfer --factors`, issue 32 item 3) against independent derivations:
+//!
+//! - relit by lighting of at most n bands, a glossy bake is the factored render of the same
+//!   mesh, factors and lighting (`render --shading factored`, which gathers the environment per
+//!   cell instead of going through SH): B = Σ_k h_k(ω_o) c_k holds whichever way c_k is made;
+//! - a Lambertian factorization at K = 1 is the diffuse transfer (σ h g = ρ cos/π, so the
+//!   glossy path's normalizations are checked against `transfer`'s exact unshadowed quadrature);
+//! - bakes are byte-identical across thread counts; every mismatch between a bake, its factors
+//!   and `--brdf` exits 2 naming the file.
+
+mod common;
+
+use common::{cmd, stderr};
+use std::path::Path;
+
+fn run_in(dir: &Path, stage: &str, args: &[&str]) {
+    let out = cmd(stage).args(args).arg("-q").current_dir(dir).output().unwrap();
+    assert!(out.status.success(), "{stage} {args:?}: {}", stderr(&out));
+}
+
+/// `render ARGS --json` in `dir`: its relative RMS error against `--compare`.
+fn relative_error(dir: &Path, args: &[&str]) -> f64 {
+    let out = cmd("render").args(args).args(["-q", "--json"]).current_dir(dir).output().unwrap();
+    assert!(out.status.success(), "render {args:?}: {}", stderr(&out));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    v["metrics"]["rel_error"].as_f64().unwrap()
+}
+
+fn mesh(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes").join(name).display().to_string()
+}
+
+/// A lat-long sky of bands 0–2 only (a different quadratic per channel), positive everywhere:
+/// SH order 3 holds it exactly.
+fn band_limited_sky(dir: &Path) {
+    let sky = common::latlong(128, 64, |d| {
+        let q = |a: f64, b: f64, c: f64| (2.0 + a * d.x + b * d.y * d.z + c * (3.0 * d.z * d.z - 1.0)) as f32;
+        [q(0.6, 0.5, 0.3), q(-0.4, 0.3, 0.2), q(0.2, -0.6, -0.1)]
+    });
+    common::write_pfm(dir, "sky.pfm", &sky);
+}
+
+#[test]
+fn a_glossy_bake_relit_by_band_limited_light_is_the_factored_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    band_limited_sky(d);
+    run_in(
+        d,
+        "factor-brdf",
+        &[
+            "phong:s=8",
+            "--domain",
+            "hemisphere",
+            "--resolution",
+            "16",
+            "--cosine",
+            "--factors",
+            "p.exr",
+            "--terms",
+            "10",
+            "-o",
+            "p.json",
+        ],
+    );
+    let bowl = mesh("bowl-ball.obj");
+    run_in(d, "transfer", &[&bowl, "-n", "4", "--factors", "p.json", "-K", "10", "--glb", "g.glb", "-o", "g.json"]);
+    let view = [
+        "--scene",
+        bowl.as_str(),
+        "--brdf",
+        "phong:s=8",
+        "--res",
+        "64x64",
+        "--eye",
+        "0,-1.6,3.2",
+        "--target",
+        "0,0,-0.45",
+    ];
+    let factored = |k: &str, out: &str| {
+        let args = [
+            &["sky.pfm"][..],
+            &view,
+            &["--shading", "factored", "--factors", "p.json", "-K", k, "--bright", "off", "-o", out],
+        ]
+        .concat();
+        run_in(d, "render", &args);
+    };
+    factored("10", "f10.exr");
+    factored("5", "f5.exr");
+    let relit = |compare: &str| {
+        let args = [
+            &["sky.pfm"][..],
+            &view,
+            &["--shading", "transfer", "--transfer", "g.glb", "--factors", "p.json", "--compare", compare],
+        ]
+        .concat();
+        relative_error(d, &args)
+    };
+    let same_k = relit("f10.exr");
+    let other_k = relit("f5.exr");
+    eprintln!("glossy bake (K = 10, n = 4) vs factored render: K = 10 {same_k:.2e}, K = 5 {other_k:.2e}");
+    // What separates them: the factored render's bilinear lookups of the 128 × 64 map against
+    // the SH of its texels, and rays of single against double precision at grazing cells.
+    assert!(same_k < 1e-3, "{same_k:e}");
+    // Not vacuous: the terms K = 5 leaves out are visible.
+    assert!(other_k > 10.0 * same_k && other_k > 1e-2, "{other_k:e}");
+}
+
+#[test]
+fn a_lambertian_factorization_at_one_term_is_the_diffuse_transfer() {
+    // ρ cos θ_i/π on the hemisphere is rank one: σ_0 h_0 g_0 = ρ cos/π with h_0 constant. So a
+    // glossy bake at K = 1 relights as the diffuse transfer does, which `transfer` computes by
+    // an exact quadrature (unshadowed) — the same image up to the grid's midpoint rule.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    band_limited_sky(d);
+    run_in(
+        d,
+        "factor-brdf",
+        &[
+            "lambert:albedo=0.6",
+            "--domain",
+            "hemisphere",
+            "--resolution",
+            "32",
+            "--cosine",
+            "--factors",
+            "l.exr",
+            "--terms",
+            "2",
+            "-o",
+            "l.json",
+        ],
+    );
+    let sphere = mesh("sphere.obj");
+    let common = [sphere.as_str(), "-n", "3", "--mode", "unshadowed"];
+    run_in(d, "transfer", &[&common[..], &["--albedo", "0.6", "--glb", "diffuse.glb", "-o", "diffuse.json"]].concat());
+    run_in(
+        d,
+        "transfer",
+        &[&common[..], &["--factors", "l.json", "-K", "1", "--glb", "glossy.glb", "-o", "glossy.json"]].concat(),
+    );
+    let view = ["--scene", sphere.as_str(), "--brdf", "lambert:albedo=0.6", "--res", "48x48"];
+    run_in(
+        d,
+        "render",
+        &[&["sky.pfm"][..], &view, &["--shading", "transfer", "--transfer", "diffuse.glb", "-o", "d.exr"]].concat(),
+    );
+    let err = relative_error(
+        d,
+        &[
+            &["sky.pfm"][..],
+            &view,
+            &["--shading", "transfer", "--transfer", "glossy.glb", "--factors", "l.json", "--compare", "d.exr"],
+        ]
+        .concat(),
+    );
+    eprintln!("lambert at K = 1 through the factors vs the diffuse transfer: relative RMS {err:.2e}");
+    assert!(err < 2e-4, "{err:e}");
+    let manifest: serde_json::Value = common::read(&d.join("glossy.json"));
+    assert_eq!(manifest["glossy"]["terms"], 1);
+    assert!(manifest["glossy"]["energy"].as_f64().unwrap() > 0.999_999, "{manifest}");
+    assert_eq!(manifest["coefficients"], 9);
+}
+
+#[test]
+fn glossy_bakes_are_the_same_bytes_for_any_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    run_in(
+        d,
+        "factor-brdf",
+        &[
+            "phong:s=8",
+            "--domain",
+            "hemisphere",
+            "--resolution",
+            "12",
+            "--cosine",
+            "--factors",
+            "p.exr",
+            "--terms",
+            "6",
+            "-o",
+            "p.json",
+        ],
+    );
+    let bowl = mesh("bowl.obj");
+    let mut bakes = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let glb = format!("t{threads}.glb");
+        run_in(
+            d,
+            "transfer",
+            &[
+                &bowl,
+                "-n",
+                "3",
+                "--factors",
+                "p.json",
+                "--energy",
+                "0.9",
+                "--glb",
+                &glb,
+                "--threads",
+                threads,
+                "-o",
+                "-",
+            ],
+        );
+        bakes.push(std::fs::read(d.join(glb)).unwrap());
+    }
+    assert!(bakes.windows(2).all(|w| w[0] == w[1]));
+}
+
+#[test]
+fn mismatched_bakes_factors_and_brdfs_exit_2_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    common::sky_pfm(d, 16, 8);
+    for (brdf, name) in [("phong:s=8", "p"), ("phong:s=20", "q")] {
+        let (exr, json) = (format!("{name}.exr"), format!("{name}.json"));
+        run_in(
+            d,
+            "factor-brdf",
+            &[
+                brdf,
+                "--domain",
+                "hemisphere",
+                "--resolution",
+                "8",
+                "--cosine",
+                "--factors",
+                &exr,
+                "--terms",
+                "4",
+                "-o",
+                &json,
+            ],
+        );
+    }
+    let bowl = mesh("bowl.obj");
+    run_in(d, "transfer", &[&bowl, "-n", "2", "--factors", "p.json", "-K", "3", "--glb", "g.glb", "-o", "g.json"]);
+    run_in(d, "transfer", &[&bowl, "-n", "2", "--rays", "16", "--glb", "diffuse.glb", "-o", "diffuse.json"]);
+    let render: [(&[&str], &str); 4] = [
+        (
+            &["--transfer", "g.glb", "--brdf", "phong:s=8"],
+            "g.glb: a glossy transfer: relighting it needs h_k, --factors p.json",
+        ),
+        (&["--transfer", "g.glb", "--brdf", "phong:s=8", "--factors", "q.json"], "g.glb was baked from p.json"),
+        (&["--transfer", "g.glb", "--brdf", "phong:s=9", "--factors", "p.json"], "g.glb: the transfer holds phong:s=8"),
+        (
+            &["--transfer", "diffuse.glb", "--factors", "p.json"],
+            "diffuse.glb: a diffuse transfer; --factors is for glossy",
+        ),
+    ];
+    for (args, says) in render {
+        let out = cmd("render")
+            .args(["sky.pfm", "--scene", &bowl, "--shading", "transfer", "-o", "o.exr"])
+            .args(args)
+            .current_dir(d)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
+        assert!(!d.join("o.exr").exists());
+    }
+    let transfer: [(&[&str], &str); 5] = [
+        (&["--factors", "p.json", "-K", "5"], "--terms 5 is outside 1..=4"),
+        (&["--factors", "p.json", "--mode", "interreflected"], "interreflections are not built"),
+        (&["-K", "2"], "-K, --energy and --cell-samples are for glossy transfer"),
+        (&["--factors", "p.json", "-K", "2", "--energy", "0.9"], "give one"),
+        (&["--factors", "missing.json"], "missing.json"),
+    ];
+    for (args, says) in transfer {
+        let out = cmd("transfer")
+            .arg(&bowl)
+            .args(["--glb", "x.glb", "-o", "x.json"])
+            .args(args)
+            .current_dir(d)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
+        assert!(!d.join("x.glb").exists() && !d.join("x.json").exists());
+    }
+}
