@@ -10,7 +10,9 @@
 #   6. ibl bakes the sky for a glTF/PBR engine (KTX2 mip chain, SH snippets, DFG table);
 #   7. render shades a grid of glTF materials from that bake, each next to the ground truth;
 #   8. transfer bakes a bowl holding a ball (unshadowed, shadowed, interreflected) and render
-#      relights it under two light probes and a turned one, beside the ground truth.
+#      relights it under two light probes and a turned one, beside the ground truth;
+#   9. transfer --factors bakes the same bowl in a glossy material and render relights it, view
+#      dependent, beside the factored render and the ground truth.
 # Outputs go to out/demo/ (EXR for data, PNG previews for people). Usage: scripts/demo.sh [OUTDIR]
 # Each step says what it does in one line; the stages' own notes follow (and, for a phase longer
 # than 10 s, how far it is every 10 s), so no step is silent for long.
@@ -113,6 +115,40 @@ if [ -f "$probes/grace_latlong.exr" ] && [ -f "$probes/uffizi_ict_latlong_256x12
         rows+=("$t/$name.png")
     done
     "$bin/examples/stack_panels" "$out/transfer-relit.png" "${rows[@]}"
+
+    say "9. transfer --factors: the same bowl in glossy Phong s=8, relit per frame through the in-out factorization (transfer-glossy.png)"
+    # factor-brdf factors the BRDF once; transfer keeps the fewest terms holding 99 % of its energy
+    # and bakes a K x 64 matrix per vertex (order 8, one ray per cell of the factors' grid); render
+    # relights it (K dot products per vertex, h_k per pixel) beside the factored render of the whole
+    # probe (no SH) and the ground truth.
+    g="$out/transfer-glossy"
+    mkdir -p "$g"
+    "$bin/factor-brdf" phong:s=8 --domain hemisphere --resolution 32 --cosine --factors "$g/phong8.exr" --terms 32 \
+        -o "$g/phong8.json" -q
+    "$bin/transfer" "$mesh" -n 8 --factors "$g/phong8.json" --energy 0.99 --glb "$g/glossy.glb" -o "$g/glossy.json" -q
+    k=$(sed -n 's/^ *"terms": \([0-9]*\),$/\1/p' "$g/glossy.json" | head -n 1)
+    view=(--scene "$mesh" --brdf phong:s=8 --eye 0,-1.6,3.2 --target 0,0,-0.45 --fov 34 --res 96x96 -q)
+    rows=()
+    for row in "grace grace.exr 0 3.5" "uffizi uffizi.exr 0 -2.5" "grace-turned grace.exr 120 3.5"; do
+        set -- $row
+        name=$1 env="$t/$2" turn=$3 exposure=$4
+        title=$([ "$turn" = 0 ] && echo "$name" || echo "grace +${turn}deg")
+        "$bin/render" "$env" "${view[@]}" --env-rotation "$turn" -o "$g/$name-reference.exr"
+        # The factored render has no --env-rotation (it projects the probe as stored): the turned
+        # row shows the bake and the ground truth.
+        factored=()
+        if [ "$turn" = 0 ]; then
+            "$bin/render" "$env" "${view[@]}" --shading factored --factors "$g/phong8.json" -K "$k" --bright off \
+                -o "$g/$name-factored.exr" --compare "$g/$name-reference.exr"
+            factored=(--panel-item "$title|factored K=$k|whole probe=$g/$name-factored.exr")
+        fi
+        "$bin/render" "$env" "${view[@]}" --env-rotation "$turn" --shading transfer --transfer "$g/glossy.glb" \
+            --factors "$g/phong8.json" -o "$g/$name-transfer.exr" --compare "$g/$name-reference.exr" --exposure "$exposure" \
+            --metrics "$g/$name-transfer.metrics.json" --panel "$g/$name.png" \
+            --panel-item "$title|transfer K=$k n=8=-" "${factored[@]}" --panel-item "$title|reference=$g/$name-reference.exr"
+        rows+=("$g/$name.png")
+    done
+    "$bin/examples/stack_panels" "$out/transfer-glossy.png" "${rows[@]}"
 else
     printf 'skipped: %s holds no grace_latlong.exr and uffizi_ict_latlong_256x128.hdr\n' "$probes" >&2
 fi
