@@ -143,7 +143,7 @@ if [ -f "$probes/grace_latlong.exr" ] && [ -f "$probes/uffizi_ict_latlong_256x12
             factored=(--panel-item "$title|factored K=$k|whole probe=$g/$name-factored.exr")
         fi
         "$bin/render" "$env" "${view[@]}" --env-rotation "$turn" --shading transfer --transfer "$g/glossy.glb" \
-            --factors "$g/phong8.json" -o "$g/$name-transfer.exr" --compare "$g/$name-reference.exr" --exposure "$exposure" \
+            -o "$g/$name-transfer.exr" --compare "$g/$name-reference.exr" --exposure "$exposure" \
             --metrics "$g/$name-transfer.metrics.json" --panel "$g/$name.png" \
             --panel-item "$title|transfer K=$k n=8=-" "${factored[@]}" --panel-item "$title|reference=$g/$name-reference.exr"
         rows+=("$g/$name.png")

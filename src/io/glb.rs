@@ -31,6 +31,19 @@ pub struct GlbMesh {
     pub generator: String,
     /// Application data stored in the mesh's `extras`.
     pub extras: Value,
+    /// Float arrays that are not vertex attributes (e.g. a lookup table the run time needs),
+    /// each stored as a buffer view; the mesh's `extras."prtkit.blobs"` maps each name to
+    /// `{"bufferView", "count"}` (little-endian f32).
+    pub blobs: Vec<Blob>,
+}
+
+/// A named float array stored beside the mesh.
+#[derive(Clone, Debug)]
+pub struct Blob {
+    /// Its name in `extras."prtkit.blobs"`.
+    pub name: String,
+    /// The values.
+    pub values: Vec<f32>,
 }
 
 const FLOAT: u32 = 5126;
@@ -45,10 +58,14 @@ pub fn encode(mesh: &GlbMesh) -> Result<Vec<u8>, String> {
     let mut views = Vec::new();
     let mut accessors = Vec::new();
     let mut attributes = serde_json::Map::new();
-    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: u32| {
+    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: Option<u32>| {
         let offset = bin.len();
         bin.extend_from_slice(bytes);
-        views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target}));
+        let mut view = json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len()});
+        if let Some(target) = target {
+            view["target"] = json!(target);
+        }
+        views.push(view);
         views.len() - 1
     };
     let floats = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
@@ -61,7 +78,7 @@ pub fn encode(mesh: &GlbMesh) -> Result<Vec<u8>, String> {
             hi[k] = hi[k].max(p[k]);
         }
     }
-    let view = push_view(&mut bin, &floats(&flat), ARRAY_BUFFER);
+    let view = push_view(&mut bin, &floats(&flat), Some(ARRAY_BUFFER));
     accessors.push(
         json!({"bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC3", "min": lo, "max": hi}),
     );
@@ -71,16 +88,25 @@ pub fn encode(mesh: &GlbMesh) -> Result<Vec<u8>, String> {
             return Err(format!("attribute {} holds {} values for {count} vertices", a.name, a.values.len()));
         }
         let kind = ["SCALAR", "VEC2", "VEC3", "VEC4"][a.components - 1];
-        let view = push_view(&mut bin, &floats(&a.values), ARRAY_BUFFER);
+        let view = push_view(&mut bin, &floats(&a.values), Some(ARRAY_BUFFER));
         accessors.push(json!({"bufferView": view, "componentType": FLOAT, "count": count, "type": kind}));
         attributes.insert(a.name.clone(), json!(accessors.len() - 1));
     }
     let indices: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
-    let view = push_view(&mut bin, &indices, ELEMENT_ARRAY_BUFFER);
+    let view = push_view(&mut bin, &indices, Some(ELEMENT_ARRAY_BUFFER));
     accessors.push(
         json!({"bufferView": view, "componentType": UNSIGNED_INT, "count": 3 * mesh.triangles.len(), "type": "SCALAR"}),
     );
     let indices_accessor = accessors.len() - 1;
+    let mut extras = mesh.extras.clone();
+    if !mesh.blobs.is_empty() {
+        let mut blobs = serde_json::Map::new();
+        for b in &mesh.blobs {
+            let view = push_view(&mut bin, &floats(&b.values), None);
+            blobs.insert(b.name.clone(), json!({"bufferView": view, "count": b.values.len()}));
+        }
+        extras["prtkit.blobs"] = Value::Object(blobs);
+    }
 
     let document = json!({
         "asset": {"version": "2.0", "generator": mesh.generator},
@@ -89,7 +115,7 @@ pub fn encode(mesh: &GlbMesh) -> Result<Vec<u8>, String> {
         "nodes": [{"mesh": 0}],
         "meshes": [{
             "primitives": [{"attributes": attributes, "indices": indices_accessor, "mode": 4}],
-            "extras": mesh.extras,
+            "extras": extras,
         }],
         "buffers": [{"byteLength": bin.len()}],
         "bufferViews": views,
@@ -111,6 +137,25 @@ pub fn encode(mesh: &GlbMesh) -> Result<Vec<u8>, String> {
     out.extend_from_slice(b"BIN\0");
     out.extend_from_slice(&bin);
     Ok(out)
+}
+
+/// The f32 values of the blob `name` of the first mesh (see [`GlbMesh::blobs`]): `None` when
+/// there is no such blob, an error when it does not fit the BIN chunk.
+pub fn blob(json: &Value, bin: &[u8], name: &str) -> Option<Result<Vec<f32>, String>> {
+    let entry = json["meshes"][0]["extras"]["prtkit.blobs"].get(name)?;
+    let read = || -> Result<Vec<f32>, String> {
+        let view = entry["bufferView"].as_u64().ok_or("no bufferView")? as usize;
+        let count = entry["count"].as_u64().ok_or("no count")? as usize;
+        let view = &json["bufferViews"][view];
+        let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let length = view["byteLength"].as_u64().ok_or("a buffer view without byteLength")? as usize;
+        if count.checked_mul(4) != Some(length) {
+            return Err(format!("{count} values in a buffer view of {length} bytes"));
+        }
+        let bytes = start.checked_add(length).and_then(|end| bin.get(start..end)).ok_or("past the BIN chunk")?;
+        Ok(bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
+    };
+    Some(read().map_err(|e| format!("blob {name}: {e}")))
 }
 
 /// The JSON chunk of a `.glb` (for readers and tests): `None` when the header is not glTF 2.

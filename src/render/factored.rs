@@ -149,16 +149,15 @@ impl Factored {
     /// The shader of a mesh whose c_k per vertex (`coeffs[vertex * K + k]`, σ_k folded in) were
     /// computed elsewhere: relit from a glossy `transfer` bake, c_k = Σ_j T_kj L_j.
     pub fn from_vertex_coefficients(
-        f: &Factorization,
-        terms: usize,
+        grid: Grid,
+        h: &[Vec<f64>],
         triangles: Vec<[u32; 3]>,
         coeffs: Vec<[f64; 3]>,
     ) -> Self {
-        let k = terms.min(f.h.len());
         Factored {
-            sigma: vec![1.0; k],
-            h: f.h[..k].iter().map(|h| with_pole_values(h, f.grid.n)).collect(),
-            grid: f.grid,
+            sigma: vec![1.0; h.len()],
+            h: h.iter().map(|h| with_pole_values(h, grid.n)).collect(),
+            grid,
             transport: Transport {
                 support: Support::Vertices,
                 frames: Vec::new(),

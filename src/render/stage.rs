@@ -482,9 +482,12 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
             };
             bake.check_mesh(mesh, "the --scene mesh").map_err(bad)?;
             // The BRDF the bake holds must be --brdf's (the reference and the labels use it).
-            let glossy_factors = match (&bake.glossy, factors) {
-                (Some(glossy), Some(stored)) => {
-                    glossy.check_factors(&bake.name, &stored.factorization, &stored.name).map_err(bad)?;
+            // A glossy bake carries h_k; --factors, when given, must be what it was baked from.
+            let glossy = match (&bake.glossy, factors) {
+                (Some(glossy), stored) => {
+                    if let Some(stored) = stored {
+                        glossy.check_factors(&bake.name, &stored.factorization, &stored.name).map_err(bad)?;
+                    }
                     if brdf.spec() != glossy.brdf {
                         return Err(bad(format!(
                             "{}: the transfer holds {}, --brdf says {}",
@@ -493,13 +496,7 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                             brdf.spec()
                         )));
                     }
-                    Some(&stored.factorization)
-                }
-                (Some(glossy), None) => {
-                    return Err(bad(format!(
-                        "{}: a glossy transfer: relighting it needs h_k, --factors {} (the document it was baked from)",
-                        bake.name, glossy.factors
-                    )))
+                    Some(glossy)
                 }
                 (None, Some(_)) => {
                     return Err(bad(format!("{}: a diffuse transfer; --factors is for glossy bakes", bake.name)))
@@ -544,11 +541,11 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 frames_per_second: 1.0 / times[0],
                 median_frames_per_second: 1.0 / times[RELIGHT_FRAMES / 2],
             });
-            match glossy_factors {
+            match glossy {
                 // B(x, ω_o) = Σ_k h_k(F_xᵀ ω_o) c_k(x), c_k interpolated over the triangle.
-                Some(f) => {
+                Some(g) => {
                     let coeffs = relit.iter().map(|c| c.map(f64::from)).collect();
-                    let shader = Factored::from_vertex_coefficients(f, bake.terms(), mesh.triangles.clone(), coeffs);
+                    let shader = Factored::from_vertex_coefficients(g.grid(), &g.h, mesh.triangles.clone(), coeffs);
                     let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
                     (frame, format!("transfer glossy {} n={} K={}", bake.mode, bake.order, bake.terms()))
                 }

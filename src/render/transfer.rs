@@ -58,11 +58,19 @@ pub struct GlossyBake {
     pub cosine: bool,
     /// σ_0 … σ_{K−1}, folded into the transfer.
     pub singular_values: Vec<f64>,
+    /// h_0 … h_{K−1} on the grid, n² values each (the `.glb`'s `glossy.h` blob).
+    #[serde(skip)]
+    pub h: Vec<Vec<f64>>,
 }
 
 impl GlossyBake {
+    /// The factor grid h_k is sampled on.
+    pub fn grid(&self) -> crate::factor::Grid {
+        crate::factor::Grid { n: self.resolution, domain: self.domain }
+    }
+
     /// Whether `f` (read from `factors_name`) is the factorization this bake was made with: the
-    /// same grid and the same leading singular values (to the f32 the file keeps the factors in).
+    /// same grid and the same leading singular values.
     pub fn check_factors(
         &self,
         bake: &str,
@@ -108,19 +116,39 @@ impl TransferBake {
             return Err(bad(&format!("order {order} is outside 1..={}", crate::transfer::stage::MAX_ORDER)));
         }
         let mode = extras["mode"].as_str().ok_or_else(|| bad("no extras.prtkit.transfer.mode"))?.to_string();
-        let glossy = match extras.get("glossy") {
+        let mut glossy = match extras.get("glossy") {
             None => None,
             Some(g) => Some(
                 serde_json::from_value::<GlossyBake>(g.clone())
                     .map_err(|e| bad(&format!("extras.prtkit.transfer.glossy: {e}")))?,
             ),
         };
-        if let Some(g) = &glossy {
+        if let Some(g) = &mut glossy {
             if !(1..=crate::limits::MAX_FACTOR_RESOLUTION.pow(2)).contains(&g.terms)
                 || g.singular_values.len() != g.terms
             {
                 return Err(bad(&format!("glossy terms {} with {} singular values", g.terms, g.singular_values.len())));
             }
+            if !(2..=crate::limits::MAX_FACTOR_RESOLUTION).contains(&g.resolution) {
+                return Err(bad(&format!(
+                    "glossy resolution {} is outside 2..={}",
+                    g.resolution,
+                    crate::limits::MAX_FACTOR_RESOLUTION
+                )));
+            }
+            let cells = g.resolution * g.resolution;
+            let h = glb::blob(&gltf, bin, crate::transfer::stage::GLOSSY_H_BLOB)
+                .ok_or_else(|| bad("a glossy transfer without its glossy.h blob"))?
+                .map_err(|e| bad(&e))?;
+            if h.len() != g.terms * cells || h.iter().any(|v| !v.is_finite()) {
+                return Err(bad(&format!(
+                    "glossy.h holds {} values, not {} finite ones ({} terms of {cells})",
+                    h.len(),
+                    g.terms * cells,
+                    g.terms
+                )));
+            }
+            g.h = h.chunks_exact(cells).map(|t| t.iter().map(|&v| v as f64).collect()).collect();
         }
         let terms = glossy.as_ref().map_or(1, |g| g.terms);
         let albedo = extras["albedo"].as_f64().filter(|a| a.is_finite()).ok_or_else(|| bad("no finite albedo"))?;

@@ -15,7 +15,7 @@ use super::interreflect::{Hits, Storage, Tracer};
 use super::shaders::{snippet, Language};
 use super::visibility::{triangle_area, Occluders};
 use crate::factor::Factorization;
-use crate::io::glb::{self, Attribute, GlbMesh};
+use crate::io::glb::{self, Attribute, Blob, GlbMesh};
 use crate::io::{Document, Provenance};
 use crate::limits::LimitError;
 use crate::mesh::Mesh;
@@ -541,7 +541,11 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         error,
         glossy: glossy_info,
     };
-    let glb = glb::encode(&glb_mesh(mesh, &transfer, per_vertex, &body)).map_err(Error::Glb)?;
+    let h = config
+        .glossy
+        .as_ref()
+        .map(|g| g.factorization.h[..g.terms].iter().flatten().map(|&v| v as f32).collect::<Vec<f32>>());
+    let glb = glb::encode(&glb_mesh(mesh, &transfer, per_vertex, &body, h)).map_err(Error::Glb)?;
     let document = Document::new(FORMAT, VERSION, Provenance::new("transfer", &config.args, vec![name.clone()]), body);
     let cast = if config.mode == Mode::Unshadowed { 0 } else { vertices * rays_per_vertex };
     let summary = Summary {
@@ -565,7 +569,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
 
 /// The `.glb`: positions, unit normals, the transfer packed four coefficients per `_PRT_k`, and
 /// the manifest's body in the mesh's `extras` (so that the file explains itself).
-fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody) -> GlbMesh {
+fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody, h: Option<Vec<f32>>) -> GlbMesh {
     let mut extras = serde_json::json!({ "order": body.order, "mode": body.mode, "albedo": body.albedo });
     if let Some(g) = &body.glossy {
         extras["glossy"] = serde_json::json!({
@@ -600,8 +604,14 @@ fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody) -
         triangles: mesh.triangles.clone(),
         generator: format!("prtkit {} transfer", env!("CARGO_PKG_VERSION")),
         extras: serde_json::json!({ "prtkit.transfer": extras }),
+        blobs: h.map(|values| Blob { name: GLOSSY_H_BLOB.into(), values }).into_iter().collect(),
     }
 }
+
+/// The blob of a glossy `.glb` holding h_0 … h_{K−1} on the factors' grid: term-major, each
+/// n² values in the grid's index order j·n + k (j the cos θ bin from the pole, k the φ bin),
+/// as the factor file's `h` layer (`docs/formats/transfer.md`), so the `.glb` relights alone.
+pub const GLOSSY_H_BLOB: &str = "glossy.h";
 
 /// The integrator of a glossy bake, after checking what the factorization can give.
 fn glossy_integrator(config: &Config, g: &GlossyConfig) -> Result<Glossy, Error> {

@@ -21,7 +21,7 @@ pub enum ShadingArg {
     Ibl,
     /// From a `transfer` bake (--transfer FILE.glb): the per-vertex dot product of the transfer
     /// with the environment's SH, interpolated over the triangles; --scene the baked mesh. A
-    /// glossy bake also needs --factors: B = Σ_k h_k(ω_o) (T_k · L).
+    /// glossy bake is relit as B = Σ_k h_k(ω_o) (T_k · L), h_k from the bake.
     Transfer,
     /// Ground truth: sum over every environment texel of L ρ cos (× visibility on meshes).
     Reference,
@@ -101,7 +101,7 @@ pub struct Args {
 
     /// factored: a prtkit.factor document written by `factor-brdf --factors FILE.exr` (names
     /// the EXR beside it, so a file: not `-`). Without it the BRDF is factored here, on the hemisphere with the cosine folded in.
-    /// transfer: the document a glossy bake was made from (its h_k are evaluated per pixel).
+    /// transfer: optional, the document a glossy bake was made from, checked against the bake.
     #[arg(long, value_name = "FACTOR.json")]
     pub factors: Option<PathBuf>,
 
