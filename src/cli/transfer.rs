@@ -7,7 +7,7 @@ use super::options::{check_json_output, Execution};
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::Output;
 use crate::mesh::Mesh;
-use crate::transfer::stage::{self, Config, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES};
+use crate::transfer::stage::{self, Compression, Config, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES};
 use anyhow::{Context as _, Result};
 pub use args::*;
 
@@ -33,8 +33,13 @@ impl TryFrom<&Args> for Config {
                 None
             }
         };
+        let compression = match (args.clusters, args.pca) {
+            (Some(clusters), Some(components)) => Some(Compression { clusters, components }),
+            _ => None,
+        };
         Ok(Config {
             glossy,
+            compression,
             order: args.order,
             mode: args.mode,
             rays: args.rays,

@@ -282,10 +282,10 @@ fn factor_dense(
     })
 }
 
-type Svd = (Vec<f64>, Option<Mat<f64>>, Option<Mat<f64>>);
+pub(crate) type Svd = (Vec<f64>, Option<Mat<f64>>, Option<Mat<f64>>);
 
 /// faer's SVD, sequential so that results are bit-identical for any thread count.
-fn run_svd(a: MatRef<'_, f64>, vectors: bool) -> Result<Svd, FactorError> {
+pub(crate) fn run_svd(a: MatRef<'_, f64>, vectors: bool) -> Result<Svd, FactorError> {
     let (rows, cols) = a.shape();
     let size = rows.min(cols);
     let mut s = Diag::<f64>::zeros(size);

@@ -38,6 +38,25 @@ pub struct TransferBake {
     pub transfer: Vec<f32>,
     /// What a glossy bake was factored with (absent for diffuse bakes).
     pub glossy: Option<GlossyBake>,
+    /// The clustered PCA the transfer is stored in (then `transfer` is empty).
+    pub compressed: Option<Compressed>,
+}
+
+/// A transfer stored by clustered PCA (Sloan et al. 2003, eq. 2): T(x) = m_c + Σ_p w_p b_cp.
+#[derive(Clone, Debug)]
+pub struct Compressed {
+    /// Clusters C.
+    pub clusters: usize,
+    /// Directions per cluster P.
+    pub components: usize,
+    /// m_c (C × D, D the values per vertex).
+    pub means: Vec<f32>,
+    /// b_cp (C × P × D).
+    pub bases: Vec<f32>,
+    /// Each vertex's cluster.
+    pub cluster_of: Vec<u32>,
+    /// Each vertex's P weights.
+    pub weights: Vec<f32>,
 }
 
 /// The factorization a glossy bake records (the `.glb` extras' `glossy`), checked against the
@@ -163,9 +182,15 @@ impl TransferBake {
             let view = &gltf["bufferViews"][a["bufferView"].as_u64().ok_or_else(|| bad("no bufferView"))? as usize];
             let start =
                 view["byteOffset"].as_u64().unwrap_or(0) as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
-            let components = if kind == "VEC3" { 3 } else { 4 };
-            let data = bin
-                .get(start..start + count * 4 * components)
+            let components = match kind {
+                "SCALAR" => 1,
+                "VEC3" => 3,
+                _ => 4,
+            };
+            let data = count
+                .checked_mul(4 * components)
+                .and_then(|length| start.checked_add(length))
+                .and_then(|end| bin.get(start..end))
                 .ok_or_else(|| bad("an accessor runs past the BIN chunk"))?;
             Ok((count, data))
         };
@@ -174,29 +199,77 @@ impl TransferBake {
         };
         let (vertices, data) = accessor(&attributes["POSITION"], "VEC3")?;
         let positions: Vec<[f32; 3]> = floats(data).chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        let coeffs = terms * order * order;
-        crate::limits::check_memory("the transfer", (vertices as u128) * (coeffs as u128) * 4)
-            .map_err(|e| bad(&e.to_string()))?;
-        let mut transfer = vec![0.0f32; vertices * coeffs];
-        for k in 0..coeffs.div_ceil(4) {
-            let (count, data) = accessor(&attributes[format!("_PRT_{k}")], "VEC4")?;
-            if count != vertices {
-                return Err(bad(&format!("_PRT_{k} has {count} vertices, POSITION {vertices}")));
-            }
-            for (v, c) in floats(data).chunks_exact(4).enumerate() {
-                for j in 0..4 {
-                    if 4 * k + j < coeffs {
-                        transfer[v * coeffs + 4 * k + j] = c[j];
+        // `per_vertex` values packed four to a VEC4 attribute PREFIX0, PREFIX1, ….
+        let vec4s = |prefix: &str, per_vertex: usize| -> Result<Vec<f32>, String> {
+            crate::limits::check_memory("the transfer", (vertices as u128) * (per_vertex as u128) * 4)
+                .map_err(|e| bad(&e.to_string()))?;
+            let mut out = vec![0.0f32; vertices * per_vertex];
+            for k in 0..per_vertex.div_ceil(4) {
+                let (count, data) = accessor(&attributes[format!("{prefix}{k}")], "VEC4")?;
+                if count != vertices {
+                    return Err(bad(&format!("{prefix}{k} has {count} vertices, POSITION {vertices}")));
+                }
+                for (v, c) in floats(data).chunks_exact(4).enumerate() {
+                    for j in 0..4 {
+                        if 4 * k + j < per_vertex {
+                            out[v * per_vertex + 4 * k + j] = c[j];
+                        }
                     }
                 }
             }
-        }
-        if transfer.iter().any(|t| !t.is_finite()) {
-            return Err(bad("a transfer coefficient is not finite"));
-        }
+            if out.iter().any(|t| !t.is_finite()) {
+                return Err(bad(&format!("a value of {prefix}k is not finite")));
+            }
+            Ok(out)
+        };
+        let coeffs = terms * order * order;
+        let (transfer, compressed) = match extras.get("cpca") {
+            None => (vec4s("_PRT_", coeffs)?, None),
+            Some(c) => {
+                let clusters = c["clusters"].as_u64().unwrap_or(0) as usize;
+                let components = c["components"].as_u64().unwrap_or(0) as usize;
+                if !(1..=crate::transfer::stage::MAX_CLUSTERS).contains(&clusters)
+                    || !(1..=crate::transfer::stage::MAX_PCA).contains(&components)
+                {
+                    return Err(bad(&format!("cpca: {clusters} clusters of {components} directions")));
+                }
+                let (count, data) = accessor(&attributes["_PRT_CLUSTER"], "SCALAR")?;
+                let cluster_of = floats(data)
+                    .into_iter()
+                    .map(|c| (c >= 0.0 && c.fract() == 0.0 && (c as usize) < clusters).then_some(c as u32))
+                    .collect::<Option<Vec<u32>>>()
+                    .filter(|_| count == vertices)
+                    .ok_or_else(|| {
+                        bad(&format!("_PRT_CLUSTER must hold {vertices} cluster numbers below {clusters}"))
+                    })?;
+                let blob = |name: &str, len: usize| -> Result<Vec<f32>, String> {
+                    let values = glb::blob(&gltf, bin, name)
+                        .ok_or_else(|| bad(&format!("no {name} blob")))?
+                        .map_err(|e| bad(&e))?;
+                    if values.len() != len || values.iter().any(|v| !v.is_finite()) {
+                        return Err(bad(&format!("{name} holds {} values, not {len} finite ones", values.len())));
+                    }
+                    Ok(values)
+                };
+                let means = blob("cpca.means", clusters * coeffs)?;
+                let bases = blob("cpca.bases", clusters * components * coeffs)?;
+                let weights = vec4s("_PRT_W_", components)?;
+                (Vec::new(), Some(Compressed { clusters, components, means, bases, cluster_of, weights }))
+            }
+        };
         let indices = &gltf["accessors"][primitive["indices"].as_u64().ok_or_else(|| bad("no indices"))? as usize];
         let triangles = indices["count"].as_u64().ok_or_else(|| bad("the indices have no count"))? as usize / 3;
-        Ok(TransferBake { name: name.to_string(), order, mode, albedo, positions, triangles, transfer, glossy })
+        Ok(TransferBake {
+            name: name.to_string(),
+            order,
+            mode,
+            albedo,
+            positions,
+            triangles,
+            transfer,
+            glossy,
+            compressed,
+        })
     }
 
     /// Whether the bake is of `mesh` (`mesh_name` for the message): the same vertices, at the same
@@ -242,8 +315,7 @@ pub fn relight(bake: &TransferBake, light: &ShCoeffs, rotation: &ShRotation, out
     let coeffs = bake.coefficients();
     let turned = rotation.apply(&light.truncated(bake.order - 1));
     let l: Vec<[f32; 3]> = turned.rgb.iter().map(|c| c.map(|x| x as f32)).collect();
-    out.clear();
-    out.extend(bake.transfer.chunks_exact(coeffs).map(|t| {
+    let dot = |t: &[f32]| {
         let mut b = [0.0f32; 3];
         for (ti, li) in t.iter().zip(&l) {
             b[0] += ti * li[0];
@@ -251,7 +323,30 @@ pub fn relight(bake: &TransferBake, light: &ShCoeffs, rotation: &ShRotation, out
             b[2] += ti * li[2];
         }
         b
-    }));
+    };
+    out.clear();
+    let Some(c) = &bake.compressed else {
+        out.extend(bake.transfer.chunks_exact(coeffs).map(dot));
+        return;
+    };
+    // Clustered PCA (Sloan et al. 2003, eq. 3): the lighting against each cluster's mean and
+    // directions once per frame, term by term; then P multiply-adds per vertex and term.
+    let (terms, p) = (bake.terms(), c.components);
+    let means: Vec<[f32; 3]> = c.means.chunks_exact(coeffs).map(dot).collect(); // C × K
+    let bases: Vec<[f32; 3]> = c.bases.chunks_exact(coeffs).map(dot).collect(); // C × P × K
+    for (&cluster, w) in c.cluster_of.iter().zip(c.weights.chunks_exact(p)) {
+        let cluster = cluster as usize;
+        for k in 0..terms {
+            let mut b = means[cluster * terms + k];
+            for (j, wj) in w.iter().enumerate() {
+                let d = bases[(cluster * p + j) * terms + k];
+                for ch in 0..3 {
+                    b[ch] += wj * d[ch];
+                }
+            }
+            out.push(b);
+        }
+    }
 }
 
 /// Shades a mesh hit by interpolating the per-vertex radiance of [`relight`] with the hit's

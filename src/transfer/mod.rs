@@ -16,6 +16,7 @@
 //! HLSL, WGSL), and [`stage`] the `transfer` stage. Glossy transfer, per-texel lightmaps, glTF
 //! input and CPCA compression are later slices of issue 32.
 
+pub mod cpca;
 pub mod diffuse;
 pub mod directions;
 pub mod glossy;

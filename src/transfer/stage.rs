@@ -8,6 +8,7 @@
 //! ray casts (2⁻²⁴ ≈ 6·10⁻⁸ of the coordinates), far below any feature a mesh is modelled with.
 //! The manifest states both numbers.
 
+use super::cpca::Cpca;
 use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
 use super::glossy::Glossy;
@@ -82,7 +83,27 @@ pub struct Config {
     pub args: Vec<String>,
     /// Glossy, view-dependent transfer through a factorization (`--factors`), else diffuse.
     pub glossy: Option<GlossyConfig>,
+    /// Clustered PCA of the transfer (`--clusters C --pca P`), else stored as it is.
+    pub compression: Option<Compression>,
 }
+
+/// How many clusters and directions CPCA keeps (Sloan et al. 2003).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Compression {
+    /// Clusters C (at most [`MAX_CLUSTERS`]; capped at the vertex count).
+    pub clusters: usize,
+    /// Principal directions per cluster P (at most [`MAX_PCA`] and the values per vertex).
+    pub components: usize,
+}
+
+/// Most CPCA clusters.
+pub const MAX_CLUSTERS: usize = 4096;
+/// Most principal directions per cluster.
+pub const MAX_PCA: usize = 64;
+/// Most multiply-adds one round of clustered PCA may take (vertices × clusters × (P + 1) ×
+/// values per vertex): about a minute per round on two cores, so that no option value runs for
+/// hours.
+pub const MAX_CPCA_ROUND_WORK: u128 = 100_000_000_000;
 
 /// What a glossy bake is made from: `factor-brdf`'s factorization, read back as `render
 /// --factors` reads it, and how many of its terms to keep.
@@ -118,6 +139,7 @@ impl Default for Config {
             glb_name: String::new(),
             args: Vec::new(),
             glossy: None,
+            compression: None,
         }
     }
 }
@@ -152,6 +174,34 @@ pub struct TransferBody {
     /// The glossy transfer's factorization (absent for diffuse transfer).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub glossy: Option<GlossyInfo>,
+    /// The clustered PCA the `.glb` stores the transfer in (absent: stored as it is).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compression: Option<CompressionInfo>,
+}
+
+/// What CPCA kept and what it costs in accuracy (`docs/formats/transfer.md`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CompressionInfo {
+    /// `clustered PCA` (Sloan, Hall, Hart & Snyder 2003).
+    pub method: String,
+    /// Clusters C.
+    pub clusters: usize,
+    /// Principal directions per cluster P.
+    pub components: usize,
+    /// Fit-and-assign rounds run.
+    pub iterations: usize,
+    /// ‖T − T̃‖ / ‖T‖ over every vertex and value.
+    pub relative_rms: f64,
+    /// The largest per-vertex ‖T(x) − T̃(x)‖ over the RMS of ‖T(x)‖.
+    pub max_vertex: f64,
+    /// Values per vertex before (n² or K·n²).
+    pub values_per_vertex: usize,
+    /// Values per vertex stored: the cluster and P weights.
+    pub stored_per_vertex: usize,
+    /// Values stored per cluster: the mean and P directions, (P + 1)·values_per_vertex.
+    pub stored_per_cluster: usize,
+    /// In words.
+    pub description: String,
 }
 
 /// How a glossy transfer was made and how it is relit (`docs/formats/transfer.md`).
@@ -371,6 +421,9 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     let coeffs = n * n;
     let per_vertex = glossy.as_ref().map_or(coeffs, Glossy::values_per_vertex);
     let vertices = mesh.positions.len();
+    if let Some(c) = &config.compression {
+        check_compression(c, vertices, per_vertex)?;
+    }
     let offset = config.offset * mesh.extent();
     let start = Instant::now();
     let mut transfer = vec![0.0; vertices * per_vertex];
@@ -472,7 +525,22 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     }
     let seconds = start.elapsed().as_secs_f64();
 
-    let attributes: Vec<String> = (0..per_vertex.div_ceil(4)).map(|k| format!("_PRT_{k}")).collect();
+    let cpca = match config.compression {
+        Some(c) => {
+            progress.start("clustered PCA", 1);
+            let cpca = Cpca::new(&transfer, per_vertex, c.clusters, c.components).map_err(Error::Parameter)?;
+            progress.finish();
+            Some(cpca)
+        }
+        None => None,
+    };
+    let compression = cpca.as_ref().map(|cpca| compression_info(cpca, &transfer));
+    let attributes: Vec<String> = match &cpca {
+        None => (0..per_vertex.div_ceil(4)).map(|k| format!("_PRT_{k}")).collect(),
+        Some(c) => std::iter::once("_PRT_CLUSTER".to_string())
+            .chain((0..c.components.div_ceil(4)).map(|k| format!("_PRT_W_{k}")))
+            .collect(),
+    };
     let (method, rays, description) = match (config.mode, &glossy) {
         (mode, Some(glossy)) => (
             "factor grid cells",
@@ -521,12 +589,19 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         glb: GlbInfo {
             file: config.glb_name.clone(),
             attributes: attributes.clone(),
-            packing: match &glossy_info {
-                None => format!(
+            packing: match (&glossy_info, &compression) {
+                (_, Some(c)) => format!(
+                    "clustered PCA: _PRT_CLUSTER is a float SCALAR holding the vertex's cluster c (an integer), \
+                     _PRT_W_k a float VEC4 holding weights 4k..4k+3 of its {} (zeros pad the last); the blobs \
+                     cpca.means ({} x {per_vertex}) and cpca.bases ({} x {} x {per_vertex}) hold each cluster's mean and \
+                     directions, so T = means[c] + sum_p w_p bases[c][p], T laid out as below when uncompressed",
+                    c.components, c.clusters, c.clusters, c.components
+                ),
+                (None, None) => format!(
                     "_PRT_k is a float VEC4 holding coefficients 4k..4k+3 in index order i = l(l+1)+m; \
                      {coeffs} coefficients, zeros pad the last attribute"
                 ),
-                Some(g) => format!(
+                (Some(g), None) => format!(
                     "_PRT_k is a float VEC4 holding values 4k..4k+3 of the {} x {coeffs} matrix, term-major: value \
                      t*{coeffs} + i is term t's coefficient i = l(l+1)+m (sigma_t folded in); {per_vertex} values, \
                      zeros pad the last attribute",
@@ -540,12 +615,13 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
             .into(),
         error,
         glossy: glossy_info,
+        compression,
     };
     let h = config
         .glossy
         .as_ref()
         .map(|g| g.factorization.h[..g.terms].iter().flatten().map(|&v| v as f32).collect::<Vec<f32>>());
-    let glb = glb::encode(&glb_mesh(mesh, &transfer, per_vertex, &body, h)).map_err(Error::Glb)?;
+    let glb = glb::encode(&glb_mesh(mesh, &transfer, per_vertex, &body, h, cpca.as_ref())).map_err(Error::Glb)?;
     let document = Document::new(FORMAT, VERSION, Provenance::new("transfer", &config.args, vec![name.clone()]), body);
     let cast = if config.mode == Mode::Unshadowed { 0 } else { vertices * rays_per_vertex };
     let summary = Summary {
@@ -569,7 +645,14 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
 
 /// The `.glb`: positions, unit normals, the transfer packed four coefficients per `_PRT_k`, and
 /// the manifest's body in the mesh's `extras` (so that the file explains itself).
-fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody, h: Option<Vec<f32>>) -> GlbMesh {
+fn glb_mesh(
+    mesh: &Mesh,
+    transfer: &[f64],
+    coeffs: usize,
+    body: &TransferBody,
+    h: Option<Vec<f32>>,
+    cpca: Option<&Cpca>,
+) -> GlbMesh {
     let mut extras = serde_json::json!({ "order": body.order, "mode": body.mode, "albedo": body.albedo });
     if let Some(g) = &body.glossy {
         extras["glossy"] = serde_json::json!({
@@ -588,15 +671,21 @@ fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody, h
         components: 3,
         values: mesh.normals.iter().flat_map(|n| n.as_vec3().to_array()).collect(),
     }];
-    for k in 0..coeffs.div_ceil(4) {
-        let mut values = Vec::with_capacity(4 * vertices);
-        for v in 0..vertices {
-            for j in 0..4 {
-                let i = 4 * k + j;
-                values.push(if i < coeffs { transfer[v * coeffs + i] as f32 } else { 0.0 });
-            }
+    let mut blobs: Vec<Blob> = h.map(|values| Blob { name: GLOSSY_H_BLOB.into(), values }).into_iter().collect();
+    match cpca {
+        None => attributes.extend(vec4_attributes("_PRT_", transfer, coeffs, vertices)),
+        Some(c) => {
+            extras["cpca"] = serde_json::json!({ "clusters": c.clusters, "components": c.components });
+            attributes.push(Attribute {
+                name: "_PRT_CLUSTER".into(),
+                components: 1,
+                values: c.cluster_of.iter().map(|&k| k as f32).collect(),
+            });
+            attributes.extend(vec4_attributes("_PRT_W_", &c.weights, c.components, vertices));
+            let floats = |v: &[f64]| v.iter().map(|&x| x as f32).collect();
+            blobs.push(Blob { name: "cpca.means".into(), values: floats(&c.means) });
+            blobs.push(Blob { name: "cpca.bases".into(), values: floats(&c.bases) });
         }
-        attributes.push(Attribute { name: format!("_PRT_{k}"), components: 4, values });
     }
     GlbMesh {
         positions: mesh.positions.iter().map(|p| p.as_vec3().to_array()).collect(),
@@ -604,7 +693,48 @@ fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody, h
         triangles: mesh.triangles.clone(),
         generator: format!("prtkit {} transfer", env!("CARGO_PKG_VERSION")),
         extras: serde_json::json!({ "prtkit.transfer": extras }),
-        blobs: h.map(|values| Blob { name: GLOSSY_H_BLOB.into(), values }).into_iter().collect(),
+        blobs,
+    }
+}
+
+/// `values` (`per_vertex` per vertex) as float VEC4 attributes `PREFIX0`, `PREFIX1`, …, four
+/// values each, zeros padding the last.
+fn vec4_attributes(prefix: &str, values: &[f64], per_vertex: usize, vertices: usize) -> Vec<Attribute> {
+    (0..per_vertex.div_ceil(4))
+        .map(|k| {
+            let mut packed = Vec::with_capacity(4 * vertices);
+            for v in 0..vertices {
+                for j in 0..4 {
+                    let i = 4 * k + j;
+                    packed.push(if i < per_vertex { values[v * per_vertex + i] as f32 } else { 0.0 });
+                }
+            }
+            Attribute { name: format!("{prefix}{k}"), components: 4, values: packed }
+        })
+        .collect()
+}
+
+/// The manifest's account of a compression.
+fn compression_info(cpca: &Cpca, transfer: &[f64]) -> CompressionInfo {
+    let r = cpca.reconstruction(transfer);
+    CompressionInfo {
+        method: "clustered PCA".into(),
+        clusters: cpca.clusters,
+        components: cpca.components,
+        iterations: cpca.iterations,
+        relative_rms: r.relative_rms,
+        max_vertex: r.max_vertex,
+        values_per_vertex: cpca.dim,
+        stored_per_vertex: 1 + cpca.components,
+        stored_per_cluster: (1 + cpca.components) * cpca.dim,
+        description: format!(
+            "Sloan, Hall, Hart & Snyder 2003: clusters cut along the first principal direction, then rounds of \
+             fitting each cluster's mean and {} leading directions and moving every vertex to the cluster that \
+             reconstructs it best, until none moves or a round gains less than 0.1 % of the error (at most {} rounds); errors of the stored f64 fit, before \
+             the f32 the .glb keeps",
+            cpca.components,
+            super::cpca::MAX_ITERATIONS
+        ),
     }
 }
 
@@ -612,6 +742,31 @@ fn glb_mesh(mesh: &Mesh, transfer: &[f64], coeffs: usize, body: &TransferBody, h
 /// n² values in the grid's index order j·n + k (j the cos θ bin from the pole, k the φ bin),
 /// as the factor file's `h` layer (`docs/formats/transfer.md`), so the `.glb` relights alone.
 pub const GLOSSY_H_BLOB: &str = "glossy.h";
+
+/// Refuses a compression whose clusters or directions are out of range, or whose rounds would
+/// take longer than [`MAX_CPCA_ROUND_WORK`] allows, before anything is baked.
+fn check_compression(c: &Compression, vertices: usize, per_vertex: usize) -> Result<(), Error> {
+    if !(1..=MAX_CLUSTERS).contains(&c.clusters) || !(1..=MAX_PCA.min(per_vertex)).contains(&c.components) {
+        return Err(Error::Parameter(format!(
+            "--clusters {} --pca {}: clusters must be in 1..={MAX_CLUSTERS}, directions in 1..={} (the values \
+             per vertex, at most {MAX_PCA})",
+            c.clusters,
+            c.components,
+            MAX_PCA.min(per_vertex)
+        )));
+    }
+    // Each round compares every vertex with every cluster: bound its work up front.
+    let work = vertices as u128 * c.clusters.min(vertices) as u128 * (c.components as u128 + 1) * per_vertex as u128;
+    if work > MAX_CPCA_ROUND_WORK {
+        return Err(Error::Parameter(format!(
+            "--clusters {} --pca {} on {vertices} vertices of {per_vertex} values: a round of clustered PCA \
+             would take {work:.2e} multiply-adds, above the ceiling of {MAX_CPCA_ROUND_WORK:.0e} (minutes \
+             per round); use fewer clusters or directions",
+            c.clusters, c.components
+        )));
+    }
+    Ok(())
+}
 
 /// The integrator of a glossy bake, after checking what the factorization can give.
 fn glossy_integrator(config: &Config, g: &GlossyConfig) -> Result<Glossy, Error> {

@@ -98,6 +98,16 @@ pub struct Args {
     #[arg(long, value_name = "S")]
     pub cell_samples: Option<usize>,
 
+    /// Compress the transfer by clustered PCA (Sloan et al. 2003) into C clusters (with --pca):
+    /// the `.glb` stores each vertex's cluster and P weights, and each cluster's mean and P
+    /// directions; the manifest reports the reconstruction error
+    #[arg(long, value_name = "C", requires = "pca")]
+    pub clusters: Option<usize>,
+
+    /// With --clusters: principal directions P per cluster (1 to 64, at most the values per vertex)
+    #[arg(long, value_name = "P", requires = "clusters")]
+    pub pca: Option<usize>,
+
     /// Print a JSON summary (vertices, rays, seconds, rays per second) on stdout.
     #[arg(long)]
     pub json: bool,
