@@ -160,6 +160,18 @@ fn a_hand_written_scene_is_placed_node_by_node() {
     let computed = Mesh::load(&bare).unwrap();
     assert!(computed.normals_computed && bits(&computed.positions) == bits(&mesh.positions));
 
+    // An asset that requires extensions of materials and textures alone is read; one that
+    // requires a compression of its geometry is refused (below).
+    let textured = dir.path().join("textured.glTF");
+    let extended = text.replacen(
+        "\"scene\": 1,",
+        "\"scene\": 1, \"extensionsUsed\": [\"KHR_texture_basisu\", \"KHR_materials_unlit\"],\n \"extensionsRequired\": [\"KHR_texture_basisu\", \"KHR_materials_unlit\"],\n \"textures\": [{\"extensions\": {\"KHR_texture_basisu\": {\"source\": 0}}}],",
+        1,
+    );
+    assert_ne!(extended, text);
+    std::fs::write(&textured, extended).unwrap();
+    assert!(bits(&Mesh::load(&textured).unwrap().positions) == bits(&mesh.positions));
+
     // And through the binaries: transfer bakes it, render draws it.
     let out = cmd("transfer")
         .arg(meshes().join("tetrahedra.gltf"))
@@ -287,6 +299,12 @@ fn bad_assets_exit_2_naming_the_file_and_write_nothing() {
                 s.replace("\"nodes\": [{\"mesh\": 0}]", "\"nodes\": [{\"mesh\": 0, \"scale\": [1, 0, 1]}]")
             }),
             "node 0: the world transform is singular",
+        ),
+        (
+            write_asset(d, "draco.gltf", &tri, &[0, 1, 2], |s| {
+                s.replacen("{", "{\"extensionsRequired\": [\"KHR_draco_mesh_compression\"], ", 1)
+            }),
+            "extensionsRequired[0] = \"KHR_draco_mesh_compression\": Unsupported extension",
         ),
         (
             write_asset(d, "absolute.gltf", &tri, &[0, 1, 2], |s| s.replace("absolute.gltf.bin", "/dev/zero")),

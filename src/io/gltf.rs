@@ -116,8 +116,8 @@ pub fn read(path: &Path) -> Result<Geometry, GltfError> {
         ::gltf::Gltf::from_slice_without_validation(asset).map_err(|e| not_gltf(e.to_string()))?;
     // Validated in two steps: the crate's validation indexes the accessors with POSITION before
     // it checks that index, so that is checked here first.
-    let root = document.into_json();
-    precheck(&root).map_err(|(at, reason)| GltfError::Invalid { path: name.clone(), at, reason })?;
+    let mut root = document.into_json();
+    precheck(&mut root).map_err(|(at, reason)| GltfError::Invalid { path: name.clone(), at, reason })?;
     let document = ::gltf::Document::from_json(root).map_err(|e| not_gltf(e.to_string()))?;
     let buffers = buffers(path, &name, &document, blob, ceiling)?;
     let mut scene = Flattened {
@@ -154,11 +154,18 @@ fn glb_container(bytes: &[u8]) -> Result<&[u8], String> {
     Ok(&bytes[..length as usize])
 }
 
+/// Extensions that change only materials, textures or lights: an asset that requires them is read
+/// all the same, as its geometry is core glTF. Any other in `extensionsRequired` (Draco or
+/// meshopt compression, quantized attributes…) is refused by the crate's validation.
+const GEOMETRY_FREE_EXTENSIONS: [&str; 5] =
+    ["KHR_materials_", "KHR_texture_", "EXT_texture_", "MSFT_texture_", "KHR_lights_"];
+
 /// What the `gltf` crate's validation assumes before it checks it: every primitive has a POSITION
 /// naming an accessor that exists (its hook indexes the accessors with it). Returns the object and
-/// the problem.
-fn precheck(root: &::gltf::json::Root) -> Result<(), (String, String)> {
+/// the problem. Drops the [`GEOMETRY_FREE_EXTENSIONS`] from `extensionsRequired`.
+fn precheck(root: &mut ::gltf::json::Root) -> Result<(), (String, String)> {
     use ::gltf::json::validation::Checked;
+    root.extensions_required.retain(|e| !GEOMETRY_FREE_EXTENSIONS.iter().any(|prefix| e.starts_with(prefix)));
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let at = format!("mesh {m}, primitive {p}");
