@@ -486,8 +486,7 @@ pub fn corpus(work: &Path) -> Vec<(&'static str, Vec<Vec<u8>>)> {
 /// with 16-bit indices in a strip, written here.
 fn glb_seeds() -> Vec<Vec<u8>> {
     let positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let normal =
-        prtkit::io::glb::Attribute { name: "NORMAL".into(), components: 3, values: vec![0.0, 0.6, 0.8].repeat(4) };
+    let normal = prtkit::io::glb::Attribute { name: "NORMAL".into(), components: 3, values: [0.0, 0.6, 0.8].repeat(4) };
     let prt = prtkit::io::glb::Attribute { name: "_PRT_0".into(), components: 4, values: vec![0.5; 16] };
     let mesh = prtkit::io::glb::GlbMesh {
         positions,
@@ -503,9 +502,9 @@ fn glb_seeds() -> Vec<Vec<u8>> {
     let at = bin.len();
     bin.extend([0u16, 1, 2, 3, 0, 1].iter().flat_map(|i| i.to_le_bytes()));
     bin.resize(bin.len().next_multiple_of(4), 0);
-    json["bufferViews"]
-        .as_array_mut()
-        .map(|v| v.push(serde_json::json!({"buffer": 0, "byteOffset": at, "byteLength": 12})));
+    if let Some(views) = json["bufferViews"].as_array_mut() {
+        views.push(serde_json::json!({"buffer": 0, "byteOffset": at, "byteLength": 12}));
+    }
     json["accessors"][3] = serde_json::json!({"bufferView": 4, "componentType": 5123, "count": 6, "type": "SCALAR"});
     json["meshes"][0]["primitives"][0]["mode"] = serde_json::json!(5);
     json["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
