@@ -238,6 +238,44 @@ fn ktx2_files_an_ibl_manifest_names_are_read_within_the_file_ceiling() {
     );
 }
 
+#[test]
+fn gltf_assets_and_their_buffers_are_read_within_the_file_ceiling() {
+    if !limited_runs_possible() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let big = sparse(d, "big.glb", b"glTF", FILE_CEILING + 1);
+    sparse(d, "big.bin", b"", FILE_CEILING + 1);
+    std::os::unix::fs::symlink(ZERO, d.join("zero.glb")).unwrap();
+    std::os::unix::fs::symlink(ZERO, d.join("zero.bin")).unwrap();
+    // Assets whose one buffer is a file over the ceiling, a device, or claims more than it.
+    let asset = |name: &str, bytes: u64, uri: &str| {
+        let text =
+            format!(r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"byteLength": {bytes}, "uri": "{uri}"}}]}}"#);
+        std::fs::write(d.join(name), text).unwrap();
+        d.join(name).to_str().unwrap().to_string()
+    };
+    let (far, device, claims) = (
+        asset("far.gltf", 42, "big.bin"),
+        asset("device.gltf", 42, "zero.bin"),
+        asset("claims.gltf", 1 << 40, "big.bin"),
+    );
+    let zero_glb = d.join("zero.glb");
+    let over = ceiling_words(FILE_CEILING);
+    let args = |mesh: &str| vec![mesh.to_string(), "--glb".into(), "t.glb".into(), "-o".into(), "t.json".into()];
+    let runs = [
+        (args(big.to_str().unwrap()), vec!["big.glb", over.as_str()]),
+        (args(zero_glb.to_str().unwrap()), vec!["zero.glb", "does not start like glTF"]),
+        (args(&far), vec!["far.gltf: buffer 0", "big.bin", &over]),
+        (args(&device), vec!["device.gltf: buffer 0", "zero.bin", &over]),
+        (args(&claims), vec!["claims.gltf", "the buffers' byteLength together is 1.0 TiB", &over]),
+    ];
+    let runs: Vec<Case> =
+        runs.iter().map(|(a, says)| (a.iter().map(String::as_str).collect(), None, says.clone())).collect();
+    refused("transfer", &runs);
+}
+
 /// `ibl` plans its memory before it allocates any (`ibl::stage::Config::planned_bytes`): under
 /// a 1 GiB address space (a 512 MiB budget) 2048² faces are refused at once with the figure they
 /// need, where they used to abort in the encoder; 1024² faces bake.

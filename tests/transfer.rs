@@ -359,7 +359,7 @@ fn bad_meshes_exit_2_naming_the_file_and_write_nothing() {
         ("empty.obj", "v 0 0 0\n", "no triangles"),
         ("mesh.ply", "ply\nformat ascii 1.0\nend_header\n", "no vertex element"),
         ("nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\nnan 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "not finite"),
-        ("mesh.stl", "solid x\n", "reads OBJ and PLY"),
+        ("mesh.stl", "solid x\n", "reads OBJ, PLY and glTF"),
     ];
     let flags: &[&str] = &[];
     let cases = cases.iter().map(|c| (c, flags)).chain([

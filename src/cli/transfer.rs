@@ -108,11 +108,8 @@ impl Stage for Args {
                 .chain([&self.glsl, &self.hlsl, &self.wgsl].into_iter().flatten().map(|g| (g, Holds::Text))),
         )?;
         let extension = self.mesh.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        if !matches!(extension.as_deref(), Some("obj" | "ply")) {
-            anyhow::bail!(
-                "{}: transfer reads OBJ and PLY meshes (.obj, .ply); glTF input is a later slice of issue 32",
-                self.mesh.display()
-            );
+        if !matches!(extension.as_deref(), Some("obj" | "ply" | "gltf" | "glb")) {
+            anyhow::bail!("{}: transfer reads OBJ, PLY and glTF meshes (.obj, .ply, .gltf, .glb)", self.mesh.display());
         }
         let config = Config::try_from(&self)?;
         let mesh = Mesh::load(&self.mesh)?;

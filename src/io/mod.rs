@@ -1,4 +1,4 @@
-//! File formats: HDR images (OpenEXR, Radiance `.hdr`, PFM), tone-mapped PNG, meshes (OBJ, PLY),
+//! File formats: HDR images (OpenEXR, Radiance `.hdr`, PFM), tone-mapped PNG, meshes (OBJ, PLY, glTF),
 //! JSON documents, and atomic writes. Everything that touches a file format lives here, once.
 
 pub mod atomic;
@@ -6,6 +6,7 @@ pub mod dds;
 pub mod document;
 pub mod exr;
 pub mod glb;
+pub mod gltf;
 pub mod gpu_format;
 pub mod image;
 pub mod ktx2;

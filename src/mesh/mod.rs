@@ -1,5 +1,6 @@
-//! Triangle meshes from OBJ or PLY files (read by [`crate::io::obj`] and [`crate::io::ply`]) with
-//! per-vertex normals, and a bounding-volume hierarchy for primary rays and visibility (shadow) rays.
+//! Triangle meshes from OBJ, PLY or glTF files (read by [`crate::io::obj`], [`crate::io::ply`] and
+//! [`crate::io::gltf`]) with per-vertex normals, and a bounding-volume hierarchy for primary rays and
+//! visibility (shadow) rays.
 
 use crate::io::obj::ObjError;
 use glam::DVec3;
@@ -30,6 +31,9 @@ pub enum MeshError {
     /// The file cannot be read, or is not text, or is too large.
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    /// A glTF asset cannot be read, or is wrong (the error names the file and the object).
+    #[error(transparent)]
+    Gltf(#[from] crate::io::gltf::GltfError),
     /// A line of the file is wrong.
     #[error("{path}:{line}:{column}: {reason}")]
     At {
@@ -74,14 +78,17 @@ pub struct MeshHit {
 }
 
 impl Mesh {
-    /// Reads a mesh file: PLY by its extension ([`Mesh::load_ply`]), else OBJ (all its objects,
-    /// triangulated) through [`crate::io::obj`], which reads the file whole (at most
-    /// [`crate::limits::max_file_bytes`]) and checks its geometry lines first, so that an error
-    /// names the line and column.
+    /// Reads a mesh file by its extension (in any case): PLY ([`Mesh::load_ply`]), glTF
+    /// (`.gltf`, `.glb`: [`Mesh::load_gltf`]), else OBJ (all its objects, triangulated) through
+    /// [`crate::io::obj`], which reads the file whole (at most [`crate::limits::max_file_bytes`])
+    /// and checks its geometry lines first, so that an error names the line and column.
     pub fn load(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
-        if path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
-            return Self::load_ply(path);
+        let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match extension.as_deref() {
+            Some("ply") => return Self::load_ply(path),
+            Some("gltf" | "glb") => return Self::load_gltf(path),
+            _ => {}
         }
         let text = crate::io::obj::read(path)?;
         let geometry = crate::io::obj::geometry(&text).map_err(|e| match e {
@@ -114,6 +121,18 @@ impl Mesh {
             return Err(invalid("a vertex position is not finite".into()));
         }
         Mesh::new(positions, normals, triangles).map_err(invalid)
+    }
+
+    /// Reads a glTF 2.0 asset (`.gltf` with its buffers, or `.glb`; [`crate::io::gltf`]): the
+    /// triangles of every mesh of its scene placed by their nodes, in the file's axes; normals
+    /// from the file when every primitive has NORMAL, else computed.
+    pub fn load_gltf(path: &Path) -> Result<Mesh, MeshError> {
+        let name = path.display().to_string();
+        let crate::io::gltf::Geometry { positions, normals, triangles } = crate::io::gltf::read(path)?;
+        if triangles.is_empty() {
+            return Err(MeshError::Invalid { path: name, reason: "the glTF scene holds no triangles".into() });
+        }
+        Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })
     }
 
     /// Builds a mesh; computes normals when `normals` is `None` (or when a given normal is zero).

@@ -323,6 +323,36 @@ pub fn json(rng: &mut Rng, data: &[u8], other: &[u8]) -> Vec<u8> {
     serde_json::to_vec_pretty(&v).unwrap_or_default()
 }
 
+/// A GLB mutation: the JSON chunk mutated as JSON ([`json`]) and the container built again
+/// around it with its lengths right; or a byte mutation (lengths and chunk headers wrong too).
+pub fn glb(rng: &mut Rng, data: &[u8], other: &[u8]) -> Vec<u8> {
+    let (Some(document), Some(bin)) = (prtkit::io::glb::json_chunk(data), prtkit::io::glb::bin_chunk(data)) else {
+        return bytes(rng, data, other);
+    };
+    if below(rng, 4) == 0 {
+        return bytes(rng, data, other);
+    }
+    let text = json(rng, &serde_json::to_vec(&document).unwrap_or_default(), &[]);
+    glb_container(&text, bin)
+}
+
+/// A `.glb` of a JSON chunk and a BIN chunk (glTF 2.0 §4.4), each padded to 4 bytes.
+pub fn glb_container(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let (mut json, mut bin) = (json.to_vec(), bin.to_vec());
+    json.resize(json.len().next_multiple_of(4), b' ');
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((28 + json.len() + bin.len()) as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
 /// Splits shader source into tokens (identifiers, numbers, single symbols) and the text between.
 fn tokens(src: &str) -> Vec<(usize, usize)> {
     let b = src.as_bytes();

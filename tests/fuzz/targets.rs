@@ -216,6 +216,29 @@ pub fn all() -> Vec<Target> {
             names_file: true,
         },
         Target {
+            name: "gltf",
+            ext: "gltf",
+            mutate: mutate::json,
+            library: |p| prtkit::mesh::Mesh::load(p).map(drop).map_err(err),
+            binary: |file, out, work| ("render", render(work, out, &["--scene".into(), s(file)])),
+            names_file: true,
+        },
+        Target {
+            name: "glb",
+            ext: "glb",
+            mutate: mutate::glb,
+            library: |p| prtkit::mesh::Mesh::load(p).map(drop).map_err(err),
+            binary: |file, out, _| {
+                let args = ["--mode", "unshadowed", "-q", "--glb"].map(String::from);
+                (
+                    "transfer",
+                    [vec![s(file)], args.to_vec(), vec![s(&out.join("t.glb")), "-o".into(), s(&out.join("t.json"))]]
+                        .concat(),
+                )
+            },
+            names_file: true,
+        },
+        Target {
             name: "manifest",
             ext: "txt",
             mutate: mutate::lines,
@@ -278,6 +301,7 @@ pub fn binary_path(name: &str) -> PathBuf {
         "count-terms" => env!("CARGO_BIN_EXE_count-terms"),
         "prefilter" => env!("CARGO_BIN_EXE_prefilter"),
         "ibl" => env!("CARGO_BIN_EXE_ibl"),
+        "transfer" => env!("CARGO_BIN_EXE_transfer"),
         other => panic!("no binary {other}"),
     }
     .into()
@@ -444,6 +468,8 @@ pub fn corpus(work: &Path) -> Vec<(&'static str, Vec<Vec<u8>>)> {
                 ply_bin,
             ],
         ),
+        ("gltf", vec![read(&root.join("testdata/meshes/tetrahedra.gltf"))]),
+        ("glb", glb_seeds()),
         (
             "manifest",
             vec![
@@ -454,6 +480,35 @@ pub fn corpus(work: &Path) -> Vec<(&'static str, Vec<Vec<u8>>)> {
         ("ktx2", ["specular.ktx2", "irradiance.ktx2", "dfg.ktx2"].iter().map(|f| read(&work.join(f))).collect()),
         ("ibl", vec![document(&work.join("ibl.json"))]),
     ]
+}
+
+/// `.glb` seeds: a tetrahedron as `transfer` writes one (`NORMAL` and a custom `_PRT_0`), and
+/// with 16-bit indices in a strip, written here.
+fn glb_seeds() -> Vec<Vec<u8>> {
+    let positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let normal = prtkit::io::glb::Attribute { name: "NORMAL".into(), components: 3, values: [0.0, 0.6, 0.8].repeat(4) };
+    let prt = prtkit::io::glb::Attribute { name: "_PRT_0".into(), components: 4, values: vec![0.5; 16] };
+    let mesh = prtkit::io::glb::GlbMesh {
+        positions,
+        attributes: vec![normal, prt],
+        triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        generator: "fuzz".into(),
+        extras: serde_json::json!({}),
+    };
+    let written = prtkit::io::glb::encode(&mesh).unwrap_or_default();
+    // The same vertices as a strip of u16 indices: the JSON edited, the BIN chunk extended.
+    let mut json = prtkit::io::glb::json_chunk(&written).unwrap_or_default();
+    let mut bin = prtkit::io::glb::bin_chunk(&written).unwrap_or_default().to_vec();
+    let at = bin.len();
+    bin.extend([0u16, 1, 2, 3, 0, 1].iter().flat_map(|i| i.to_le_bytes()));
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    if let Some(views) = json["bufferViews"].as_array_mut() {
+        views.push(serde_json::json!({"buffer": 0, "byteOffset": at, "byteLength": 12}));
+    }
+    json["accessors"][3] = serde_json::json!({"bufferView": 4, "componentType": 5123, "count": 6, "type": "SCALAR"});
+    json["meshes"][0]["primitives"][0]["mode"] = serde_json::json!(5);
+    json["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
+    vec![written, mutate::glb_container(&serde_json::to_vec(&json).unwrap_or_default(), &bin)]
 }
 
 /// Applies one to three mutations of a random seed input of `target`.

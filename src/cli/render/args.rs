@@ -27,7 +27,7 @@ pub enum ShadingArg {
     Reference,
 }
 
-/// Render a sphere or an OBJ mesh under an environment map with one of the bakes, or the
+/// Render a sphere or a mesh (OBJ, PLY, glTF) under an environment map with one of the bakes, or the
 /// reference, and compare.
 #[derive(Debug, Parser)]
 #[command(name = "render", version)]
@@ -35,7 +35,8 @@ pub struct Args {
     #[command(flatten)]
     pub input: EnvArgs,
 
-    /// The object: `sphere` (unit sphere at the origin) or an OBJ file.
+    /// The object: `sphere` (unit sphere at the origin) or a mesh file: .obj, .ply, or .gltf/.glb
+    /// (the scene's meshes placed by their nodes, in the file's axes: glTF is +Y up).
     #[arg(long, default_value = "sphere")]
     pub scene: String,
 

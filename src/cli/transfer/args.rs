@@ -9,7 +9,7 @@ use std::path::PathBuf;
 /// Bake a mesh's precomputed radiance transfer: diffuse (Sloan, Kautz & Snyder 2002) or glossy
 /// through the in-out factorization (Mahajan, Tseng & Ramamoorthi 2008).
 ///
-/// Reads an OBJ or PLY mesh (every object in it; they shadow each other) and writes, per vertex, the
+/// Reads an OBJ, PLY or glTF mesh (every object in it; they shadow each other) and writes, per vertex, the
 /// transfer vector T_i = (albedo/π) ∫ V(x,ω) max(n·ω,0) Y_i(ω) dω, so that a renderer relights it
 /// under any SH lighting L as B = Σ_i T_i L_i: a `.glb` with the transfer as `_PRT_k` vertex
 /// attributes, a `prtkit.transfer` manifest and, optionally, the GLSL of the dot product. With
@@ -18,8 +18,9 @@ use std::path::PathBuf;
 #[derive(Debug, Parser)]
 #[command(name = "transfer", version)]
 pub struct Args {
-    /// The mesh (.obj, or .ply: ASCII or binary). Normals are read from it when every vertex
-    /// has one, else computed (area-weighted face normals).
+    /// The mesh (.obj; .ply: ASCII or binary; .gltf or .glb: the scene's meshes placed by their
+    /// nodes, in the file's axes). Normals are read from it when every vertex has one, else
+    /// computed (area-weighted face normals).
     #[arg(value_name = "MESH")]
     pub mesh: PathBuf,
 
