@@ -404,24 +404,35 @@ export function prtGlossyVertexShader(K, coeffs) {
   const values = K * coeffs, P = Math.ceil(values / 4), Q = Math.ceil((3 * K) / 4);
   const f = (i) => (i < 3 * K ? `c[${Math.floor(i / 3)}].${'xyz'[i % 3]}` : '0.0');
   const pack = Array.from({ length: Q }, (_, q) => `  vC[${q}] = vec4(${[0, 1, 2, 3].map((j) => f(4 * q + j)).join(', ')});`).join('\n');
+  // Written out texel by texel with constant indices (value i = 4p + j is term ⌊i/n²⌋'s
+  // coefficient i mod n²): a four-vector inside one term is one mat4x3 product, as the diffuse
+  // shader's; one that straddles two terms (n odd) is taken component by component.
+  const sum = [];
+  for (let p = 0; p < P; p++) {
+    sum.push(`  T = transferTexel(base + ${p});`);
+    const i0 = 4 * p, t = Math.floor(i0 / coeffs), k = i0 % coeffs;
+    if (k + 4 <= coeffs && i0 + 4 <= values) {
+      sum.push(`  c[${t}] += mat4x3(shLighting[${k}], shLighting[${k + 1}], shLighting[${k + 2}], shLighting[${k + 3}]) * T;`);
+    } else {
+      for (let j = 0; j < 4 && i0 + j < values; j++) {
+        const i = i0 + j;
+        sum.push(`  c[${Math.floor(i / coeffs)}] += T.${'xyzw'[j]} * shLighting[${i % coeffs}];`);
+      }
+    }
+  }
   return /* glsl */ `
 uniform sampler2D prtTransfer; // RGBA32F, ${GLOSSY_TRANSFER_WIDTH} wide: vertex v's ${P} texels from v·${P}
 uniform vec3 shLighting[${coeffs}]; // L_i, turned by the environment rotation
 varying vec4 vC[${Q}];
 varying vec3 vNormal;
 varying vec3 vPosition;
+vec4 transferTexel(int q) { return texelFetch(prtTransfer, ivec2(q % ${GLOSSY_TRANSFER_WIDTH}, q / ${GLOSSY_TRANSFER_WIDTH}), 0); }
 void main() {
   vec3 c[${K}];
   for (int t = 0; t < ${K}; t++) c[t] = vec3(0.0);
   int base = gl_VertexID * ${P};
-  for (int p = 0; p < ${P}; p++) {
-    int q = base + p;
-    vec4 T = texelFetch(prtTransfer, ivec2(q % ${GLOSSY_TRANSFER_WIDTH}, q / ${GLOSSY_TRANSFER_WIDTH}), 0);
-    for (int j = 0; j < 4; j++) {
-      int i = 4 * p + j; // term i / n², coefficient i % n² (term-major)
-      if (i < ${values}) c[i / ${coeffs}] += T[j] * shLighting[i % ${coeffs}];
-    }
-  }
+  vec4 T;
+${sum.join('\n')}
 ${pack}
   vNormal = normal;
   vPosition = position;

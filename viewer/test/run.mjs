@@ -441,6 +441,21 @@ async function glossyPrtTests() {
     fig.x_flipped = f.psnr;
     check('prt glossy with the x flip dropped (gl frame, three\'s camera) fails', f.psnr < 30, `PSNR ${f.psnr.toFixed(2)} dB (< 30)`);
   }
+  // n = 3: 9 coefficients a term, so four-vectors of the transfer straddle two terms (the
+  // vertex shader's other path).
+  {
+    const glb3 = join(dir, 'g3.glb'), glsl3 = join(dir, 'g3.glsl'), png = join(out, 'prt-glossy-n3-60-render.png');
+    run('transfer', [mesh, '-n', '3', '--factors', join(dir, 'p.json'), '-K', '10', '--glb', glb3, '-o', join(dir, 'g3.json'), '--glsl', glsl3, '-q']);
+    run('render', [sky, '--scene', mesh, '--brdf', 'phong:s=8', '--shading', 'transfer', '--transfer', glb3, '--env-rotation', '60',
+      '--eye', eye.join(','), '--target', target.join(','), '--fov', String(FOV), '--res', RESP, '--png', png, '--exposure', EXP, '-q']);
+    const ref = readPng(png);
+    const img = mirrorX((await view({ ...params, glb: url(glb3), glsl: url(glsl3), rotate: '60', ...pageCam('three') })).image);
+    writePng(join(out, 'prt-glossy-n3-60-viewer-three.png'), img);
+    const c = compare(img, ref, meshMask(img));
+    fig.n3_turned60_three = c.psnr;
+    check('prt glossy n = 3 (terms straddle four-vectors), turned 60° (three frame) vs render --shading transfer', c.psnr >= 35,
+      `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+  }
   const r = await view({ ...params, rotate: '30', src: url(sky), eye: toPage([1.6, -2.6, 2.2], 'three'), target: toPage(target, 'three'),
     fov: '32', res: '640x360', exposure: EXP }, { bench: 20 });
   writePng(join(out, 'mode-prt-glossy.png'), r.image);
