@@ -81,7 +81,7 @@ fn glossy_snippets_parse_and_validate_in_naga_for_both_domains() {
             "PrtkitGlossyTaps prtkitGlossyTaps(float2 ctPhi)",
             "float prtkitGlossyH(int term, PrtkitGlossyTaps t)",
             "float3 prtkitGlossyRadiance(float3 n, float3 wo, float3 c[PRTKIT_GLOSSY_TERMS])",
-            "Texture2D<float> prtkitGlossyH;",
+            "Texture2D<float> prtkitGlossyHTexture;",
             &format!("#define PRTKIT_GLOSSY_TERMS {terms}"),
         ] {
             assert!(hlsl.contains(decl), "{what}: {decl}\n{hlsl}");

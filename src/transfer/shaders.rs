@@ -217,8 +217,8 @@ pub fn glossy_snippet(order: usize, terms: usize, grid: Grid, lang: Language) ->
     };
     let [local_view, angles, taps, lookup, radiance, dot] = names;
     let (texture, h) = match lang {
-        Language::Glsl => ("prtkitGlossyH, a sampler2D (R32F; only texelFetch reads it, no filtering),", ""),
-        Language::Hlsl => ("prtkitGlossyH, a Texture2D<float> (only Load reads it, no filtering),", ""),
+        Language::Glsl => ("prtkitGlossyHTexture, a sampler2D (R32F; only texelFetch reads it, no filtering),", ""),
+        Language::Hlsl => ("prtkitGlossyHTexture, a Texture2D<float> (only Load reads it, no filtering),", ""),
         Language::Wgsl => ("the argument h, a texture_2d<f32> (r32float; only textureLoad reads it),", "h, "),
     };
     let mut out = snippet(order, lang);
@@ -272,9 +272,9 @@ pub fn glossy_snippet(order: usize, terms: usize, grid: Grid, lang: Language) ->
             // The texture is named through a macro, as the lighting is, so that a client can bind
             // it its own way (a Vulkan GLSL client: a texture2D and a sampler).
             let (declare, default_fetch) = if glsl {
-                ("uniform sampler2D prtkitGlossyH;", "texelFetch(prtkitGlossyH, ivec2(x, y), 0).r")
+                ("uniform sampler2D prtkitGlossyHTexture;", "texelFetch(prtkitGlossyHTexture, ivec2(x, y), 0).r")
             } else {
-                ("Texture2D<float> prtkitGlossyH;", "prtkitGlossyH.Load(int3(x, y, 0))")
+                ("Texture2D<float> prtkitGlossyHTexture;", "prtkitGlossyHTexture.Load(int3(x, y, 0))")
             };
             out += &format!(
                 "
