@@ -12,8 +12,15 @@
 //! body, written out (no loops, no tables) with each language's type names, so what is checked
 //! in one holds in the others.
 //!
+//! A glossy bake ([`glossy_snippet`]) adds what its per-pixel half needs (Mahajan, Tseng &
+//! Ramamoorthi 2008, eq. 4: B(x, ω_o) = Σ_k h_k(Fᵀ ω_o) c_k(x)): the view direction in the
+//! normal's frame F, and the lookup of h_k with the rule `render` uses
+//! (`render::factored::h_taps`): bilinear between cell centres in (cos θ, φ), φ wrapping, the
+//! grid's edge rows clamped, and within half a bin of a pole a blend into the pole ring's mean.
+//!
 //! [`ShRotation`]: crate::sh::rotate::ShRotation
 
+use crate::factor::{Domain, Grid};
 pub use crate::normals::shader::Language;
 use crate::sh::index;
 use crate::sh::rotate::band_terms;
@@ -175,6 +182,294 @@ uniform {vec3} prtkitLightSH[PRTKIT_TRANSFER_COEFFS];
             vec3 = s.vec3
         ),
     };
+    out
+}
+
+/// The snippet of a glossy bake: [`snippet`]'s dot product (applied per term) and rotation, then
+/// the per-pixel half of Mahajan, Tseng & Ramamoorthi 2008's eq. 4 for `terms` K factors on
+/// `grid` (the bake's `glossy.h`): the view direction in the normal's frame, the h_k lookup and
+/// the sum over the terms (`docs/transfer.md`, "The run-time snippets").
+pub fn glossy_snippet(order: usize, terms: usize, grid: Grid, lang: Language) -> String {
+    let coeffs = order * order;
+    let n = grid.n;
+    let span = grid.span();
+    let (domain, sphere) = match grid.domain {
+        Domain::Sphere => ("sphere", true),
+        Domain::Hemisphere => ("hemisphere", false),
+    };
+    let names = match lang {
+        Language::Wgsl => [
+            "prtkit_glossy_local_view",
+            "prtkit_glossy_cos_theta_phi",
+            "prtkit_glossy_taps",
+            "prtkit_glossy_h",
+            "prtkit_glossy_radiance",
+            "prtkit_transfer_radiance",
+        ],
+        _ => [
+            "prtkitGlossyLocalView",
+            "prtkitGlossyCosThetaPhi",
+            "prtkitGlossyTaps",
+            "prtkitGlossyH",
+            "prtkitGlossyRadiance",
+            "prtkitTransferRadiance",
+        ],
+    };
+    let [local_view, angles, taps, lookup, radiance, dot] = names;
+    let (texture, h) = match lang {
+        Language::Glsl => ("prtkitGlossyHTexture, a sampler2D (R32F; only texelFetch reads it, no filtering),", ""),
+        Language::Hlsl => ("prtkitGlossyHTexture, a Texture2D<float> (only Load reads it, no filtering),", ""),
+        Language::Wgsl => ("the argument h, a texture_2d<f32> (r32float; only textureLoad reads it),", "h, "),
+    };
+    let mut out = snippet(order, lang);
+    out += &format!(
+        "
+// prtkit transfer, glossy: view-dependent transfer through the in-out BRDF factorization
+// (Mahajan, Tseng & Ramamoorthi 2008, eq. 4), K = {terms} terms on a {n} x {n} {domain} grid:
+//   B(x, w_o) = sum_t h_t(F^T w_o) c_t(x),   c_t(x) = sum_i T_ti(x) L_i.
+// c_t: per vertex, {dot} applied to term t's {coeffs} values (the _PRT_k stream holds
+// K x {coeffs} values term-major: value t*{coeffs} + i is T_ti, sigma_t folded in{repack}), then
+// interpolated over the triangle.
+// F = R_z(phi_n) R_y(theta_n): the frame of the unit shading normal's spherical angles in the
+// mesh's axes (columns: the direction of increasing theta, of increasing phi, the normal;
+// phi_n = 0 on the poles). It matters: the factors have structure in phi. w_o: unit, from the
+// surface towards the eye, in the mesh's axes.
+// {local_view}(n, w_o): F^T w_o.
+// {angles}(w): (cos theta, phi) of it, phi in [0, 2 pi).
+// {taps}(ct_phi): where h is read, the same for every term: bilinear between the cell
+// centres cos theta_j = 1 - (j + 1/2) {span:.1}/{n}, phi_k = (k + 1/2) 2 pi/{n}, phi wrapping, cos theta
+// clamped to the grid's first and last rows{horizon}; within half a bin of a pole the value
+// blends linearly into the mean of the pole's ring of cells (phi means nothing at the pole: a
+// plain bilinear lookup there shows a dot where the view meets the normal).
+// {lookup}({h}t, taps): h_t there. h: {texture}
+// {n} texels wide and K*{n} = {rows} tall, texel (k, t*{n} + j) = h_t of cell (j, k): the .glb's
+// glossy.h blob (extras.prtkit.blobs, K*{cells} little-endian floats) uploaded as it is.
+// {radiance}({h}n, w_o, c): the sum over the K terms, c[t] = c_t interpolated.
+// This is the lookup prtkit render uses (render::factored::h_taps).
+",
+        rows = terms * n,
+        cells = n * n,
+        horizon = if sphere { "" } else { " (views below the horizon read\n// the horizon row)" },
+        repack = if coeffs % 4 == 0 { "" } else { ";\n// repack term t's values into four-vectors" },
+    );
+    let two_pi = "6.283185307179586";
+    let pole_south = if sphere {
+        format!(
+            " else if (raw > {last:.1}) {{\n        t.poleRow = {lasti};\n        t.pole = 2.0 * (raw - {last:.1});\n    }}\n    ",
+            last = (n - 1) as f64,
+            lasti = n - 1
+        )
+    } else {
+        "\n    ".to_string()
+    };
+    match lang {
+        Language::Glsl | Language::Hlsl => {
+            let glsl = lang == Language::Glsl;
+            let (v2, v3, v4, i4) =
+                if glsl { ("vec2", "vec3", "vec4", "ivec4") } else { ("float2", "float3", "float4", "int4") };
+            let atan = if glsl { "atan" } else { "atan2" };
+            let fetch = |x: &str, y: &str| format!("PRTKIT_GLOSSY_H_FETCH({x}, {y})");
+            // The texture is named through a macro, as the lighting is, so that a client can bind
+            // it its own way (a Vulkan GLSL client: a texture2D and a sampler).
+            let (declare, default_fetch) = if glsl {
+                ("uniform sampler2D prtkitGlossyHTexture;", "texelFetch(prtkitGlossyHTexture, ivec2(x, y), 0).r")
+            } else {
+                ("Texture2D<float> prtkitGlossyHTexture;", "prtkitGlossyHTexture.Load(int3(x, y, 0))")
+            };
+            out += &format!(
+                "
+// h: the plain declaration below, or define PRTKIT_GLOSSY_H_FETCH(x, y) (texel (x, y) of h, a
+// float) yourself to read your own binding.
+#define PRTKIT_GLOSSY_TERMS {terms}
+#define PRTKIT_GLOSSY_RESOLUTION {n}
+#ifndef PRTKIT_GLOSSY_H_FETCH
+{declare}
+#define PRTKIT_GLOSSY_H_FETCH(x, y) {default_fetch}
+#endif
+
+{v3} {local_view}({v3} n, {v3} wo) {{
+    float s = length(n.xy); // sin theta_n
+    float cp = 1.0;
+    float sp = 0.0;
+    if (s > 0.0) {{
+        cp = n.x / s;
+        sp = n.y / s;
+    }}
+    {v3} u = {v3}(n.z * cp, n.z * sp, -s); // F's columns: increasing theta, increasing phi, n
+    {v3} v = {v3}(-sp, cp, 0.0);
+    return {v3}(dot(u, wo), dot(v, wo), dot(n, wo));
+}}
+
+{v2} {angles}({v3} w) {{
+    float phi = 0.0;
+    if (w.x != 0.0 || w.y != 0.0) {{
+        phi = {atan}(w.y, w.x);
+    }}
+    if (phi < 0.0) {{
+        phi += {two_pi};
+    }}
+    return {v2}(clamp(w.z, -1.0, 1.0), phi);
+}}
+
+struct PrtkitGlossyTaps {{
+    {i4} texel; // phi columns k0, k1; cos theta rows j0, j1
+    {v4} weight; // of (k0, j0), (k1, j0), (k0, j1), (k1, j1), the ring's share folded in
+    int poleRow; // the ring whose mean is the pole's value
+    float pole; // its weight
+}};
+
+PrtkitGlossyTaps {taps}({v2} ctPhi) {{
+    PrtkitGlossyTaps t;
+    float z = max(ctPhi.x, {zmin:.1});
+    float raw = (1.0 - z) * {bins_per_cos:.1} - 0.5;
+    float fj = clamp(raw, 0.0, {last:.1});
+    t.poleRow = 0;
+    t.pole = 0.0;
+    if (raw < 0.0) {{
+        t.pole = -2.0 * raw;
+    }}{pole_south}float ring = 1.0 - t.pole;
+    float fk = ctPhi.y * {bins_per_radian:.17} - 0.5;
+    float k0f = floor(fk);
+    float tk = fk - k0f;
+    float tj = fj - floor(fj);
+    int k0 = (int(k0f) + {n}) % {n}; // fk >= -1/2
+    int j0 = int(floor(fj));
+    t.texel = {i4}(k0, (k0 + 1) % {n}, j0, min(j0 + 1, {lasti}));
+    t.weight = ring * {v4}((1.0 - tj) * (1.0 - tk), (1.0 - tj) * tk, tj * (1.0 - tk), tj * tk);
+    return t;
+}}
+
+float {lookup}(int term, PrtkitGlossyTaps t) {{
+    int row = term * {n};
+    float value = t.weight.x * {f00} + t.weight.y * {f10}
+        + t.weight.z * {f01} + t.weight.w * {f11};
+    if (t.pole > 0.0) {{
+        float mean = 0.0;
+        for (int k = 0; k < {n}; k++) {{
+            mean += {fpole};
+        }}
+        value += t.pole * mean / {bins:.1};
+    }}
+    return value;
+}}
+
+{v3} {radiance}({v3} n, {v3} wo, {v3} c[PRTKIT_GLOSSY_TERMS]) {{
+    PrtkitGlossyTaps t = {taps}({angles}({local_view}(n, wo)));
+    {v3} b = {v3}(0.0, 0.0, 0.0);
+    for (int k = 0; k < PRTKIT_GLOSSY_TERMS; k++) {{
+        b += {lookup}(k, t) * c[k];
+    }}
+    return b;
+}}
+",
+                zmin = 1.0 - span,
+                bins_per_cos = n as f64 / span,
+                last = (n - 1) as f64,
+                lasti = n - 1,
+                bins_per_radian = n as f64 / std::f64::consts::TAU,
+                bins = n as f64,
+                f00 = fetch("t.texel.x", "row + t.texel.z"),
+                f10 = fetch("t.texel.y", "row + t.texel.z"),
+                f01 = fetch("t.texel.x", "row + t.texel.w"),
+                f11 = fetch("t.texel.y", "row + t.texel.w"),
+                fpole = fetch("k", "row + t.poleRow"),
+            );
+        }
+        Language::Wgsl => {
+            let pole_south = pole_south.replace("poleRow", "pole_row");
+            let fetch = |x: &str, y: &str| format!("textureLoad(h, vec2<i32>({x}, {y}), 0).x");
+            out += &format!(
+                "
+fn {local_view}(n: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {{
+    let s = length(n.xy); // sin theta_n
+    var cp = 1.0;
+    var sp = 0.0;
+    if (s > 0.0) {{
+        cp = n.x / s;
+        sp = n.y / s;
+    }}
+    let u = vec3<f32>(n.z * cp, n.z * sp, -s); // F's columns: increasing theta, increasing phi, n
+    let v = vec3<f32>(-sp, cp, 0.0);
+    return vec3<f32>(dot(u, wo), dot(v, wo), dot(n, wo));
+}}
+
+fn {angles}(w: vec3<f32>) -> vec2<f32> {{
+    var phi = 0.0;
+    if (w.x != 0.0 || w.y != 0.0) {{
+        phi = atan2(w.y, w.x);
+    }}
+    if (phi < 0.0) {{
+        phi += {two_pi};
+    }}
+    return vec2<f32>(clamp(w.z, -1.0, 1.0), phi);
+}}
+
+struct PrtkitGlossyTaps {{
+    texel: vec4<i32>,  // phi columns k0, k1; cos theta rows j0, j1
+    weight: vec4<f32>, // of (k0, j0), (k1, j0), (k0, j1), (k1, j1), the ring's share folded in
+    pole_row: i32,     // the ring whose mean is the pole's value
+    pole: f32,         // its weight
+}}
+
+fn {taps}(ct_phi: vec2<f32>) -> PrtkitGlossyTaps {{
+    var t: PrtkitGlossyTaps;
+    let z = max(ct_phi.x, {zmin:.1});
+    let raw = (1.0 - z) * {bins_per_cos:.1} - 0.5;
+    let fj = clamp(raw, 0.0, {last:.1});
+    t.pole_row = 0;
+    t.pole = 0.0;
+    if (raw < 0.0) {{
+        t.pole = -2.0 * raw;
+    }}{pole_south}let ring = 1.0 - t.pole;
+    let fk = ct_phi.y * {bins_per_radian:.17} - 0.5;
+    let k0f = floor(fk);
+    let tk = fk - k0f;
+    let tj = fj - floor(fj);
+    let k0 = (i32(k0f) + {n}) % {n}; // fk >= -1/2
+    let j0 = i32(floor(fj));
+    t.texel = vec4<i32>(k0, (k0 + 1) % {n}, j0, min(j0 + 1, {lasti}));
+    t.weight = ring * vec4<f32>((1.0 - tj) * (1.0 - tk), (1.0 - tj) * tk, tj * (1.0 - tk), tj * tk);
+    return t;
+}}
+
+fn {lookup}(h: texture_2d<f32>, term: i32, t: PrtkitGlossyTaps) -> f32 {{
+    let row = term * {n};
+    var value = t.weight.x * {f00} + t.weight.y * {f10}
+        + t.weight.z * {f01} + t.weight.w * {f11};
+    if (t.pole > 0.0) {{
+        var mean = 0.0;
+        for (var k = 0; k < {n}; k++) {{
+            mean += {fpole};
+        }}
+        value += t.pole * mean / {bins:.1};
+    }}
+    return value;
+}}
+
+fn {radiance}(h: texture_2d<f32>, n: vec3<f32>, wo: vec3<f32>, c: array<vec3<f32>, {terms}>) -> vec3<f32> {{
+    let t = {taps}({angles}({local_view}(n, wo)));
+    var terms = c; // indexed by a variable: held in a var
+    var b = vec3<f32>(0.0, 0.0, 0.0);
+    for (var k = 0; k < {terms}; k++) {{
+        b += {lookup}(h, k, t) * terms[k];
+    }}
+    return b;
+}}
+",
+                zmin = 1.0 - span,
+                bins_per_cos = n as f64 / span,
+                last = (n - 1) as f64,
+                lasti = n - 1,
+                bins_per_radian = n as f64 / std::f64::consts::TAU,
+                bins = n as f64,
+                f00 = fetch("t.texel.x", "row + t.texel.z"),
+                f10 = fetch("t.texel.y", "row + t.texel.z"),
+                f01 = fetch("t.texel.x", "row + t.texel.w"),
+                f11 = fetch("t.texel.y", "row + t.texel.w"),
+                fpole = fetch("k", "row + t.pole_row"),
+            );
+        }
+    }
     out
 }
 

@@ -13,7 +13,7 @@ use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
 use super::glossy::Glossy;
 use super::interreflect::{Hits, Storage, Tracer};
-use super::shaders::{snippet, Language};
+use super::shaders::{glossy_snippet, snippet, Language};
 use super::visibility::{triangle_area, Occluders};
 use crate::factor::Factorization;
 use crate::io::glb::{self, Attribute, Blob, GlbMesh};
@@ -632,12 +632,17 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         rays_per_second: if trace_seconds > 0.0 { cast as f64 / trace_seconds } else { 0.0 },
         bounce_seconds,
     };
+    // A glossy bake's snippet adds the view-dependent half: the frame F and the h_k lookup.
+    let run_time = |lang| match &config.glossy {
+        Some(g) => glossy_snippet(n, g.terms, g.factorization.grid, lang),
+        None => snippet(n, lang),
+    };
     Ok(Output {
         document,
         glb,
-        glsl: snippet(n, Language::Glsl),
-        hlsl: snippet(n, Language::Hlsl),
-        wgsl: snippet(n, Language::Wgsl),
+        glsl: run_time(Language::Glsl),
+        hlsl: run_time(Language::Hlsl),
+        wgsl: run_time(Language::Wgsl),
         transfer,
         summary,
     })

@@ -15,7 +15,9 @@
 //   mode=normals      codes=URL report=URL decoder=URL (encode-normals' codes, report, --emit-decoder
 //                     glsl) size=WxH: a lat-long table of normals decoded in the shader, lit by sh=URL
 //   mode=prt          glb=URL (transfer --glb) sh=URL (sh-project of the map, order ≥ the bake's n − 1):
-//                     the mesh relit per vertex, B = Σ_i T_i L_i, Gouraud
+//                     the mesh relit per vertex, B = Σ_i T_i L_i, Gouraud; a glossy bake (transfer
+//                     --factors) also needs glsl=URL (its transfer --glsl snippet): c_k per vertex,
+//                     B = Σ_k h_k(Fᵀω_o) c_k per pixel
 //   (these four: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
 //    rotate=DEG turns the lighting about the up axis: SH coefficients rotated every frame)
 //   test=1            no UI, no animation loop: the test script drives window.prtkit
@@ -26,7 +28,8 @@ import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { loadPrtkitIbl, PRTKIT_IBL_GLSL, prtkitUniforms } from './prtkit-loader.js';
 import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, loadPrtkitShrm, SHRM_GLSL, loadNormalCodes,
-  prtAttribute, transferLightingUniform, prtVertexShader, PRT_FRAGMENT } from './prtkit-sh.js';
+  prtAttribute, transferLightingUniform, prtVertexShader, PRT_FRAGMENT,
+  glossyTransferTexture, glossyHTexture, prtGlossyVertexShader, prtGlossyFragmentShader } from './prtkit-sh.js';
 
 const q = new URLSearchParams(location.search);
 const num = (k, d) => (q.has(k) ? Number(q.get(k)) : d);
@@ -285,11 +288,51 @@ async function prtMesh(uniforms) {
   let K = 0;
   while (mesh.geometry.attributes[prtAttribute(K)]) K++;
   if (!bake || K === 0) throw new Error(`${url}: not a transfer bake (no prtkit.transfer extras or _PRT_k attributes)`);
+  if (bake.glossy) return prtGlossyMesh(url, mesh, bake, uniforms);
   if (K > 15) throw new Error(`${url}: ${K} _PRT_k attributes; position + 15 is WebGL2's guaranteed 16 (n ≤ 7 bands here)`);
   if (docs.sh.coefficients.length < bake.order ** 2) throw new Error(`sh: order ${docs.sh.order} < the bake's ${bake.order} bands − 1`);
   document.getElementById('source').textContent = `${url.split('/').pop()}: n = ${bake.order}, ${bake.mode}`;
   uniforms.shLighting = { value: transferLightingUniform([], 4 * K) };
   shMaterial = new THREE.ShaderMaterial({ uniforms, vertexShader: prtVertexShader(K), fragmentShader: PRT_FRAGMENT, side: THREE.DoubleSide });
+  const object = new THREE.Mesh(mesh.geometry, shMaterial);
+  object.matrixAutoUpdate = false;
+  object.matrix.setFromMatrix3(prtkitFromWorld(state.frame).transpose());
+  return object;
+}
+// mode=prt with a glossy bake (extras.prtkit.transfer.glossy): Mahajan, Tseng & Ramamoorthi
+// 2008's eq. 4, B(x, ω_o) = Σ_k h_k(Fᵀω_o) c_k(x). The K·n² values per vertex go to a float
+// texture read by gl_VertexID (c_k = Σ_i T_ki L_i in the vertex shader), h_k to an R32F texture
+// (the .glb's glossy.h blob as it is), and the per-pixel sum is the emitted snippet's
+// prtkitGlossyRadiance (glsl=URL: `transfer --glsl` of this bake), so the page runs the
+// shipped lookup itself.
+async function prtGlossyMesh(url, mesh, bake, uniforms) {
+  const g = bake.glossy;
+  const coeffs = bake.order ** 2, K = g.terms;
+  if (!q.get('glsl')) throw new Error(`${url}: a glossy bake; mode=prt needs glsl=URL too (its transfer --glsl snippet, which holds the h_k lookup)`);
+  if (docs.sh.coefficients.length < coeffs) throw new Error(`sh: order ${docs.sh.order} < the bake's ${bake.order} bands − 1`);
+  const varyings = Math.ceil((3 * K) / 4) + 2;
+  const limit = gl.getParameter(gl.MAX_VARYING_VECTORS);
+  if (varyings > limit) throw new Error(`${url}: K = ${K} terms need ${varyings} varying vectors; this device has ${limit}`);
+  if (!docs.glossy) {
+    const blob = mesh.userData['prtkit.blobs']?.['glossy.h'];
+    if (!blob) throw new Error(`${url}: a glossy bake without its glossy.h blob`);
+    const view = await docs.prt.parser.getDependency('bufferView', blob.bufferView);
+    const snippet = await (await fetch(q.get('glsl'))).text();
+    if (!snippet.includes(`#define PRTKIT_GLOSSY_TERMS ${K}\n`) || !snippet.includes(`#define PRTKIT_GLOSSY_RESOLUTION ${g.resolution}\n`)) {
+      throw new Error(`${q.get('glsl')}: not the glossy snippet of this bake (K = ${K}, ${g.resolution}² cells)`);
+    }
+    docs.glossy = {
+      transfer: glossyTransferTexture(mesh.geometry, Math.ceil((K * coeffs) / 4)),
+      h: glossyHTexture(new Float32Array(view, 0, blob.count), g.resolution, K),
+      snippet,
+    };
+  }
+  document.getElementById('source').textContent = `${url.split('/').pop()}: n = ${bake.order}, ${bake.mode}, glossy ${g.brdf}, K = ${K}`;
+  uniforms.shLighting = { value: transferLightingUniform([], coeffs) };
+  uniforms.prtTransfer = { value: docs.glossy.transfer };
+  uniforms.prtkitGlossyHTexture = { value: docs.glossy.h };
+  shMaterial = new THREE.ShaderMaterial({ uniforms, vertexShader: prtGlossyVertexShader(K, coeffs),
+    fragmentShader: prtGlossyFragmentShader(docs.glossy.snippet, K), side: THREE.DoubleSide });
   const object = new THREE.Mesh(mesh.geometry, shMaterial);
   object.matrixAutoUpdate = false;
   object.matrix.setFromMatrix3(prtkitFromWorld(state.frame).transpose());

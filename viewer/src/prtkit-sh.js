@@ -346,3 +346,123 @@ export const PRT_FRAGMENT = /* glsl */ `
 uniform float exposureScale;
 varying vec3 vRadiance;
 void main() { gl_FragColor = linearToOutputTexel(vec4(vRadiance * exposureScale, 1.0)); }`;
+
+// ---- Glossy PRT (transfer --factors --glb) --------------------------------------------------
+
+/** Width of the glossy transfer texture: vertex v's P texels start at linear texel v·P. */
+export const GLOSSY_TRANSFER_WIDTH = 2048;
+
+/**
+ * A glossy bake's transfer as an RGBA32F THREE.DataTexture: the K·n² values of each vertex (the
+ * `_PRT_k` stream, term-major, σ_k folded in) as P = ⌈K·n²/4⌉ consecutive texels, vertex v's
+ * texel p at linear index v·P + p of a GLOSSY_TRANSFER_WIDTH-wide image (row-major). WebGL 2
+ * draws at most 16 attributes per vertex; the vertex shader reads these by gl_VertexID instead.
+ */
+export function glossyTransferTexture(geometry, texelsPerVertex) {
+  const vertices = geometry.attributes.position.count;
+  const W = GLOSSY_TRANSFER_WIDTH;
+  const H = Math.ceil((vertices * texelsPerVertex) / W);
+  const data = new Float32Array(W * H * 4);
+  for (let p = 0; p < texelsPerVertex; p++) {
+    const a = geometry.attributes[prtAttribute(p)];
+    if (!a || a.count !== vertices) throw new Error(`the glossy bake lacks ${prtAttribute(p)} for its ${vertices} vertices`);
+    for (let v = 0; v < vertices; v++) {
+      const o = 4 * (v * texelsPerVertex + p);
+      data[o] = a.getX(v); data[o + 1] = a.getY(v); data[o + 2] = a.getZ(v); data[o + 3] = a.getW(v);
+    }
+  }
+  const texture = new THREE.DataTexture(data, W, H, THREE.RGBAFormat, THREE.FloatType);
+  texture.minFilter = texture.magFilter = THREE.NearestFilter;
+  texture.generateMipmaps = false;
+  texture.flipY = false;
+  texture.needsUpdate = true;
+  return texture;
+}
+
+/**
+ * h_0 … h_{K−1} (the .glb's `glossy.h` blob, K·N² floats) as the R32F texture the emitted
+ * snippet reads (N wide, K·N tall, texel (k, t·N + j) = h_t of cell (j, k)): the blob as it is.
+ */
+export function glossyHTexture(values, resolution, terms) {
+  if (values.length !== terms * resolution * resolution) throw new Error(`glossy.h: ${values.length} values, not K·N² = ${terms * resolution * resolution}`);
+  const texture = new THREE.DataTexture(values, resolution, terms * resolution, THREE.RedFormat, THREE.FloatType);
+  texture.minFilter = texture.magFilter = THREE.NearestFilter;
+  texture.generateMipmaps = false;
+  texture.flipY = false;
+  texture.needsUpdate = true;
+  return texture;
+}
+
+/**
+ * Vertex shader of glossy PRT (Mahajan, Tseng & Ramamoorthi 2008, eq. 4): c_t = Σ_i T_ti L_i for
+ * the K terms at the vertex, T read from the transfer texture by gl_VertexID, L the (rotated)
+ * lighting's n² coefficients; the 3K numbers packed into ⌈3K/4⌉ vec4 varyings (interpolated
+ * over the triangle, as render interpolates c_k with the hit's barycentrics), with the normal
+ * and position in prtkit's frame (the mesh's own axes).
+ */
+export function prtGlossyVertexShader(K, coeffs) {
+  const values = K * coeffs, P = Math.ceil(values / 4), Q = Math.ceil((3 * K) / 4);
+  const f = (i) => (i < 3 * K ? `c[${Math.floor(i / 3)}].${'xyz'[i % 3]}` : '0.0');
+  const pack = Array.from({ length: Q }, (_, q) => `  vC[${q}] = vec4(${[0, 1, 2, 3].map((j) => f(4 * q + j)).join(', ')});`).join('\n');
+  // Written out texel by texel with constant indices (value i = 4p + j is term ⌊i/n²⌋'s
+  // coefficient i mod n²): a four-vector inside one term is one mat4x3 product, as the diffuse
+  // shader's; one that straddles two terms (n odd) is taken component by component.
+  const sum = [];
+  for (let p = 0; p < P; p++) {
+    sum.push(`  T = transferTexel(base + ${p});`);
+    const i0 = 4 * p, t = Math.floor(i0 / coeffs), k = i0 % coeffs;
+    if (k + 4 <= coeffs && i0 + 4 <= values) {
+      sum.push(`  c[${t}] += mat4x3(shLighting[${k}], shLighting[${k + 1}], shLighting[${k + 2}], shLighting[${k + 3}]) * T;`);
+    } else {
+      for (let j = 0; j < 4 && i0 + j < values; j++) {
+        const i = i0 + j;
+        sum.push(`  c[${Math.floor(i / coeffs)}] += T.${'xyzw'[j]} * shLighting[${i % coeffs}];`);
+      }
+    }
+  }
+  return /* glsl */ `
+uniform sampler2D prtTransfer; // RGBA32F, ${GLOSSY_TRANSFER_WIDTH} wide: vertex v's ${P} texels from v·${P}
+uniform vec3 shLighting[${coeffs}]; // L_i, turned by the environment rotation
+varying vec4 vC[${Q}];
+varying vec3 vNormal;
+varying vec3 vPosition;
+vec4 transferTexel(int q) { return texelFetch(prtTransfer, ivec2(q % ${GLOSSY_TRANSFER_WIDTH}, q / ${GLOSSY_TRANSFER_WIDTH}), 0); }
+void main() {
+  vec3 c[${K}];
+  for (int t = 0; t < ${K}; t++) c[t] = vec3(0.0);
+  int base = gl_VertexID * ${P};
+  vec4 T;
+${sum.join('\n')}
+${pack}
+  vNormal = normal;
+  vPosition = position;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+}`;
+}
+
+/**
+ * Fragment shader of glossy PRT: `snippet` is `transfer --glsl`'s output for the bake (its
+ * prtkitGlossyRadiance: the view direction in the normal's frame F = R_z(φ_n) R_y(θ_n) and the
+ * h_k lookup with render's bilinear/pole rule, reading the uniform prtkitGlossyHTexture). The normal is
+ * turned towards the viewer first, as render shades the side it sees.
+ */
+export function prtGlossyFragmentShader(snippet, K) {
+  const Q = Math.ceil((3 * K) / 4);
+  const unpack = Array.from({ length: K }, (_, t) =>
+    `  c[${t}] = vec3(${[0, 1, 2].map((j) => { const i = 3 * t + j; return `vC[${Math.floor(i / 4)}].${'xyzw'[i % 4]}`; }).join(', ')});`).join('\n');
+  return /* glsl */ `
+${snippet}
+uniform mat3 prtkitFromWorld;
+uniform float exposureScale;
+varying vec4 vC[${Q}];
+varying vec3 vNormal;
+varying vec3 vPosition;
+void main() {
+  vec3 c[PRTKIT_GLOSSY_TERMS];
+${unpack}
+  vec3 wo = normalize(prtkitFromWorld * cameraPosition - vPosition); // towards the eye, prtkit's frame
+  vec3 n = normalize(vNormal);
+  if (dot(n, wo) < 0.0) n = -n;
+  gl_FragColor = linearToOutputTexel(vec4(prtkitGlossyRadiance(n, wo, c) * exposureScale, 1.0));
+}`;
+}

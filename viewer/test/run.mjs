@@ -398,10 +398,76 @@ async function prtTests() {
   figures.prt = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|sh|prt runs one group (development); all by default.
+// ---- Glossy PRT (mode=prt, a transfer --factors bake) against render --shading transfer ----------
+// The bowl holding a ball, Phong s = 8 factored on a 16² hemisphere grid (K = 10 of 16 terms),
+// baked at n = 4 (shadowed); the page computes c_k per vertex from the transfer texture and
+// evaluates B = Σ_k h_k(Fᵀω_o) c_k per pixel with the emitted GLSL snippet; render relights
+// the same .glb on the CPU (its own h_k lookup, render::factored). Environment as stored and
+// turned 60° (SH rotation per frame in the page), both frames, over the mesh less a rim.
+async function glossyPrtTests() {
+  const { dir, sky } = skyIn('prt-glossy');
+  const mesh = 'testdata/meshes/bowl-ball.obj', glb = join(dir, 'g.glb'), glsl = join(dir, 'g.glsl');
+  run('factor-brdf', ['phong:s=8', '--domain', 'hemisphere', '--resolution', '16', '--cosine',
+    '--factors', join(dir, 'p.exr'), '--terms', '16', '-o', join(dir, 'p.json'), '-q']);
+  run('transfer', [mesh, '-n', '4', '--factors', join(dir, 'p.json'), '-K', '10', '--glb', glb, '-o', join(dir, 'g.json'),
+    '--glsl', glsl, '-q']);
+  run('sh-project', [sky, '-F', '3', '-o', join(dir, 'sky3.sh.json'), '-q']);
+  const eye = [1.3, -2.2, 2.4], target = [0, 0, -0.45], RESP = '200x200', EXP = '-3.5';
+  const pageCam = (frame) => ({ eye: toPage(eye, frame), target: toPage(target, frame), fov: String(FOV), res: RESP, exposure: EXP });
+  const params = { mode: 'prt', glb: url(glb), sh: url(join(dir, 'sky3.sh.json')), glsl: url(glsl) };
+  const fig = {};
+  for (const deg of [0, 60]) {
+    const png = join(out, `prt-glossy-${deg}-render.png`);
+    run('render', [sky, '--scene', mesh, '--brdf', 'phong:s=8', '--shading', 'transfer', '--transfer', glb, '--env-rotation', String(deg),
+      '--eye', eye.join(','), '--target', target.join(','), '--fov', String(FOV), '--res', RESP, '--png', png, '--exposure', EXP, '-q']);
+    const ref = readPng(png);
+    for (const frame of ['three', 'gl']) {
+      let img = (await view({ ...params, rotate: String(deg), frame, ...pageCam(frame) })).image;
+      if (frame === 'three') img = mirrorX(img);
+      writePng(join(out, `prt-glossy-${deg}-viewer-${frame}.png`), img);
+      writePng(join(out, `prt-glossy-${deg}-diff-${frame}-x8.png`), diffImage(img, ref));
+      const c = compare(img, ref, meshMask(img));
+      fig[`turned${deg}_${frame}`] = c.psnr;
+      check(`prt glossy bowl-ball (Phong s = 8, K = 10, n = 4), environment turned ${deg}° (${frame} frame) vs render --shading transfer`, c.psnr >= 35,
+        `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+    }
+    if (deg === 0) continue;
+    const reversed = mirrorX((await view({ ...params, rotate: String(-deg), ...pageCam('three') })).image);
+    const r = compare(reversed, ref, meshMask(reversed));
+    fig.reversed = r.psnr;
+    check(`prt glossy turned −${deg}° instead of ${deg}° fails`, r.psnr < 30, `PSNR ${r.psnr.toFixed(2)} dB (< 30)`);
+    const flipped = mirrorX((await view({ ...params, rotate: String(deg), frame: 'gl', ...pageCam('three') })).image);
+    const f = compare(flipped, ref, meshMask(flipped));
+    fig.x_flipped = f.psnr;
+    check('prt glossy with the x flip dropped (gl frame, three\'s camera) fails', f.psnr < 30, `PSNR ${f.psnr.toFixed(2)} dB (< 30)`);
+  }
+  // n = 3: 9 coefficients a term, so four-vectors of the transfer straddle two terms (the
+  // vertex shader's other path).
+  {
+    const glb3 = join(dir, 'g3.glb'), glsl3 = join(dir, 'g3.glsl'), png = join(out, 'prt-glossy-n3-60-render.png');
+    run('transfer', [mesh, '-n', '3', '--factors', join(dir, 'p.json'), '-K', '10', '--glb', glb3, '-o', join(dir, 'g3.json'), '--glsl', glsl3, '-q']);
+    run('render', [sky, '--scene', mesh, '--brdf', 'phong:s=8', '--shading', 'transfer', '--transfer', glb3, '--env-rotation', '60',
+      '--eye', eye.join(','), '--target', target.join(','), '--fov', String(FOV), '--res', RESP, '--png', png, '--exposure', EXP, '-q']);
+    const ref = readPng(png);
+    const img = mirrorX((await view({ ...params, glb: url(glb3), glsl: url(glsl3), rotate: '60', ...pageCam('three') })).image);
+    writePng(join(out, 'prt-glossy-n3-60-viewer-three.png'), img);
+    const c = compare(img, ref, meshMask(img));
+    fig.n3_turned60_three = c.psnr;
+    check('prt glossy n = 3 (terms straddle four-vectors), turned 60° (three frame) vs render --shading transfer', c.psnr >= 35,
+      `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+  }
+  const r = await view({ ...params, rotate: '30', src: url(sky), eye: toPage([1.6, -2.6, 2.2], 'three'), target: toPage(target, 'three'),
+    fov: '32', res: '640x360', exposure: EXP }, { bench: 20 });
+  writePng(join(out, 'mode-prt-glossy.png'), r.image);
+  fig.frame_ms_640x360 = r.ms;
+  console.log(`     frame time prt glossy (K = 10, n = 4, bowl-ball) 640×360: ${r.ms.toFixed(1)} ms (CPU, SwiftShader)`);
+  figures.prt_glossy = fig;
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|sh|prt|glossy runs one group (development; prt includes glossy); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
-  if (only !== 'sh' && only !== 'prt') {
+  if (!only || only === 'ibl') {
   // 1. Skybox (specular.ktx2 level 0 in the viewer) against three.js's own view of the source map.
   const skyViews = [
     { name: 'front', eye: [0, -4, 0.3], fov: 60 },
@@ -497,8 +563,9 @@ try {
   }
   figures.frame_ms_640x360 = times;
   }
-  if (only !== 'ibl' && only !== 'prt') await shTests();
-  if (only !== 'ibl' && only !== 'sh') await prtTests();
+  if (!only || only === 'sh') await shTests();
+  if (!only || only === 'prt') await prtTests();
+  if (!only || only === 'prt' || only === 'glossy') await glossyPrtTests();
 } catch (e) {
   check('viewer pages', false, e.stack ?? String(e));
 } finally {
