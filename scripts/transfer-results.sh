@@ -2,8 +2,9 @@
 # The transfer stage's numbers (docs/results/transfer.md) and one JSON row per measurement on
 # stdout: accuracy against independent derivations (examples/transfer_accuracy.rs: rows with
 # "check" unshadowed, shadowed, furnace), the speed of a shadowed and an interreflected bake of a
-# bowl holding a ball generated here (about 100 000 vertices; "check": "speed"), and the frames per
-# second of relighting that mesh from its .glb at order 3 ("check": "relight").
+# bowl holding a ball generated here (about 100 000 vertices; "check": "speed"), the frames per
+# second of relighting that mesh from its .glb at order 3 ("check": "relight"), and clustered PCA
+# of diffuse and glossy bakes ("check": "compression").
 # Knobs (scripts/README.md): PRTKIT_BIN, PRTKIT_RESULTS, PRTKIT_SMALL=1 (a 650-vertex scene,
 # 64 rays, the example's small sizes).
 set -euo pipefail
@@ -89,6 +90,47 @@ json_row check=relight order="$(json_get "$tmp/relight.json" transfer.order)" \
     frames_per_second="$(json_get "$tmp/relight.json" transfer.frames_per_second)" \
     median_frames_per_second="$(json_get "$tmp/relight.json" transfer.median_frames_per_second)" | tee "$tmp/relight.row"
 
+# compressed NAME MESH RELIGHT_ARGS -- TRANSFER_ARGS...: bakes MESH with TRANSFER_ARGS, relights
+# it once (render --json) and prints a row: its size, the CPCA figures from the manifest, the
+# frames per second of relighting it.
+compressed() {
+  local name=$1 mesh=$2 relight_args=$3
+  shift 4
+  echo "transfer-results: $name…" >&2
+  TIMEFORMAT='%R %U'
+  { time "$bin/transfer" "$mesh" "$@" --glb "$tmp/$name.glb" -o "$tmp/$name.json" --json -q >"$tmp/$name.summary"; } \
+      2>"$tmp/time"
+  read -r wall user <"$tmp/time"
+  # shellcheck disable=SC2086
+  "$bin/render" "$tmp/sky.exr" --scene "$mesh" --shading transfer --transfer "$tmp/$name.glb" $relight_args \
+      --res 64x64 --json -q >"$tmp/$name.relight.json"
+  local m="$tmp/$name.json"
+  jq -c --arg name "$name" --arg wall "$wall" --arg user "$user" --arg bytes "$(wc -c <"$tmp/$name.glb")" \
+      --argjson fps "$(json_get "$tmp/$name.relight.json" transfer.frames_per_second)" \
+      '{check: "compression", name: $name, vertices: .mesh.vertices, values: (.compression.values_per_vertex // .coefficients),
+        terms: (.glossy.terms // 1), clusters: (.compression.clusters // 0), pca: (.compression.components // 0),
+        iterations: (.compression.iterations // 0), relative_rms: (.compression.relative_rms // 0),
+        max_vertex: (.compression.max_vertex // 0), glb_bytes: ($bytes | tonumber), wall: ($wall | tonumber),
+        cpu_user: ($user | tonumber), frames_per_second: $fps}' "$m" | tee "$tmp/$name.row"
+  compressed_rows+=("$tmp/$name.row")
+}
+compressed_rows=()
+# Diffuse, order 4, on the scene above; glossy (Phong s = 8, the demo's step 9) on the bowl of
+# testdata, whose 1 507 vertices keep the glossy bakes to seconds.
+compressed diffuse-full "$tmp/scene.obj" "" -- -n 4 --rays "$rays"
+for cp in "64 4" "256 4" "256 8"; do
+  set -- $cp
+  compressed "diffuse-c$1-p$2" "$tmp/scene.obj" "" -- -n 4 --rays "$rays" --clusters "$1" --pca "$2"
+done
+"$bin/factor-brdf" phong:s=8 --domain hemisphere --resolution 32 --cosine --factors "$tmp/phong8.exr" --terms 32 \
+    -o "$tmp/phong8.json" -q
+glossy=(-n 8 --factors "$tmp/phong8.json" --energy 0.99)
+compressed glossy-full testdata/meshes/bowl-ball.obj "--brdf phong:s=8" -- "${glossy[@]}"
+for cp in "16 8" "64 8" "64 16"; do
+  set -- $cp
+  compressed "glossy-c$1-p$2" testdata/meshes/bowl-ball.obj "--brdf phong:s=8" -- "${glossy[@]}" --clusters "$1" --pca "$2"
+done
+
 out="$docs/results/transfer.md"
 acc="$tmp/accuracy.jsonl"
 {
@@ -150,5 +192,22 @@ acc="$tmp/accuracy.jsonl"
   echo "| order | vertices | frames | frames/s (fastest) | frames/s (median) |"
   echo "| --- | --- | --- | --- | --- |"
   jq -r '"| \(.order) | \(.vertices) | \(.frames) | \(.frames_per_second | round) | \(.median_frames_per_second | round) |"' "$tmp/relight.row"
+  echo
+  echo "### Clustered PCA (\`--clusters C --pca P\`)"
+  echo
+  echo "Sloan, Hall, Hart & Snyder 2003: each vertex keeps its cluster and P weights, each cluster"
+  echo "its mean and P directions. Diffuse: the scene above at order 4 ($rays rays). Glossy: the demo's"
+  echo "bowl (\`testdata/meshes/bowl-ball.obj\`) in Phong s = 8 factored at 32² cells, K from 99 % of"
+  echo "the energy, order 8. Error: ‖T − T̃‖/‖T‖ over every value (relative RMS) and the largest"
+  echo "per-vertex ‖T − T̃‖ over the RMS of ‖T‖, from the manifest. Seconds: the whole \`transfer\`"
+  echo "run (rays and compression). Frames/s: \`render --shading transfer --json\`'s relighting (one"
+  echo "thread: per frame the SH rotation and the dot products, per cluster then per vertex when"
+  echo "compressed)."
+  echo
+  echo "| bake | vertices | values per vertex | C | P | rounds | relative RMS | largest vertex | .glb MB | wall s | frames/s |"
+  echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+  for f in "${compressed_rows[@]}"; do
+    jq -r '"| \(.name) | \(.vertices) | \(.values) | \(.clusters) | \(.pca) | \(.iterations) | \(.relative_rms * 10000 | round / 100) % | \(.max_vertex * 10000 | round / 100) % | \(.glb_bytes / 1e4 | round / 100) | \(.wall) | \(.frames_per_second | round) |"' "$f"
+  done
 } >"$out"
 echo "wrote $out" >&2
