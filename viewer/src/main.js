@@ -532,6 +532,12 @@ window.prtkit = {
   decodedNormals,
   rotateShZ,
   sh: () => docs.sh?.coefficients,
+  // ms per call of the per-cluster half of compressed relighting (the CPU's share of a frame).
+  cpcaProjectMs: (calls = 20) => {
+    const t0 = performance.now();
+    for (let i = 0; i < calls; i++) projectCpcaLighting(docs.cpca, rotateShZ(docs.sh.coefficients, i * 0.01));
+    return (performance.now() - t0) / calls;
+  },
   gpu: () => {
     const ext = gl.getExtension('WEBGL_debug_renderer_info');
     return ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER);
