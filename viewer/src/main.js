@@ -17,7 +17,8 @@
 //   mode=prt          glb=URL (transfer --glb) sh=URL (sh-project of the map, order ≥ the bake's n − 1):
 //                     the mesh relit per vertex, B = Σ_i T_i L_i, Gouraud; a glossy bake (transfer
 //                     --factors) also needs glsl=URL (its transfer --glsl snippet): c_k per vertex,
-//                     B = Σ_k h_k(Fᵀω_o) c_k per pixel
+//                     B = Σ_k h_k(Fᵀω_o) c_k per pixel; a bake compressed by clustered PCA
+//                     (transfer --clusters C --pca P) is relit in compressed form, either kind
 //   (these four: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
 //    rotate=DEG turns the lighting about the up axis: SH coefficients rotated every frame)
 //   test=1            no UI, no animation loop: the test script drives window.prtkit
