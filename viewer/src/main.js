@@ -17,7 +17,8 @@
 //   mode=prt          glb=URL (transfer --glb) sh=URL (sh-project of the map, order ≥ the bake's n − 1):
 //                     the mesh relit per vertex, B = Σ_i T_i L_i, Gouraud; a glossy bake (transfer
 //                     --factors) also needs glsl=URL (its transfer --glsl snippet): c_k per vertex,
-//                     B = Σ_k h_k(Fᵀω_o) c_k per pixel
+//                     B = Σ_k h_k(Fᵀω_o) c_k per pixel; a bake compressed by clustered PCA
+//                     (transfer --clusters C --pca P) is relit in compressed form, either kind
 //   (these four: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
 //    rotate=DEG turns the lighting about the up axis: SH coefficients rotated every frame)
 //   test=1            no UI, no animation loop: the test script drives window.prtkit
@@ -29,7 +30,8 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { loadPrtkitIbl, PRTKIT_IBL_GLSL, prtkitUniforms } from './prtkit-loader.js';
 import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, loadPrtkitShrm, SHRM_GLSL, loadNormalCodes,
   prtAttribute, transferLightingUniform, prtVertexShader, PRT_FRAGMENT,
-  glossyTransferTexture, glossyHTexture, prtGlossyVertexShader, prtGlossyFragmentShader } from './prtkit-sh.js';
+  glossyTransferTexture, glossyHTexture, prtGlossyVertexShader, prtGlossyFragmentShader,
+  PRT_CLUSTER_ATTRIBUTE, prtWeightAttribute, cpcaBake, projectCpcaLighting, prtCpcaVertexShader } from './prtkit-sh.js';
 
 const q = new URLSearchParams(location.search);
 const num = (k, d) => (q.has(k) ? Number(q.get(k)) : d);
@@ -285,6 +287,7 @@ async function prtMesh(uniforms) {
   docs.prt.scene.traverse((o) => { if (o.isMesh) mesh = o; });
   if (!mesh) throw new Error(`${url}: no mesh`);
   const bake = mesh.userData['prtkit.transfer'];
+  if (bake?.cpca) return prtCpcaMesh(url, mesh, bake, uniforms);
   let K = 0;
   while (mesh.geometry.attributes[prtAttribute(K)]) K++;
   if (!bake || K === 0) throw new Error(`${url}: not a transfer bake (no prtkit.transfer extras or _PRT_k attributes)`);
@@ -338,6 +341,55 @@ async function prtGlossyMesh(url, mesh, bake, uniforms) {
   object.matrix.setFromMatrix3(prtkitFromWorld(state.frame).transpose());
   return object;
 }
+// mode=prt with a bake compressed by clustered PCA (extras.prtkit.transfer.cpca; transfer
+// --clusters C --pca P), diffuse or glossy, relit in compressed form (Sloan et al. 2003, eq. 3):
+// every frame the CPU dots the turned lighting with each cluster's mean and P directions, term
+// by term (projectCpcaLighting), into a small float texture; the vertex shader takes its
+// cluster's texels and P multiply-adds per term. A glossy bake's c_k then go to the same
+// fragment shader as an uncompressed one's.
+async function prtCpcaMesh(url, mesh, bake, uniforms) {
+  const { clusters: C, components: P } = bake.cpca;
+  const coeffs = bake.order ** 2, g = bake.glossy, K = g ? g.terms : 1;
+  const attrs = mesh.geometry.attributes, A = Math.ceil(P / 4);
+  if (!attrs[PRT_CLUSTER_ATTRIBUTE]) throw new Error(`${url}: a compressed bake without _PRT_CLUSTER`);
+  for (let a = 0; a < A; a++) if (!attrs[prtWeightAttribute(a)]) throw new Error(`${url}: a compressed bake of P = ${P} without _PRT_W_${a}`);
+  // position, the cluster, ⌈P/4⌉ weight vectors (and the normal, glossy) of WebGL 2's 16 attributes.
+  const used = 2 + A + (g ? 1 : 0), limit = gl.getParameter(gl.MAX_VERTEX_ATTRIBS);
+  if (used > limit) throw new Error(`${url}: P = ${P} weights need ${used} vertex attributes; this device has ${limit}`);
+  if (docs.sh.coefficients.length < coeffs) throw new Error(`sh: order ${docs.sh.order} < the bake's ${bake.order} bands − 1`);
+  if (g) {
+    if (!q.get('glsl')) throw new Error(`${url}: a glossy bake; mode=prt needs glsl=URL too (its transfer --glsl snippet, which holds the h_k lookup)`);
+    const varyings = Math.ceil((3 * K) / 4) + 2, vlimit = gl.getParameter(gl.MAX_VARYING_VECTORS);
+    if (varyings > vlimit) throw new Error(`${url}: K = ${K} terms need ${varyings} varying vectors; this device has ${vlimit}`);
+  }
+  if (!docs.cpca) {
+    const blobs = mesh.userData['prtkit.blobs'] ?? {};
+    const floats = async (name) => {
+      if (!blobs[name]) throw new Error(`${url}: a compressed bake without its ${name} blob`);
+      const view = await docs.prt.parser.getDependency('bufferView', blobs[name].bufferView);
+      return new Float32Array(view, 0, blobs[name].count);
+    };
+    docs.cpca = cpcaBake(C, P, K, coeffs, await floats('cpca.means'), await floats('cpca.bases'));
+    if (g) {
+      const snippet = await (await fetch(q.get('glsl'))).text();
+      if (!snippet.includes(`#define PRTKIT_GLOSSY_TERMS ${K}\n`) || !snippet.includes(`#define PRTKIT_GLOSSY_RESOLUTION ${g.resolution}\n`)) {
+        throw new Error(`${q.get('glsl')}: not the glossy snippet of this bake (K = ${K}, ${g.resolution}² cells)`);
+      }
+      docs.glossy = { h: glossyHTexture(await floats('glossy.h'), g.resolution, K), snippet };
+    }
+  }
+  document.getElementById('source').textContent = `${url.split('/').pop()}: n = ${bake.order}, ${bake.mode}${g ? `, glossy ${g.brdf}, K = ${K}` : ''}, CPCA ${C} clusters × ${P}`;
+  uniforms.cpcaLighting = { value: docs.cpca.texture };
+  const material = g
+    ? { vertexShader: prtCpcaVertexShader(K, P, true), fragmentShader: prtGlossyFragmentShader(docs.glossy.snippet, K) }
+    : { vertexShader: prtCpcaVertexShader(1, P, false), fragmentShader: PRT_FRAGMENT };
+  if (g) uniforms.prtkitGlossyHTexture = { value: docs.glossy.h };
+  shMaterial = new THREE.ShaderMaterial({ uniforms, ...material, side: THREE.DoubleSide });
+  const object = new THREE.Mesh(mesh.geometry, shMaterial);
+  object.matrixAutoUpdate = false;
+  object.matrix.setFromMatrix3(prtkitFromWorld(state.frame).transpose());
+  return object;
+}
 // Every frame: the lighting turned by state.rotate about the up axis. For SH lighting the
 // coefficients themselves are rotated (rotateShZ, any order); the SHRM's lookup turns (β − γ).
 function updateShUniforms() {
@@ -345,7 +397,8 @@ function updateShUniforms() {
   const turn = rotation();
   u.exposureScale.value = exposureScale();
   u.prtkitFromWorld.value = prtkitFromWorld(state.frame);
-  if (docs.sh && u.shLighting) u.shLighting.value = transferLightingUniform(rotateShZ(docs.sh.coefficients, turn), u.shLighting.value.length);
+  if (docs.sh && u.cpcaLighting) projectCpcaLighting(docs.cpca, rotateShZ(docs.sh.coefficients, turn));
+  else if (docs.sh && u.shLighting) u.shLighting.value = transferLightingUniform(rotateShZ(docs.sh.coefficients, turn), u.shLighting.value.length);
   else if (docs.sh) u.shIrradiance.value = irradianceUniform(rotateShZ(docs.sh.coefficients, turn), num('albedo', 1));
   u.envTurn.value = turn;
   scene.backgroundIntensity = exposureScale();
@@ -480,6 +533,12 @@ window.prtkit = {
   decodedNormals,
   rotateShZ,
   sh: () => docs.sh?.coefficients,
+  // ms per call of the per-cluster half of compressed relighting (the CPU's share of a frame).
+  cpcaProjectMs: (calls = 20) => {
+    const t0 = performance.now();
+    for (let i = 0; i < calls; i++) projectCpcaLighting(docs.cpca, rotateShZ(docs.sh.coefficients, i * 0.01));
+    return (performance.now() - t0) / calls;
+  },
   gpu: () => {
     const ext = gl.getExtension('WEBGL_debug_renderer_info');
     return ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER);

@@ -393,6 +393,13 @@ export function glossyHTexture(values, resolution, terms) {
   return texture;
 }
 
+/** GLSL lines packing the K sums c[t] into the ⌈3K/4⌉ vec4 varyings vC (zeros pad the last). */
+function packGlossyVaryings(K) {
+  const Q = Math.ceil((3 * K) / 4);
+  const f = (i) => (i < 3 * K ? `c[${Math.floor(i / 3)}].${'xyz'[i % 3]}` : '0.0');
+  return Array.from({ length: Q }, (_, q) => `  vC[${q}] = vec4(${[0, 1, 2, 3].map((j) => f(4 * q + j)).join(', ')});`).join('\n');
+}
+
 /**
  * Vertex shader of glossy PRT (Mahajan, Tseng & Ramamoorthi 2008, eq. 4): c_t = Σ_i T_ti L_i for
  * the K terms at the vertex, T read from the transfer texture by gl_VertexID, L the (rotated)
@@ -402,8 +409,7 @@ export function glossyHTexture(values, resolution, terms) {
  */
 export function prtGlossyVertexShader(K, coeffs) {
   const values = K * coeffs, P = Math.ceil(values / 4), Q = Math.ceil((3 * K) / 4);
-  const f = (i) => (i < 3 * K ? `c[${Math.floor(i / 3)}].${'xyz'[i % 3]}` : '0.0');
-  const pack = Array.from({ length: Q }, (_, q) => `  vC[${q}] = vec4(${[0, 1, 2, 3].map((j) => f(4 * q + j)).join(', ')});`).join('\n');
+  const pack = packGlossyVaryings(K);
   // Written out texel by texel with constant indices (value i = 4p + j is term ⌊i/n²⌋'s
   // coefficient i mod n²): a four-vector inside one term is one mat4x3 product, as the diffuse
   // shader's; one that straddles two terms (n odd) is taken component by component.
@@ -464,5 +470,108 @@ ${unpack}
   vec3 n = normalize(vNormal);
   if (dot(n, wo) < 0.0) n = -n;
   gl_FragColor = linearToOutputTexel(vec4(prtkitGlossyRadiance(n, wo, c) * exposureScale, 1.0));
+}`;
+}
+
+// ---- Clustered PCA (transfer --clusters C --pca P) -------------------------------------------
+//
+// A compressed bake has no _PRT_k attributes: each vertex holds its cluster c (`_PRT_CLUSTER`, a
+// float) and P weights (`_PRT_W_k`, four a vec4, zeros padding), and the .glb's blobs hold every
+// cluster's mean m_c (C × D) and directions b_cp (C × P × D), D = K·n² values (K = 1 diffuse;
+// term-major for a glossy bake), so that T(x) = m_c + Σ_p w_p(x) b_cp (Sloan, Hall, Hart &
+// Snyder 2003, eq. 2). Relighting stays in compressed form (eq. 3): per frame the C·(P + 1)·K
+// dot products of the lighting with n² values each, m_ck·L and b_cpk·L (`projectCpcaLighting`,
+// on the CPU), go to a small float texture; the vertex shader reads its cluster's 1 + P texels per
+// term and takes P multiply-adds per term: c_k(x) = m_ck·L + Σ_p w_p(x) (b_cpk·L).
+
+/** three.js's names of the compressed bake's attributes (GLTFLoader lower-cases them). */
+export const PRT_CLUSTER_ATTRIBUTE = '_prt_cluster';
+export const prtWeightAttribute = (k) => `_prt_w_${k}`;
+
+/** Width of the projected-lighting texture: cluster c's (1 + P)·K texels from linear index c·(1 + P)·K. */
+export const CPCA_LIGHTING_WIDTH = 2048;
+
+/**
+ * The compressed bake as the page keeps it: `means` (C·D) and `bases` (C·P·D) as the .glb's blobs
+ * hold them, and an RGBA32F texture for the projected lighting, texel (c·(1 + P) + j)·K + k (row-
+ * major, CPCA_LIGHTING_WIDTH wide) = m_ck·L for j = 0 and b_c(j−1)k·L for j ≥ 1, rgb.
+ */
+export function cpcaBake(clusters, components, terms, coeffs, means, bases) {
+  const D = terms * coeffs;
+  if (means.length !== clusters * D) throw new Error(`cpca.means: ${means.length} values, not C·D = ${clusters * D}`);
+  if (bases.length !== clusters * components * D) throw new Error(`cpca.bases: ${bases.length} values, not C·P·D = ${clusters * components * D}`);
+  const texels = clusters * (1 + components) * terms;
+  const W = CPCA_LIGHTING_WIDTH, H = Math.ceil(texels / W);
+  const data = new Float32Array(W * H * 4);
+  const texture = new THREE.DataTexture(data, W, H, THREE.RGBAFormat, THREE.FloatType);
+  texture.minFilter = texture.magFilter = THREE.NearestFilter;
+  texture.generateMipmaps = false;
+  texture.flipY = false;
+  texture.needsUpdate = true;
+  return { clusters, components, terms, coeffs, means, bases, texture };
+}
+
+/**
+ * One frame of eq. 3's per-cluster half: the lighting (RGB SH, ≥ n² coefficients, already turned)
+ * dotted with each cluster's mean and directions, term by term, into the texture (marked for
+ * upload). C·(1 + P)·K·n² multiply-adds per channel, in double precision.
+ */
+export function projectCpcaLighting(cpca, lighting) {
+  const { clusters: C, components: P, terms: K, coeffs: N, means, bases, texture } = cpca;
+  const D = K * N, data = texture.image.data;
+  const Lr = new Float64Array(N), Lg = new Float64Array(N), Lb = new Float64Array(N);
+  for (let i = 0; i < N; i++) [Lr[i], Lg[i], Lb[i]] = lighting[i] ?? [0, 0, 0];
+  let o = 0;
+  for (let c = 0; c < C; c++) {
+    for (let j = 0; j <= P; j++) {
+      const src = j === 0 ? means : bases, start = j === 0 ? c * D : (c * P + j - 1) * D;
+      for (let k = 0; k < K; k++, o += 4) {
+        let r = 0, g = 0, b = 0;
+        for (let i = 0, s = start + k * N; i < N; i++, s++) {
+          const t = src[s];
+          r += t * Lr[i]; g += t * Lg[i]; b += t * Lb[i];
+        }
+        data[o] = r; data[o + 1] = g; data[o + 2] = b; data[o + 3] = 1;
+      }
+    }
+  }
+  texture.needsUpdate = true;
+}
+
+/**
+ * Vertex shader of compressed PRT: the vertex's cluster c and weights w_p (attributes), its
+ * cluster's projected lighting read from the texture, and for each term k
+ *   c_k = (m_ck·L) + Σ_p w_p (b_cpk·L)          (Sloan et al. 2003, eq. 3)
+ * written out with constant indices (K·(1 + P) texel fetches, K·P vec3 multiply-adds). Diffuse
+ * (`glossy` false, K = 1): B = c_0 goes on as vRadiance, for PRT_FRAGMENT. Glossy: the c_k are
+ * packed into vC, with the normal and position, for prtGlossyFragmentShader — as the uncompressed
+ * glossy vertex shader hands them on.
+ */
+export function prtCpcaVertexShader(K, P, glossy) {
+  const A = Math.ceil(P / 4);
+  const attributes = [`attribute float ${PRT_CLUSTER_ATTRIBUTE};`,
+    ...Array.from({ length: A }, (_, a) => `attribute vec4 ${prtWeightAttribute(a)};`)].join('\n');
+  const w = (p) => `${prtWeightAttribute(Math.floor(p / 4))}.${'xyzw'[p % 4]}`;
+  const sums = Array.from({ length: K }, (_, k) => {
+    const terms = [`cpcaTexel(base + ${k})`, ...Array.from({ length: P }, (_, p) => `${w(p)} * cpcaTexel(base + ${(1 + p) * K + k})`)];
+    return `  c[${k}] = ${terms.join('\n         + ')};`;
+  }).join('\n');
+  const out = glossy
+    ? `${packGlossyVaryings(K)}
+  vNormal = normal;
+  vPosition = position;`
+    : '  vRadiance = c[0];';
+  const varyings = glossy ? `varying vec4 vC[${Math.ceil((3 * K) / 4)}];\nvarying vec3 vNormal;\nvarying vec3 vPosition;` : 'varying vec3 vRadiance;';
+  return /* glsl */ `
+${attributes}
+uniform sampler2D cpcaLighting; // RGBA32F, ${CPCA_LIGHTING_WIDTH} wide: cluster c's ${(1 + P) * K} texels from c·${(1 + P) * K}
+${varyings}
+vec3 cpcaTexel(int q) { return texelFetch(cpcaLighting, ivec2(q % ${CPCA_LIGHTING_WIDTH}, q / ${CPCA_LIGHTING_WIDTH}), 0).rgb; }
+void main() {
+  vec3 c[${K}];
+  int base = int(${PRT_CLUSTER_ATTRIBUTE} + 0.5) * ${(1 + P) * K};
+${sums}
+${out}
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
 }`;
 }

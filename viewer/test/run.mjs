@@ -464,7 +464,88 @@ async function glossyPrtTests() {
   figures.prt_glossy = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|sh|prt|glossy runs one group (development; prt includes glossy); all by default.
+// ---- Compressed PRT (mode=prt, transfer --clusters C --pca P) against render --shading transfer --
+// The page relights a clustered-PCA bake in compressed form (per frame the lighting against each
+// cluster's mean and directions on the CPU, then P multiply-adds per vertex and term in the vertex
+// shader); render relights the same .glb in compressed form on the CPU (render::transfer::relight).
+// Diffuse (n = 3) and glossy (Phong s = 8, K = 10, n = 4) bakes of the bowl, as stored and turned
+// 60°, both frames, over the mesh less a rim. Negative control: the same .glb with every vertex's
+// cluster moved to the next one (c + 1 mod C; the page reads another cluster's mean and
+// directions) must fail the bar.
+
+// A copy of the .glb `from` at `to` with _PRT_CLUSTER's values c replaced by (c + 1) mod C.
+function shiftClusters(from, to) {
+  const b = Buffer.from(readFileSync(from));
+  const jsonLength = b.readUInt32LE(12);
+  const gltf = JSON.parse(b.subarray(20, 20 + jsonLength).toString());
+  const bin = 20 + jsonLength + 8; // the BIN chunk's data, after its length and type
+  const mesh = gltf.meshes[0];
+  const C = mesh.extras['prtkit.transfer'].cpca.clusters;
+  const accessor = gltf.accessors[mesh.primitives[0].attributes._PRT_CLUSTER];
+  const view = gltf.bufferViews[accessor.bufferView];
+  const start = bin + (view.byteOffset ?? 0) + (accessor.byteOffset ?? 0);
+  for (let v = 0; v < accessor.count; v++) b.writeFloatLE((b.readFloatLE(start + 4 * v) + 1) % C, start + 4 * v);
+  writeFileSync(to, b);
+}
+async function cpcaPrtTests() {
+  const { dir, sky } = skyIn('prt-cpca');
+  const mesh = 'testdata/meshes/bowl-ball.obj';
+  run('factor-brdf', ['phong:s=8', '--domain', 'hemisphere', '--resolution', '16', '--cosine',
+    '--factors', join(dir, 'p.exr'), '--terms', '16', '-o', join(dir, 'p.json'), '-q']);
+  const bakes = [
+    { name: 'diffuse', what: 'diffuse n = 3, 8 clusters × 4', n: 3, exp: '-2.5', brdf: [],
+      args: ['-n', '3', '--rays', '256', '--clusters', '8', '--pca', '4'] },
+    { name: 'glossy', what: 'glossy Phong s = 8, K = 10, n = 4, 16 clusters × 8', n: 4, exp: '-3.5', brdf: ['--brdf', 'phong:s=8'],
+      args: ['-n', '4', '--factors', join(dir, 'p.json'), '-K', '10', '--clusters', '16', '--pca', '8'] },
+  ];
+  const eye = [1.3, -2.2, 2.4], target = [0, 0, -0.45], RESP = '200x200';
+  const fig = {};
+  for (const b of bakes) {
+    const glb = join(dir, `${b.name}.glb`), glsl = join(dir, `${b.name}.glsl`), shifted = join(dir, `${b.name}-shifted.glb`);
+    run('transfer', [mesh, ...b.args, '--glb', glb, '-o', join(dir, `${b.name}.json`), '--glsl', glsl, '-q']);
+    const compression = JSON.parse(readFileSync(join(dir, `${b.name}.json`), 'utf8')).compression;
+    shiftClusters(glb, shifted);
+    const sh = join(dir, `sky${b.n - 1}.sh.json`);
+    if (!existsSync(sh)) run('sh-project', [sky, '-F', String(b.n - 1), '-o', sh, '-q']);
+    const pageCam = (frame) => ({ eye: toPage(eye, frame), target: toPage(target, frame), fov: String(FOV), res: RESP, exposure: b.exp });
+    const params = { mode: 'prt', glb: url(glb), sh: url(sh), ...(b.brdf.length ? { glsl: url(glsl) } : {}) };
+    const f = { relative_rms: compression.relative_rms };
+    for (const deg of [0, 60]) {
+      const png = join(out, `prt-cpca-${b.name}-${deg}-render.png`);
+      run('render', [sky, '--scene', mesh, ...b.brdf, '--shading', 'transfer', '--transfer', glb, '--env-rotation', String(deg),
+        '--eye', eye.join(','), '--target', target.join(','), '--fov', String(FOV), '--res', RESP, '--png', png, '--exposure', b.exp, '-q']);
+      const ref = readPng(png);
+      for (const frame of ['three', 'gl']) {
+        let img = (await view({ ...params, rotate: String(deg), frame, ...pageCam(frame) })).image;
+        if (frame === 'three') img = mirrorX(img);
+        writePng(join(out, `prt-cpca-${b.name}-${deg}-viewer-${frame}.png`), img);
+        writePng(join(out, `prt-cpca-${b.name}-${deg}-diff-${frame}-x8.png`), diffImage(img, ref));
+        const c = compare(img, ref, meshMask(img));
+        f[`turned${deg}_${frame}`] = c.psnr;
+        check(`prt compressed ${b.what}, environment turned ${deg}° (${frame} frame) vs render --shading transfer`, c.psnr >= 35,
+          `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+      }
+      if (deg === 0) continue;
+      const wrong = mirrorX((await view({ ...params, glb: url(shifted), rotate: String(deg), ...pageCam('three') })).image);
+      writePng(join(out, `prt-cpca-${b.name}-${deg}-shifted-clusters-three.png`), wrong);
+      const w = compare(wrong, ref, meshMask(wrong));
+      f.clusters_shifted = w.psnr;
+      check(`prt compressed ${b.name} with every vertex's cluster moved to the next (c + 1 mod C) fails`, w.psnr < 30,
+        `PSNR ${w.psnr.toFixed(2)} dB (< 30)`);
+    }
+    if (b.name === 'glossy') {
+      const r = await view({ ...params, rotate: '30', src: url(sky), eye: toPage([1.6, -2.6, 2.2], 'three'), target: toPage(target, 'three'),
+        fov: '32', res: '640x360', exposure: b.exp }, { bench: 20 });
+      writePng(join(out, 'mode-prt-cpca-glossy.png'), r.image);
+      f.frame_ms_640x360 = r.ms;
+      console.log(`     frame time prt compressed ${b.what} 640×360: ${r.ms.toFixed(1)} ms (CPU, SwiftShader)`);
+    }
+    fig[b.name] = f;
+  }
+  figures.prt_cpca = fig;
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
   if (!only || only === 'ibl') {
@@ -566,6 +647,7 @@ try {
   if (!only || only === 'sh') await shTests();
   if (!only || only === 'prt') await prtTests();
   if (!only || only === 'prt' || only === 'glossy') await glossyPrtTests();
+  if (!only || only === 'prt' || only === 'cpca') await cpcaPrtTests();
 } catch (e) {
   check('viewer pages', false, e.stack ?? String(e));
 } finally {
