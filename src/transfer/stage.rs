@@ -632,10 +632,24 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         rays_per_second: if trace_seconds > 0.0 { cast as f64 / trace_seconds } else { 0.0 },
         bounce_seconds,
     };
-    // A glossy bake's snippet adds the view-dependent half: the frame F and the h_k lookup.
-    let run_time = |lang| match &config.glossy {
-        Some(g) => glossy_snippet(n, g.terms, g.factorization.grid, lang),
-        None => snippet(n, lang),
+    // A glossy bake's snippet adds the view-dependent half: the frame F and the h_k lookup. A
+    // compressed bake's .glb has no _PRT_k: its header says how to get T (or c_k) first.
+    let run_time = |lang| {
+        let text = match &config.glossy {
+            Some(g) => glossy_snippet(n, g.terms, g.factorization.grid, lang),
+            None => snippet(n, lang),
+        };
+        match &config.compression {
+            None => text,
+            Some(c) => format!(
+                "// This bake's .glb stores the transfer by clustered PCA (transfer --clusters {} --pca {}): it has no\n\
+                 // _PRT_k attributes but _PRT_CLUSTER, _PRT_W_k and the cpca.means / cpca.bases blobs. Per frame,\n\
+                 // dot the (turned) lighting with each cluster's mean and directions, then per vertex add P\n\
+                 // weighted terms (Sloan et al. 2003, eq. 3; docs/formats/transfer.md); the dot product below is\n\
+                 // that of an uncompressed T, T = mean[c] + sum_p w_p basis[c][p].\n{text}",
+                c.clusters, c.components
+            ),
+        }
     };
     Ok(Output {
         document,
