@@ -494,6 +494,7 @@ fn glb_seeds() -> Vec<Vec<u8>> {
         triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
         generator: "fuzz".into(),
         extras: serde_json::json!({}),
+        blobs: Vec::new(),
     };
     let written = prtkit::io::glb::encode(&mesh).unwrap_or_default();
     // The same vertices as a strip of u16 indices: the JSON edited, the BIN chunk extended.
