@@ -236,7 +236,7 @@ pub fn check(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<
     let values = w as u64 * h as u64 * (config.order * config.order) as u64;
     if values > MAX_VALUES {
         return Err(limit(LimitError {
-            what: format!("the values of a {w}x{h} lightmap of order {}", config.order),
+            what: format!("the value count of a {w}x{h} lightmap of order {}", config.order),
             value: values.to_string(),
             ceiling: MAX_VALUES.to_string(),
             reason: "W x H x n^2 as f32 in one EXR",
