@@ -6,6 +6,8 @@
 //!   closed form, B(x) = ρ (1 − r² h / d³) (the projected solid angle of a sphere of radius r at
 //!   distance d and height h above x is π (r/d)² (h/d)); the lightmap must find the shadow that a
 //!   two-triangle floor's vertices cannot, and on a dense floor the two bakes must agree.
+//! - `render --shading transfer --lightmap` of the fixture `floor-ball.obj` (a two-triangle
+//!   floor) approaches `--shading reference` where the per-vertex bake cannot.
 //! - Thread counts give the same bytes; bad requests exit 2 naming the file and write nothing.
 
 mod common;
@@ -288,4 +290,53 @@ fn bad_lightmap_requests_exit_2_naming_the_file_and_write_nothing() {
         assert!(names_file && message.contains(reason), "{args:?}: {message}");
         assert!(!glb.exists() && !json.exists() && !exr.exists(), "{args:?}: an output was written");
     }
+}
+
+/// `render --shading transfer --lightmap`: the relative RMS error against `--shading reference`.
+fn render_error(dir: &Path, args: &[&str]) -> f64 {
+    let out = cmd("render").args(args).args(["-q", "--json"]).current_dir(dir).output().unwrap();
+    assert!(out.status.success(), "render {args:?}: {}", stderr(&out));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    v["metrics"]["rel_error"].as_f64().unwrap_or(f64::NAN)
+}
+
+#[test]
+fn a_relit_lightmap_approaches_the_reference_where_vertices_cannot() {
+    // The fixture's two-triangle floor under its ball, seen from above and to the side, under
+    // the test sky: `--shading reference` casts the mesh's own shadow rays per pixel; the
+    // per-vertex bake has four floor vertices far from the ball, the lightmap 128×128 texels.
+    let dir = tempfile::tempdir().unwrap();
+    common::sky_pfm(dir.path(), 64, 32);
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes/floor-ball.obj");
+    let mesh = mesh.to_str().unwrap();
+    let camera = ["--res", "96x96", "--eye", "0,-2.2,2.6", "--target", "0,0,0.1"];
+    let view = [&["--scene", mesh, "--brdf", "lambert:albedo=0.8"][..], &camera].concat();
+    let run = |args: &[&str]| render_error(dir.path(), &[&["sky.pfm"][..], &view, args].concat());
+    run(&["--shading", "reference", "-o", "r.exr"]);
+    let bake = ["-n", "6", "--rays", "1024", "--albedo", "0.8", "-q", "--glb", "f.glb", "-o", "f.json"];
+    let out = cmd("transfer")
+        .arg(mesh)
+        .args(bake)
+        .args(["--lightmap", "128x128", "f.exr"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let compare = ["--shading", "transfer", "--transfer", "f.glb", "--compare", "r.exr"];
+    let png = std::env::var("PRTKIT_LIGHTMAP_RENDER_PNG").ok();
+    let with_png = |extra: &[&str], name: &str| {
+        let mut args: Vec<String> = compare.iter().chain(extra).map(|s| s.to_string()).collect();
+        if let Some(dir) = &png {
+            args.extend(["--png".into(), format!("{dir}/{name}.png")]);
+        }
+        run(&args.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let vertex = with_png(&[], "vertex");
+    let lightmap = with_png(&["--lightmap", "f.exr"], "lightmap");
+    if let Some(out) = &png {
+        let file = format!("{out}/reference.png");
+        run(&["--shading", "reference", "--png", &file]);
+    }
+    eprintln!("floor and ball under the test sky, n = 6, 1024 rays, relit vs reference (relative RMS): per-vertex {vertex:.4}, lightmap 128x128 {lightmap:.4}");
+    assert!(lightmap < 0.7 * vertex, "lightmap {lightmap} vs per-vertex {vertex}");
 }
