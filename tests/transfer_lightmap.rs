@@ -340,3 +340,46 @@ fn a_relit_lightmap_approaches_the_reference_where_vertices_cannot() {
     eprintln!("floor and ball under the test sky, n = 6, 1024 rays, relit vs reference (relative RMS): per-vertex {vertex:.4}, lightmap 128x128 {lightmap:.4}");
     assert!(lightmap < 0.7 * vertex, "lightmap {lightmap} vs per-vertex {vertex}");
 }
+
+#[test]
+fn a_gltf_with_texcoord_0_bakes_the_lightmap_of_the_same_obj() {
+    // The fixture's OBJ written again as a .glb with its UVs as TEXCOORD_0: the same texels are
+    // covered, and the transfer agrees to the f32 rounding of the normals.
+    let dir = tempfile::tempdir().unwrap();
+    let obj = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes/floor-ball.obj");
+    let mesh = Mesh::load(&obj).unwrap();
+    let uvs = mesh.uvs.clone().unwrap();
+    let glb = prtkit::io::glb::encode(&prtkit::io::glb::GlbMesh {
+        positions: mesh.positions.iter().map(|p| p.as_vec3().to_array()).collect(),
+        attributes: vec![
+            prtkit::io::glb::Attribute {
+                name: "NORMAL".into(),
+                components: 3,
+                values: mesh.normals.iter().flat_map(|n| n.as_vec3().to_array()).collect(),
+            },
+            prtkit::io::glb::Attribute {
+                name: "TEXCOORD_0".into(),
+                components: 2,
+                values: uvs.iter().flat_map(|uv| uv.map(|c| c as f32)).collect(),
+            },
+        ],
+        triangles: mesh.triangles.clone(),
+        generator: "test".into(),
+        extras: serde_json::json!({}),
+        blobs: Vec::new(),
+    })
+    .unwrap();
+    let path = dir.path().join("floor-ball.glb");
+    std::fs::write(&path, glb).unwrap();
+    let from_glb = Mesh::load(&path).unwrap();
+    assert_eq!(from_glb.uvs.as_ref().map(Vec::len), Some(uvs.len()));
+    let bake = |m: &Mesh, source: &Path| {
+        stage::run(&lightmap_config(Mode::Shadowed, 3, 64, source), m, &NoProgress).unwrap().lightmap.unwrap()
+    };
+    let (a, b) = (bake(&mesh, &obj), bake(&from_glb, &path));
+    assert_eq!(a.info.texels_covered, b.info.texels_covered);
+    assert_eq!(a.coverage, b.coverage);
+    let worst = a.transfer.iter().zip(&b.transfer).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    eprintln!("floor-ball as OBJ and as glTF TEXCOORD_0: {} texels, largest |dT| = {worst:.2e}", a.info.texels_covered);
+    assert!(worst < 1e-3, "{worst}");
+}

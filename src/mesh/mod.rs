@@ -60,8 +60,8 @@ pub struct Mesh {
     /// True when the file had no normals and they were computed (area-weighted face normals).
     pub normals_computed: bool,
     /// The lightmap UV set, one (u, v) per vertex, when the file has one (OBJ `vt` on every
-    /// vertex; glTF and PLY texture coordinates are not read yet): `transfer --lightmap` bakes
-    /// per texel of it.
+    /// vertex; glTF `TEXCOORD_1`, else `TEXCOORD_0`, on every primitive; PLY texture coordinates
+    /// are not read yet): `transfer --lightmap` bakes per texel of it.
     pub uvs: Option<Vec<[f64; 2]>>,
     /// Length of the bounding box diagonal, computed once: shadow rays offset by a fraction of it.
     extent: f64,
@@ -138,11 +138,14 @@ impl Mesh {
     /// from the file when every primitive has NORMAL, else computed.
     pub fn load_gltf(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
-        let crate::io::gltf::Geometry { positions, normals, triangles } = crate::io::gltf::read(path)?;
+        let crate::io::gltf::Geometry { positions, normals, triangles, uvs } = crate::io::gltf::read(path)?;
         if triangles.is_empty() {
             return Err(MeshError::Invalid { path: name, reason: "the glTF scene holds no triangles".into() });
         }
-        Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })
+        let mut mesh =
+            Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })?;
+        mesh.uvs = uvs.filter(|uvs| !uvs.is_empty());
+        Ok(mesh)
     }
 
     /// Builds a mesh; computes normals when `normals` is `None` (or when a given normal is zero).

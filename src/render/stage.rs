@@ -555,7 +555,7 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                     let lightmap = lightmap.as_deref().expect("matched");
                     let uvs = mesh.uvs.as_deref().ok_or_else(|| {
                         bad(format!(
-                            "{}: the --scene mesh has no lightmap UVs (vt) to look the lightmap up with",
+                            "{}: the --scene mesh has no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt) to look the lightmap up with",
                             lightmap.name
                         ))
                     })?;

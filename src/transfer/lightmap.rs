@@ -216,7 +216,7 @@ pub fn check(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<
     if mesh.uvs.is_none() {
         return Err(Error::Lightmap(format!(
             "{name}: no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt): --lightmap needs a UV set on every vertex \
-             (only OBJ vt is read yet)"
+             (PLY texture coordinates are not read yet)"
         )));
     }
     let (w, h) = (lightmap.width, lightmap.height);
@@ -348,7 +348,7 @@ pub fn bake(
         texels_dilated: dilated,
         dilation: DILATION,
         texels_overlapping: coverage.overlapping,
-        uvs: "OBJ vt".into(),
+        uvs: "the mesh's UV set: OBJ vt, or glTF TEXCOORD_1 (else TEXCOORD_0)".into(),
         layout: format!(
             "one grey layer (channel T<i>.Y, f32) per coefficient i = l(l+1)+m, {coeffs} of them, and coverage.Y (1: \
              the texel centre lies in a triangle, {DILATED}: filled by dilation from a neighbour, 0: empty); texel \

@@ -78,7 +78,7 @@ pub struct Args {
     pub transfer: Option<PathBuf>,
 
     /// transfer: shade from the per-texel lightmap `transfer --lightmap` wrote beside the .glb
-    /// (its T0… layers, bilinear at the hit's UV from the --scene mesh's vt) instead of the
+    /// (its T0… layers, bilinear at the hit's UV from the --scene mesh's UVs) instead of the
     /// per-vertex transfer.
     #[arg(long, value_name = "FILE.exr", requires = "transfer")]
     pub lightmap: Option<PathBuf>,

@@ -109,7 +109,7 @@ pub struct Args {
     #[arg(long, value_name = "P", requires = "clusters")]
     pub pca: Option<usize>,
 
-    /// Also bake the transfer per texel of the mesh's UV set (OBJ vt) into a W×H grid, written as
+    /// Also bake the transfer per texel of the mesh's UV set (OBJ vt, glTF TEXCOORD_1 else TEXCOORD_0) into a W×H grid, written as
     /// one multi-layer EXR (layers T0… per coefficient and coverage); unshadowed or shadowed,
     /// with the same integrator as the vertices. Example: --lightmap 256x256 floor.exr
     #[arg(long, num_args = 2, value_names = ["WxH", "FILE.exr"])]
