@@ -1,6 +1,6 @@
 //! Per-texel diffuse transfer in a lightmap: the transfer vector T_i of
 //! [`super::diffuse`] computed at the centre of every texel of a W×H grid in the mesh's UV
-//! space, instead of at its vertices. Sloan, Kautz & Snyder 2002 (§7) bake their lightmapped
+//! space, instead of at its vertices. Sloan, Kautz & Snyder 2002 bake their lightmapped
 //! examples this way: a vertex bake interpolates T linearly across a triangle, so a shadow
 //! that falls inside a large triangle (a ball's on a two-triangle floor) is lost, while the
 //! lightmap samples it at its own resolution.
