@@ -71,7 +71,11 @@ impl Args {
                 })?;
                 let bake = crate::render::transfer::TransferBake::from_glb(&file.display().to_string(), &bytes)
                     .map_err(anyhow::Error::msg)?;
-                Shading::Transfer { bake: Box::new(bake), factors: self.stored_factors()? }
+                let lightmap = match &self.lightmap {
+                    Some(file) => Some(Box::new(crate::render::transfer::LightmapImage::load(file, &bake)?)),
+                    None => None,
+                };
+                Shading::Transfer { bake: Box::new(bake), factors: self.stored_factors()?, lightmap }
             }
             ShadingArg::Reference => Shading::Reference { integrand: self.integrand },
         })

@@ -7,6 +7,7 @@ use super::options::{check_json_output, Execution};
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::Output;
 use crate::mesh::Mesh;
+use crate::transfer::lightmap::LightmapConfig;
 use crate::transfer::stage::{self, Compression, Config, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES};
 use anyhow::{Context as _, Result};
 pub use args::*;
@@ -37,7 +38,13 @@ impl TryFrom<&Args> for Config {
             (Some(clusters), Some(components)) => Some(Compression { clusters, components }),
             _ => None,
         };
+        let lightmap = lightmap_request(args)?.map(|(width, height, path)| LightmapConfig {
+            width,
+            height,
+            file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+        });
         Ok(Config {
+            lightmap,
             glossy,
             compression,
             order: args.order,
@@ -52,6 +59,19 @@ impl TryFrom<&Args> for Config {
             args: std::env::args().collect(),
         })
     }
+}
+
+/// `--lightmap WxH FILE.exr`: the grid's size and the file.
+fn lightmap_request(args: &Args) -> Result<Option<(usize, usize, std::path::PathBuf)>> {
+    let Some(values) = &args.lightmap else { return Ok(None) };
+    let [size, file] = values.as_slice() else { anyhow::bail!("--lightmap takes WxH and FILE.exr") };
+    let parsed = size
+        .split_once(['x', 'X'])
+        .and_then(|(w, h)| Some((w.trim().parse::<usize>().ok()?, h.trim().parse::<usize>().ok()?)));
+    let Some((width, height)) = parsed else {
+        anyhow::bail!("--lightmap {size:?}: the size must be WxH, e.g. 256x256");
+    };
+    Ok(Some((width, height, std::path::PathBuf::from(file))))
 }
 
 /// Default energy fraction K must reach when -K is not given.
@@ -111,6 +131,10 @@ impl Stage for Args {
         if !matches!(extension.as_deref(), Some("obj" | "ply" | "gltf" | "glb")) {
             anyhow::bail!("{}: transfer reads OBJ, PLY and glTF meshes (.obj, .ply, .gltf, .glb)", self.mesh.display());
         }
+        let lightmap_file = lightmap_request(&self)?.map(|(_, _, path)| Output::File(path));
+        if let Some(file) = &lightmap_file {
+            check_outputs([(file, Holds::Exr)])?;
+        }
         let config = Config::try_from(&self)?;
         let mesh = Mesh::load(&self.mesh)?;
         let out = stage::run(&config, &mesh, ctx.progress())
@@ -134,6 +158,9 @@ impl Stage for Args {
             if let Some(file) = file {
                 outputs.bytes(file, text.into_bytes())?;
             }
+        }
+        if let (Some(file), Some(lightmap)) = (&lightmap_file, out.lightmap) {
+            outputs.bytes(file, lightmap.exr)?;
         }
         outputs.json(&self.output, &out.document)?;
         if self.json {

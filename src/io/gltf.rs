@@ -96,6 +96,11 @@ pub struct Geometry {
     /// Triangles as vertex indices, counter-clockwise seen from the front (§3.7.2.1; a node whose
     /// transform mirrors has its triangles turned, §3.7.4).
     pub triangles: Vec<[u32; 3]>,
+    /// The lightmap UV set, when every primitive has one: `TEXCOORD_1` (the second set, which
+    /// engines keep for lightmaps), else `TEXCOORD_0`, float or normalized unsigned byte/short
+    /// VEC2 (§3.7.2.1). A set that cannot be read leaves the scene without UVs rather than
+    /// failing: the geometry reads as it did before UVs were read.
+    pub uvs: Option<Vec<[f64; 2]>>,
 }
 
 /// Reads a `.gltf` or `.glb` file and its buffers, and flattens its scene.
@@ -123,7 +128,12 @@ pub fn read(path: &Path) -> Result<Geometry, GltfError> {
     let mut scene = Flattened {
         path: name,
         buffers,
-        geometry: Geometry { positions: Vec::new(), normals: Some(Vec::new()), triangles: Vec::new() },
+        geometry: Geometry {
+            positions: Vec::new(),
+            normals: Some(Vec::new()),
+            triangles: Vec::new(),
+            uvs: Some(Vec::new()),
+        },
     };
     for (mesh, world, at) in placements(&document).map_err(|(at, reason)| scene.invalid(at, reason))? {
         scene.place(&mesh, world, at)?;
@@ -355,6 +365,7 @@ impl Flattened {
                 }
             };
             let (positions, normals, triangles) = self.primitive(&primitive).map_err(wrap)?;
+            let uvs = self.uvs(&primitive, positions.len());
             let base = u32::try_from(self.geometry.positions.len())
                 .ok()
                 .filter(|b| b.checked_add(positions.len() as u32).is_some() && positions.len() <= u32::MAX as usize)
@@ -369,6 +380,13 @@ impl Flattened {
             self.geometry.normals = match (normals, self.geometry.normals.take()) {
                 (Some(n), Some(mut all)) => {
                     all.extend(n.iter().map(|v| if identity { *v } else { (normal_matrix * *v).normalize_or_zero() }));
+                    Some(all)
+                }
+                _ => None,
+            };
+            self.geometry.uvs = match (uvs, self.geometry.uvs.take()) {
+                (Some(uv), Some(mut all)) => {
+                    all.extend(uv);
                     Some(all)
                 }
                 _ => None,
@@ -488,6 +506,30 @@ impl Flattened {
         }
         let f = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64;
         Ok(self.elements(accessor, 12)?.map(|e| DVec3::new(f(&e[0..4]), f(&e[4..8]), f(&e[8..12]))).collect())
+    }
+
+    /// The primitive's lightmap UVs ([`Geometry::uvs`]), one per vertex, or `None`.
+    fn uvs(&self, primitive: &::gltf::Primitive, vertices: usize) -> Option<Vec<[f64; 2]>> {
+        let accessor = primitive.get(&Semantic::TexCoords(1)).or_else(|| primitive.get(&Semantic::TexCoords(0)))?;
+        if accessor.dimensions() != Dimensions::Vec2 || accessor.count() != vertices {
+            return None;
+        }
+        let (size, normalized) = (accessor.data_type(), accessor.normalized());
+        let element = match (size, normalized) {
+            (DataType::F32, _) => 8,
+            (DataType::U16, true) => 4,
+            (DataType::U8, true) => 2,
+            _ => return None,
+        };
+        let elements = self.elements(&accessor, element).ok()?;
+        let uvs: Vec<[f64; 2]> = elements
+            .map(|e| match size {
+                DataType::F32 => [0, 4].map(|k| f32::from_le_bytes([e[k], e[k + 1], e[k + 2], e[k + 3]]) as f64),
+                DataType::U16 => [0, 2].map(|k| u16::from_le_bytes([e[k], e[k + 1]]) as f64 / 65535.0),
+                _ => [0, 1].map(|k| e[k] as f64 / 255.0),
+            })
+            .collect();
+        uvs.iter().flatten().all(|c| c.is_finite()).then_some(uvs)
     }
 
     /// Vertex indices (§3.7.2.1: unsigned byte, short or int SCALAR).

@@ -1,6 +1,6 @@
 //! Wavefront OBJ, the one reader of it: the text read within the file ceiling, its lines split
 //! into tokens with their columns once ([`lines`]), and from that the two views prtkit takes —
-//! the geometry a mesh is built from ([`geometry`]: `v`, `vn` and `f`, through `tobj`) and the
+//! the geometry a mesh is built from ([`geometry`]: `v`, `vt`, `vn` and `f`, through `tobj`) and the
 //! `vn` lines alone with where they sit, so that decoded normals can be written back in place
 //! ([`vertex_normals`], [`replace_vertex_normals`]). The syntax is that of the OBJ
 //! specification (Wavefront, "Object Files (.obj)", Appendix B1 of the Advanced Visualizer
@@ -180,6 +180,10 @@ pub struct Geometry {
     pub normals: Option<Vec<DVec3>>,
     /// Triangles as vertex indices.
     pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinates (`vt`: u, v as written), when every object gives every vertex one.
+    /// `tobj`'s single-index mode numbers each distinct (v, vt, vn) combination as its own
+    /// vertex, so a position whose faces use different `vt`s is split, as a UV seam needs.
+    pub uvs: Option<Vec<[f64; 2]>>,
 }
 
 /// Reads the geometry of an OBJ text: its lines are checked first ([`check`]), so that an error
@@ -194,7 +198,9 @@ pub fn geometry(text: &str) -> Result<Geometry, ObjError> {
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut triangles = Vec::new();
+    let mut uvs = Vec::new();
     let mut all_have_normals = true;
+    let mut all_have_uvs = true;
     for m in &models {
         let mesh = &m.mesh;
         let base = positions.len() as u32;
@@ -210,6 +216,11 @@ pub fn geometry(text: &str) -> Result<Geometry, ObjError> {
             all_have_normals = false;
             normals.extend(std::iter::repeat_n(DVec3::ZERO, nv));
         }
+        if mesh.texcoords.len() == 2 * nv && nv > 0 {
+            uvs.extend(mesh.texcoords.chunks_exact(2).map(|c| [c[0] as f64, c[1] as f64]));
+        } else {
+            all_have_uvs = false;
+        }
         for t in mesh.indices.chunks_exact(3) {
             if t.iter().any(|&i| i as usize >= nv) {
                 return Err(ObjError::FaceIndex);
@@ -217,7 +228,12 @@ pub fn geometry(text: &str) -> Result<Geometry, ObjError> {
             triangles.push([base + t[0], base + t[1], base + t[2]]);
         }
     }
-    Ok(Geometry { positions, normals: all_have_normals.then_some(normals), triangles })
+    Ok(Geometry {
+        positions,
+        normals: all_have_normals.then_some(normals),
+        triangles,
+        uvs: (all_have_uvs && !uvs.is_empty()).then_some(uvs),
+    })
 }
 
 /// Where a `vn` line sits in the text.

@@ -59,6 +59,10 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// True when the file had no normals and they were computed (area-weighted face normals).
     pub normals_computed: bool,
+    /// The lightmap UV set, one (u, v) per vertex, when the file has one (OBJ `vt` on every
+    /// vertex; glTF `TEXCOORD_1`, else `TEXCOORD_0`, on every primitive; PLY texture coordinates
+    /// are not read yet): `transfer --lightmap` bakes per texel of it.
+    pub uvs: Option<Vec<[f64; 2]>>,
     /// Length of the bounding box diagonal, computed once: shadow rays offset by a fraction of it.
     extent: f64,
     bvh: Bvh,
@@ -96,14 +100,20 @@ impl Mesh {
             ObjError::Load(reason) => MeshError::Load { path: name.clone(), reason },
             ObjError::FaceIndex => MeshError::Invalid { path: name.clone(), reason: e.to_string() },
         })?;
-        let crate::io::obj::Geometry { positions, normals, triangles } = geometry;
+        let crate::io::obj::Geometry { positions, normals, triangles, uvs } = geometry;
         if triangles.is_empty() {
             return Err(MeshError::Empty(name));
         }
         if positions.iter().any(|p| !p.is_finite()) {
             return Err(MeshError::Invalid { path: name, reason: "a vertex position is not finite".into() });
         }
-        Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })
+        if uvs.as_ref().is_some_and(|uvs| uvs.iter().flatten().any(|c| !c.is_finite())) {
+            return Err(MeshError::Invalid { path: name, reason: "a texture coordinate is not finite".into() });
+        }
+        let mut mesh =
+            Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })?;
+        mesh.uvs = uvs;
+        Ok(mesh)
     }
 
     /// Reads a PLY file (ASCII or binary; [`crate::io::ply`]): its vertices, their normals when
@@ -128,11 +138,14 @@ impl Mesh {
     /// from the file when every primitive has NORMAL, else computed.
     pub fn load_gltf(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
-        let crate::io::gltf::Geometry { positions, normals, triangles } = crate::io::gltf::read(path)?;
+        let crate::io::gltf::Geometry { positions, normals, triangles, uvs } = crate::io::gltf::read(path)?;
         if triangles.is_empty() {
             return Err(MeshError::Invalid { path: name, reason: "the glTF scene holds no triangles".into() });
         }
-        Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })
+        let mut mesh =
+            Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })?;
+        mesh.uvs = uvs.filter(|uvs| !uvs.is_empty());
+        Ok(mesh)
     }
 
     /// Builds a mesh; computes normals when `normals` is `None` (or when a given normal is zero).
@@ -152,7 +165,7 @@ impl Mesh {
         let (lo, hi) =
             positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
         let extent = if positions.is_empty() { 0.0 } else { (hi - lo).length() };
-        Ok(Mesh { positions, normals, triangles, normals_computed, extent, bvh })
+        Ok(Mesh { positions, normals, triangles, normals_computed, uvs: None, extent, bvh })
     }
 
     /// The closest hit of the ray o + t d with t in (t_min, t_max).

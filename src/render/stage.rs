@@ -90,6 +90,8 @@ pub enum Shading {
         bake: Box<TransferBake>,
         /// The factorization a glossy bake was made with (`--factors`), for h_k.
         factors: Option<Box<StoredFactors>>,
+        /// The per-texel lightmap to shade from instead of the vertices (`--lightmap`).
+        lightmap: Option<Box<super::transfer::LightmapImage>>,
     },
     /// Ground truth: a sum over every environment texel.
     Reference {
@@ -474,7 +476,7 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                 }
             }
         }
-        Shading::Transfer { bake, factors } => {
+        Shading::Transfer { bake, factors, lightmap } => {
             let Scene::Mesh(mesh) = scene else {
                 return Err(
                     bad("--shading transfer relights a mesh: --scene FILE.obj, the mesh the bake is of".into()),
@@ -548,6 +550,19 @@ pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress
                     let shader = Factored::from_vertex_coefficients(g.grid(), &g.h, mesh.triangles.clone(), coeffs);
                     let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
                     (frame, format!("transfer glossy {} n={} K={}", bake.mode, bake.order, bake.terms()))
+                }
+                None if lightmap.is_some() => {
+                    let lightmap = lightmap.as_deref().expect("matched");
+                    let uvs = mesh.uvs.as_deref().ok_or_else(|| {
+                        bad(format!(
+                            "{}: the --scene mesh has no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt) to look the lightmap up with",
+                            lightmap.name
+                        ))
+                    })?;
+                    let rotation = crate::sh::rotate::ShRotation::new(turn, bake.order - 1);
+                    let shader = super::transfer::LightmapShader::new(lightmap, &light, &rotation, uvs, mesh);
+                    let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
+                    (frame, format!("transfer lightmap {} n={}", bake.mode, bake.order))
                 }
                 None => {
                     let shader = super::transfer::TransferShader::new(relit, mesh);

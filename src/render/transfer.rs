@@ -373,3 +373,112 @@ impl Shade for TransferShader<'_> {
         std::array::from_fn(|k| w * a[k] as f64 + u * b[k] as f64 + v * c[k] as f64)
     }
 }
+
+/// A per-texel lightmap of diffuse transfer, read back from the EXR `transfer --lightmap` wrote
+/// (`docs/formats/transfer.md`): its layers T0 … T{n²−1}.
+#[derive(Clone, Debug)]
+pub struct LightmapImage {
+    /// The file, for messages.
+    pub name: String,
+    /// W.
+    pub width: usize,
+    /// H.
+    pub height: usize,
+    /// n² values per texel, row-major, row y holding v = (y + ½)/H.
+    pub transfer: Vec<f32>,
+    /// n².
+    pub coefficients: usize,
+}
+
+impl LightmapImage {
+    /// Reads the lightmap `path` for the diffuse, uncompressed `bake` it was written beside.
+    pub fn load(path: &std::path::Path, bake: &TransferBake) -> Result<LightmapImage, anyhow::Error> {
+        let name = path.display().to_string();
+        if bake.glossy.is_some() {
+            anyhow::bail!("{name}: a lightmap relights a diffuse bake; {} is glossy", bake.name);
+        }
+        let coefficients = bake.order * bake.order;
+        let layers = crate::io::exr::read_layers(path)?;
+        let (width, height) = layers.first().map(|(_, l)| (l.width, l.height)).unwrap_or_default();
+        let mut transfer = vec![0.0f32; width * height * coefficients];
+        for i in 0..coefficients {
+            let wanted = format!("T{i}");
+            let Some((_, layer)) = layers.iter().find(|(n, _)| *n == wanted) else {
+                anyhow::bail!(
+                    "{name}: no layer {wanted}: not a lightmap of order {} (transfer --lightmap)",
+                    bake.order
+                );
+            };
+            for (texel, px) in layer.pixels.iter().enumerate() {
+                transfer[texel * coefficients + i] = px[0];
+            }
+        }
+        Ok(LightmapImage { name, width, height, transfer, coefficients })
+    }
+}
+
+/// Shades a mesh hit from a lightmap: the lighting dotted with every texel's transfer once
+/// (B = Σ_i T_i L_i, single precision, as [`relight`] does per vertex), then looked up
+/// bilinearly at the hit's UV, interpolated from the triangle's vertices (texel centres at
+/// ((x + ½)/W, (y + ½)/H), clamped at the grid's edges), as a lightmapped renderer samples it.
+pub struct LightmapShader<'a> {
+    radiance: Vec<[f32; 3]>,
+    width: usize,
+    height: usize,
+    uvs: &'a [[f64; 2]],
+    triangles: &'a [[u32; 3]],
+}
+
+impl<'a> LightmapShader<'a> {
+    /// The lightmap relit by `light` turned by `rotation`, for the mesh whose UVs are `uvs`.
+    pub fn new(
+        lightmap: &LightmapImage,
+        light: &ShCoeffs,
+        rotation: &ShRotation,
+        uvs: &'a [[f64; 2]],
+        mesh: &'a Mesh,
+    ) -> LightmapShader<'a> {
+        let order = (lightmap.coefficients as f64).sqrt() as usize;
+        let turned = rotation.apply(&light.truncated(order - 1));
+        let l: Vec<[f32; 3]> = turned.rgb.iter().map(|c| c.map(|x| x as f32)).collect();
+        let radiance = lightmap
+            .transfer
+            .chunks_exact(lightmap.coefficients)
+            .map(|t| {
+                let mut b = [0.0f32; 3];
+                for (ti, li) in t.iter().zip(&l) {
+                    for k in 0..3 {
+                        b[k] += ti * li[k];
+                    }
+                }
+                b
+            })
+            .collect();
+        LightmapShader { radiance, width: lightmap.width, height: lightmap.height, uvs, triangles: &mesh.triangles }
+    }
+}
+
+impl Shade for LightmapShader<'_> {
+    fn shade(&self, hit: &Hit, _wo: DVec3) -> [f64; 3] {
+        let Some((t, u, v)) = hit.triangle else {
+            return [0.0; 3];
+        };
+        if self.width == 0 || self.height == 0 {
+            return [0.0; 3];
+        }
+        let [a, b, c] = self.triangles[t].map(|i| self.uvs[i as usize]);
+        let w = 1.0 - u - v;
+        let uv = [w * a[0] + u * b[0] + v * c[0], w * a[1] + u * b[1] + v * c[1]];
+        // Texel coordinates whose integers are texel centres.
+        let x = (uv[0] * self.width as f64 - 0.5).clamp(0.0, (self.width - 1) as f64);
+        let y = (uv[1] * self.height as f64 - 0.5).clamp(0.0, (self.height - 1) as f64);
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(self.width - 1), (y0 + 1).min(self.height - 1));
+        let (fx, fy) = (x - x0 as f64, y - y0 as f64);
+        let at = |x: usize, y: usize| self.radiance[y * self.width + x].map(f64::from);
+        let (p00, p10, p01, p11) = (at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1));
+        std::array::from_fn(|k| {
+            (1.0 - fy) * ((1.0 - fx) * p00[k] + fx * p10[k]) + fy * ((1.0 - fx) * p01[k] + fx * p11[k])
+        })
+    }
+}

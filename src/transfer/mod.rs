@@ -13,14 +13,15 @@
 //! integrators (exact quadrature without visibility, stratified rays with it), [`directions`]
 //! the stratified ray directions, [`visibility`] the BVH the rays are cast through,
 //! [`interreflect`] the bounces, [`shaders`] the run-time dot product and SH rotation (GLSL,
-//! HLSL, WGSL), and [`stage`] the `transfer` stage. Glossy transfer, per-texel lightmaps, glTF
-//! input and CPCA compression are later slices of issue 32.
+//! HLSL, WGSL), [`lightmap`] the same diffuse transfer per texel of a UV set, and [`stage`] the
+//! `transfer` stage.
 
 pub mod cpca;
 pub mod diffuse;
 pub mod directions;
 pub mod glossy;
 pub mod interreflect;
+pub mod lightmap;
 pub mod shaders;
 pub mod stage;
 pub mod visibility;

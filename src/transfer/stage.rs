@@ -13,6 +13,7 @@ use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
 use super::glossy::Glossy;
 use super::interreflect::{Hits, Storage, Tracer};
+use super::lightmap::{self, Lightmap, LightmapConfig, LightmapInfo};
 use super::shaders::{glossy_snippet, snippet, Language};
 use super::visibility::{triangle_area, Occluders};
 use crate::factor::Factorization;
@@ -85,6 +86,8 @@ pub struct Config {
     pub glossy: Option<GlossyConfig>,
     /// Clustered PCA of the transfer (`--clusters C --pca P`), else stored as it is.
     pub compression: Option<Compression>,
+    /// A per-texel lightmap beside the per-vertex bake (`--lightmap WxH FILE.exr`).
+    pub lightmap: Option<LightmapConfig>,
 }
 
 /// How many clusters and directions CPCA keeps (Sloan et al. 2003).
@@ -140,6 +143,7 @@ impl Default for Config {
             args: Vec::new(),
             glossy: None,
             compression: None,
+            lightmap: None,
         }
     }
 }
@@ -177,6 +181,9 @@ pub struct TransferBody {
     /// The clustered PCA the `.glb` stores the transfer in (absent: stored as it is).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub compression: Option<CompressionInfo>,
+    /// The per-texel lightmap written beside the `.glb` (absent: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lightmap: Option<LightmapInfo>,
 }
 
 /// What CPCA kept and what it costs in accuracy (`docs/formats/transfer.md`).
@@ -337,6 +344,8 @@ pub struct Output {
     pub transfer: Vec<f64>,
     /// The `--json` summary.
     pub summary: Summary,
+    /// The per-texel lightmap (`--lightmap`).
+    pub lightmap: Option<Lightmap>,
 }
 
 /// The machine-readable summary (`transfer --json`): what the manifest says, plus timings.
@@ -385,6 +394,9 @@ pub enum Error {
     /// The `.glb` cannot be written.
     #[error("{0}")]
     Glb(String),
+    /// The lightmap cannot be baked as asked (no UVs, no texels, a mode it does not bake).
+    #[error("{0}")]
+    Lightmap(String),
 }
 
 /// Runs `transfer` on `mesh`.
@@ -411,6 +423,9 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     let zero_area = mesh.triangles.iter().filter(|t| triangle_area(&mesh.positions, t) <= 0.0).count();
     if zero_area == mesh.triangles.len() {
         return Err(Error::ZeroArea(name.clone()));
+    }
+    if let Some(l) = &config.lightmap {
+        lightmap::check(l, config, mesh)?;
     }
 
     let glossy = match &config.glossy {
@@ -566,6 +581,10 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         ),
     };
     let glossy_info = config.glossy.as_ref().map(|g| glossy_info(g, n));
+    let lightmap = match &config.lightmap {
+        Some(l) => Some(lightmap::bake(l, config, mesh, progress)?),
+        None => None,
+    };
     let body = TransferBody {
         order: n,
         coefficients: per_vertex,
@@ -616,6 +635,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         error,
         glossy: glossy_info,
         compression,
+        lightmap: lightmap.as_ref().map(|l| l.info.clone()),
     };
     let h = config
         .glossy
@@ -659,6 +679,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         wgsl: run_time(Language::Wgsl),
         transfer,
         summary,
+        lightmap,
     })
 }
 

@@ -77,6 +77,12 @@ pub struct Args {
     #[arg(long, value_name = "FILE.glb")]
     pub transfer: Option<PathBuf>,
 
+    /// transfer: shade from the per-texel lightmap `transfer --lightmap` wrote beside the .glb
+    /// (its T0… layers, bilinear at the hit's UV from the --scene mesh's UVs) instead of the
+    /// per-vertex transfer.
+    #[arg(long, value_name = "FILE.exr", requires = "transfer")]
+    pub lightmap: Option<PathBuf>,
+
     /// transfer and reference: turn the environment by DEG degrees about +Z (counter-clockwise
     /// seen from above: azimuth φ goes to φ + DEG), -360 to 360; transfer turns its SH lighting
     /// by one SH rotation. The background turns with it.

@@ -109,6 +109,12 @@ pub struct Args {
     #[arg(long, value_name = "P", requires = "clusters")]
     pub pca: Option<usize>,
 
+    /// Also bake the transfer per texel of the mesh's UV set (OBJ vt, glTF TEXCOORD_1 else TEXCOORD_0) into a W×H grid, written as
+    /// one multi-layer EXR (layers T0… per coefficient and coverage); unshadowed or shadowed,
+    /// with the same integrator as the vertices. Example: --lightmap 256x256 floor.exr
+    #[arg(long, num_args = 2, value_names = ["WxH", "FILE.exr"])]
+    pub lightmap: Option<Vec<String>>,
+
     /// Print a JSON summary (vertices, rays, seconds, rays per second) on stdout.
     #[arg(long)]
     pub json: bool,
