@@ -84,24 +84,16 @@ pub enum GltfError {
     },
 }
 
-/// The flattened triangles of a glTF scene, in world space (the file's axes).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Geometry {
-    /// Vertex positions: every primitive's, placed by its node, depth first in the order the scene
-    /// and the `children` lists name the nodes, primitives in their mesh's order.
-    pub positions: Vec<DVec3>,
-    /// Unit vertex normals placed likewise, when every primitive has `NORMAL` (a zero normal stays
-    /// zero: the mesh computes that vertex's).
-    pub normals: Option<Vec<DVec3>>,
-    /// Triangles as vertex indices, counter-clockwise seen from the front (§3.7.2.1; a node whose
-    /// transform mirrors has its triangles turned, §3.7.4).
-    pub triangles: Vec<[u32; 3]>,
-    /// The lightmap UV set, when every primitive has one: `TEXCOORD_1` (the second set, which
-    /// engines keep for lightmaps), else `TEXCOORD_0`, float or normalized unsigned byte/short
-    /// VEC2 (§3.7.2.1). A set that cannot be read leaves the scene without UVs rather than
-    /// failing: the geometry reads as it did before UVs were read.
-    pub uvs: Option<Vec<[f64; 2]>>,
-}
+/// The flattened triangles of a glTF scene, in world space (the file's axes): every primitive's
+/// vertices placed by its node, depth first in the order the scene and the `children` lists name
+/// the nodes, primitives in their mesh's order; unit normals placed likewise when every primitive
+/// has `NORMAL` (a zero normal stays zero: the mesh computes that vertex's); triangles
+/// counter-clockwise seen from the front (§3.7.2.1; a node whose transform mirrors has its
+/// triangles turned, §3.7.4); UVs when every primitive has a set: `TEXCOORD_1` (the second set,
+/// which engines keep for lightmaps), else `TEXCOORD_0`, float or normalized unsigned
+/// byte/short VEC2 (§3.7.2.1). A set that cannot be read leaves the scene without UVs rather
+/// than failing: the geometry reads as it did before UVs were read.
+pub use super::geometry::Geometry;
 
 /// Reads a `.gltf` or `.glb` file and its buffers, and flattens its scene.
 pub fn read(path: &Path) -> Result<Geometry, GltfError> {

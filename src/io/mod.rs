@@ -5,6 +5,7 @@ pub mod atomic;
 pub mod dds;
 pub mod document;
 pub mod exr;
+pub mod geometry;
 pub mod glb;
 pub mod gltf;
 pub mod gpu_format;

@@ -171,20 +171,10 @@ pub fn check(text: &str) -> Result<(), ObjError> {
 
 /// The geometry of an OBJ, as `tobj` builds it from every object of the file (triangulated,
 /// one index per vertex: `tobj` numbers the vertices in the order the faces first use each
-/// (v, vt, vn) combination, which may differ from the `v` lines').
-#[derive(Clone, Debug, PartialEq)]
-pub struct Geometry {
-    /// Vertex positions.
-    pub positions: Vec<DVec3>,
-    /// Vertex normals as written (not normalized), when every object gives every vertex one.
-    pub normals: Option<Vec<DVec3>>,
-    /// Triangles as vertex indices.
-    pub triangles: Vec<[u32; 3]>,
-    /// Texture coordinates (`vt`: u, v as written), when every object gives every vertex one.
-    /// `tobj`'s single-index mode numbers each distinct (v, vt, vn) combination as its own
-    /// vertex, so a position whose faces use different `vt`s is split, as a UV seam needs.
-    pub uvs: Option<Vec<[f64; 2]>>,
-}
+/// (v, vt, vn) combination, which may differ from the `v` lines'; a position whose faces use
+/// different `vt`s is split, as a UV seam needs). Normals as written (not normalized), UVs the
+/// `vt` lines, each when every object gives every vertex one.
+pub use super::geometry::Geometry;
 
 /// Reads the geometry of an OBJ text: its lines are checked first ([`check`]), so that an error
 /// names the line and the column, then `tobj` builds the indexed triangles.
