@@ -10,13 +10,8 @@
 
 mod common;
 
-use common::{cmd, stderr};
+use common::{cmd, run_in, stderr, test_mesh};
 use std::path::Path;
-
-fn run_in(dir: &Path, stage: &str, args: &[&str]) {
-    let out = cmd(stage).args(args).arg("-q").current_dir(dir).output().unwrap();
-    assert!(out.status.success(), "{stage} {args:?}: {}", stderr(&out));
-}
 
 /// `render ARGS --json` in `dir`: its relative RMS error against `--compare`.
 fn relative_error(dir: &Path, args: &[&str]) -> f64 {
@@ -24,10 +19,6 @@ fn relative_error(dir: &Path, args: &[&str]) -> f64 {
     assert!(out.status.success(), "render {args:?}: {}", stderr(&out));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     v["metrics"]["rel_error"].as_f64().unwrap()
-}
-
-fn mesh(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes").join(name).display().to_string()
 }
 
 /// A lat-long sky of bands 0–2 only (a different quadratic per channel), positive everywhere:
@@ -63,7 +54,7 @@ fn a_glossy_bake_relit_by_band_limited_light_is_the_factored_render() {
             "p.json",
         ],
     );
-    let bowl = mesh("bowl-ball.obj");
+    let bowl = test_mesh("bowl-ball.obj");
     run_in(d, "transfer", &[&bowl, "-n", "4", "--factors", "p.json", "-K", "10", "--glb", "g.glb", "-o", "g.json"]);
     let view = [
         "--scene",
@@ -144,7 +135,7 @@ fn a_lambertian_factorization_at_one_term_is_the_diffuse_transfer() {
             "l.json",
         ],
     );
-    let sphere = mesh("sphere.obj");
+    let sphere = test_mesh("sphere.obj");
     let common = [sphere.as_str(), "-n", "3", "--mode", "unshadowed"];
     run_in(d, "transfer", &[&common[..], &["--albedo", "0.6", "--glb", "diffuse.glb", "-o", "diffuse.json"]].concat());
     run_in(
@@ -197,7 +188,7 @@ fn glossy_bakes_are_the_same_bytes_for_any_thread_count() {
             "p.json",
         ],
     );
-    let bowl = mesh("bowl.obj");
+    let bowl = test_mesh("bowl.obj");
     let mut bakes = Vec::new();
     for threads in ["1", "2", "3"] {
         let glb = format!("t{threads}.glb");
@@ -251,7 +242,7 @@ fn mismatched_bakes_factors_and_brdfs_exit_2_naming_the_file() {
             ],
         );
     }
-    let bowl = mesh("bowl.obj");
+    let bowl = test_mesh("bowl.obj");
     run_in(d, "transfer", &[&bowl, "-n", "2", "--factors", "p.json", "-K", "3", "--glb", "g.glb", "-o", "g.json"]);
     run_in(d, "transfer", &[&bowl, "-n", "2", "--rays", "16", "--glb", "diffuse.glb", "-o", "diffuse.json"]);
     let render: [(&[&str], &str); 3] = [

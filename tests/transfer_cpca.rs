@@ -9,22 +9,13 @@
 
 mod common;
 
-use common::{cmd, stderr};
+use common::{cmd, run_in, stderr, test_mesh};
 use prtkit::render::transfer::TransferBake;
 use std::path::Path;
-
-fn run_in(dir: &Path, stage: &str, args: &[&str]) {
-    let out = cmd(stage).args(args).arg("-q").current_dir(dir).output().unwrap();
-    assert!(out.status.success(), "{stage} {args:?}: {}", stderr(&out));
-}
 
 fn bake(dir: &Path, name: &str) -> TransferBake {
     let path = dir.join(name);
     TransferBake::from_glb(name, &std::fs::read(&path).unwrap()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn bowl() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes/bowl-ball.obj").display().to_string()
 }
 
 /// ‖T − T̃‖ / ‖T‖ with T̃ recombined from the compressed `.glb` by eq. 2 of Sloan et al. 2003.
@@ -50,7 +41,7 @@ fn recombined_error(full: &TransferBake, compressed: &TransferBake) -> f64 {
 fn the_glb_recombines_to_the_transfer_within_the_stated_error() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let mesh = bowl();
+    let mesh = test_mesh("bowl-ball.obj");
     let common = [mesh.as_str(), "-n", "4", "--rays", "256"];
     run_in(d, "transfer", &[&common[..], &["--glb", "full.glb", "-o", "full.json"]].concat());
     let full = bake(d, "full.glb");
@@ -77,7 +68,7 @@ fn all_directions_are_exact_and_relight_as_the_uncompressed_bake() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     common::sky_pfm(d, 64, 32);
-    let mesh = bowl();
+    let mesh = test_mesh("bowl-ball.obj");
     let common = [mesh.as_str(), "-n", "3", "--rays", "256"];
     run_in(d, "transfer", &[&common[..], &["--glb", "full.glb", "-o", "full.json"]].concat());
     run_in(
@@ -118,7 +109,7 @@ fn all_directions_are_exact_and_relight_as_the_uncompressed_bake() {
 fn compressed_bakes_are_the_same_bytes_for_any_thread_count_and_bad_values_exit_2() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let mesh = bowl();
+    let mesh = test_mesh("bowl-ball.obj");
     let mut bakes = Vec::new();
     for threads in ["1", "2"] {
         let glb = format!("t{threads}.glb");

@@ -133,6 +133,17 @@ pub fn stderr(output: &std::process::Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
+/// Runs `STAGE ARGS -q` in `dir`, which must succeed.
+pub fn run_in(dir: &Path, stage: &str, args: &[&str]) {
+    let out = cmd(stage).args(args).arg("-q").current_dir(dir).output().unwrap();
+    assert!(out.status.success(), "{stage} {args:?}: {}", stderr(&out));
+}
+
+/// The path of `testdata/meshes/NAME`, as a string for argument lists.
+pub fn test_mesh(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes").join(name).display().to_string()
+}
+
 /// The names of the entries of `dir`, sorted.
 pub fn entries(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
