@@ -12,7 +12,7 @@
 use glam::{DMat3, DVec3};
 use prtkit::envmap::{LoadOptions, FACES};
 use prtkit::ibl::cube::{texel_direction, CubeMap, PRTKIT_FROM_WORLD};
-use prtkit::ibl::ggx::SplitSumLobe;
+use prtkit::brdf::ggx::SplitSumLobe;
 use prtkit::ibl::reference::{Measured, Reference};
 use prtkit::io::RgbImage;
 use std::fmt::Write;

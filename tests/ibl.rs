@@ -8,7 +8,7 @@ use common::{cmd, latlong, sky, sky_pfm};
 use glam::{DMat3, DVec3};
 use prtkit::envmap::{EnvMap, Face, FACES};
 use prtkit::ibl::cube::{face_direction, texel_coordinate, texel_direction, CubeMap};
-use prtkit::ibl::ggx::SplitSumLobe;
+use prtkit::brdf::ggx::SplitSumLobe;
 use prtkit::ibl::manifest::{IblBody, ShBody};
 use prtkit::ibl::stage::{self, Config, MethodChoice, Up};
 use prtkit::io::document::parse_document;

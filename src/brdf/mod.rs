@@ -13,6 +13,7 @@
 //! assert!(phong.is_isotropic() && phong.is_radially_symmetric());
 //! ```
 
+pub mod ggx;
 pub mod halfdiff;
 pub mod merl;
 pub mod models;

@@ -2,7 +2,7 @@
 //! the input cube, with its exact reference and the per-level error measurement.
 //!
 //! For each output texel direction R the level holds the split-sum prefiltered radiance (Karis
-//! 2013; see [`super::ggx`]):
+//! 2013; see [`crate::brdf::ggx`]):
 //!
 //!   B(R) = Σ_ω L(ω) k(R·ω) Ω(ω) / Σ_ω k(R·ω) Ω(ω),
 //!
@@ -41,7 +41,7 @@
 //! threads.
 
 use super::cube::{face_direction, texel_direction, texel_solid_angles, CubeError, CubeMap, CubeMipChain};
-use super::ggx::{GgxError, SplitSumLobe};
+use crate::brdf::ggx::{GgxError, SplitSumLobe};
 use crate::envmap::{Face, FACES};
 use crate::progress::Progress;
 use glam::DVec3;

@@ -5,7 +5,7 @@
 //! their directions.
 //!
 //! **Working grid.** Two needs set the grid's row height h = π/H for a lobe of width w = 2α
-//! in θ ([`super::ggx`]):
+//! in θ ([`crate::brdf::ggx`]):
 //! - *the source*: a coarse texel loses where in it the light is, an error first order in h/w
 //!   near small bright sources; h ≤ w/[`ROWS_PER_LOBE`], but never finer than the input, whose
 //!   texels are what the environment is;
@@ -56,7 +56,7 @@
 //! rows), largest for the sharpest level. [`zonal_cost`] estimates it in kernel evaluations for
 //! the stage's cost model.
 
-use super::ggx::SplitSumLobe;
+use crate::brdf::ggx::SplitSumLobe;
 use crate::envmap::resample::box_latlong;
 use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows, ZonalError};
 use crate::io::RgbImage;

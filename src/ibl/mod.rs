@@ -21,7 +21,6 @@ pub mod angular;
 pub mod cube;
 pub mod dfg;
 pub mod frequency;
-pub mod ggx;
 pub mod manifest;
 pub mod reference;
 pub mod sh_irradiance;

@@ -47,7 +47,7 @@
 
 use super::angular::LevelError;
 use super::cube::{texel_direction, CubeMap};
-use super::ggx::SplitSumLobe;
+use crate::brdf::ggx::SplitSumLobe;
 use crate::envmap::resample::box_latlong;
 use crate::envmap::zonal::{choose_rule, TexelRule};
 use crate::envmap::{EnvMap, FACES};

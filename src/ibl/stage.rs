@@ -6,7 +6,7 @@
 //! **Levels.** Level k of an L-level chain has face size `size >> k` and perceptual roughness
 //! r_k = k/(L − 1) (`linear`), or Filament's r_k = 1 − √(1 − k/(L − 1)), the inverse of its
 //! lod = r(2 − r) (`filament`). Level 0 (r = 0, a mirror) is the environment resampled; every
-//! other level is the split-sum GGX prefilter (Karis 2013, [`super::ggx::SplitSumLobe`]), by
+//! other level is the split-sum GGX prefilter (Karis 2013, [`crate::brdf::ggx::SplitSumLobe`]), by
 //! whichever exact method the cost model finds cheaper ([`choose_method`]): the zonal filter on a
 //! lat-long grid ([`super::frequency`]) or the angular cone sum over a cube pyramid
 //! ([`super::angular`]). Neither samples at random.
@@ -24,7 +24,7 @@ use super::angular::{AngularError, AngularOptions, AngularPrefilter};
 use super::cube::{CubeError, CubeMap, CubeMipChain, MAX_FACE_SIZE, WORLD_FROM_PRTKIT};
 use super::dfg::{DfgError, DfgTable, DfgVariant};
 use super::frequency::{FilteredSphere, LatLongSource};
-use super::ggx::{GgxError, SplitSumLobe};
+use crate::brdf::ggx::{GgxError, SplitSumLobe};
 use super::manifest::{self, Costs, IblBody, Level, ShBody};
 use super::reference::Reference;
 use super::sh_irradiance::IrradianceSh;

@@ -5,7 +5,7 @@
 //!   ρ̂ = (albedo/π) max(N·L, 0) about the normal, so its "reflection map" is indexed by N.
 //! - GGX takes the 1-D path too, with the split-sum lobe of glTF engines (Karis 2013): under
 //!   Karis' assumption N = V = R its kernel about R is k(θ) = D(cos(θ/2)) max(cos θ, 0)/Z,
-//!   normalized to ∫ k dω = 1 ([`crate::ibl::ggx::SplitSumLobe`]). The map is then the
+//!   normalized to ∫ k dω = 1 ([`crate::brdf::ggx::SplitSumLobe`]). The map is then the
 //!   prefiltered radiance an engine multiplies by its DFG scale and bias, not ∫ L ρ cos θ of the
 //!   BRDF for any one view: the view dependence of GGX (its Smith and Jacobian terms away from
 //!   N = V) is what the split sum moves into the DFG table.
@@ -16,7 +16,7 @@
 
 use super::brdf_sh::{self, BrdfGrid, BrdfSh};
 use crate::brdf::Brdf;
-use crate::ibl::ggx::SplitSumLobe;
+use crate::brdf::ggx::SplitSumLobe;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::sync::OnceLock;
@@ -428,11 +428,11 @@ fn half_vector_scale(cos_io: f64) -> (f64, f64) {
     }
 }
 
-/// ∫ k² dω of the split-sum kernel, on the lobe-adapted pieces of [`crate::ibl::ggx`]'s
+/// ∫ k² dω of the split-sum kernel, on the lobe-adapted pieces of [`crate::brdf::ggx`]'s
 /// quadratures (width 2α in θ; the kernel vanishes past θ = π/2).
 fn split_sum_energy(lobe: &SplitSumLobe) -> f64 {
     let width = 2.0 * lobe.ggx().alpha();
-    crate::ibl::ggx::lobe_rule(width, 0.0, PI / 2.0, PI / 16.0, 32, &[])
+    crate::brdf::ggx::lobe_rule(width, 0.0, PI / 2.0, PI / 16.0, 32, &[])
         .iter()
         .map(|&(t, w)| w * 2.0 * PI * lobe.kernel_at_angle(t).powi(2) * t.sin())
         .sum()
@@ -604,7 +604,7 @@ mod tests {
         let c = model.coefficients(f, 4);
         assert_eq!((c.f, c.p), (f, 0));
         assert!((by_nodes.get(0, 0, 0)[0] - 1.0).abs() < 1e-9, "√(4π) k_0 = ∫ k dω = {:?}", by_nodes.get(0, 0, 0));
-        // The lobe's own quadrature (ibl::ggx, in θ) against Gauss–Legendre in cos γ.
+        // The lobe's own quadrature (brdf::ggx, in θ) against Gauss–Legendre in cos γ.
         for l in 0..=f {
             let (a, b) = (c.get(l, 0, 0)[0], by_nodes.get(l, 0, 0)[0]);
             assert!((a - b).abs() < 1e-9, "l={l}: {a} vs {b}");

@@ -23,7 +23,7 @@ use crate::brdf::models::GltfMaterial;
 use crate::envmap::EnvMap;
 use crate::ibl::cube::CubeMap;
 use crate::ibl::dfg::split_sum_terms;
-use crate::ibl::ggx::SplitSumLobe;
+use crate::brdf::ggx::SplitSumLobe;
 use crate::ibl::manifest::{IblBody, FACE_ORDER, FORMAT, VERSION};
 use crate::ibl::reference::{LobeIntegral, Reference};
 use crate::io::document::{named_file, read_document, BundleError};
