@@ -10,9 +10,9 @@
 //! reported with the residual of the match.
 
 use glam::{DMat3, DVec3};
+use prtkit::brdf::ggx::SplitSumLobe;
 use prtkit::envmap::{LoadOptions, FACES};
 use prtkit::ibl::cube::{texel_direction, CubeMap, PRTKIT_FROM_WORLD};
-use prtkit::brdf::ggx::SplitSumLobe;
 use prtkit::ibl::reference::{Measured, Reference};
 use prtkit::io::RgbImage;
 use std::fmt::Write;

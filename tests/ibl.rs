@@ -6,9 +6,9 @@ mod common;
 
 use common::{cmd, latlong, sky, sky_pfm};
 use glam::{DMat3, DVec3};
+use prtkit::brdf::ggx::SplitSumLobe;
 use prtkit::envmap::{EnvMap, Face, FACES};
 use prtkit::ibl::cube::{face_direction, texel_coordinate, texel_direction, CubeMap};
-use prtkit::brdf::ggx::SplitSumLobe;
 use prtkit::ibl::manifest::{IblBody, ShBody};
 use prtkit::ibl::stage::{self, Config, MethodChoice, Up};
 use prtkit::io::document::parse_document;

@@ -1,17 +1,21 @@
 //! Stanford PLY (Turk 1994; the format as Paul Bourke documents it), the one reader of it: a text
 //! header of `element` and `property` lines ([`Header`], parsed once for every view), then the
-//! elements in ASCII or binary (little- or big-endian). Two views are taken of a file:
+//! elements in ASCII or binary (little- or big-endian), read value by value by one walker that
+//! knows where each value sits ([`walk`]). Two views are taken of a file through it:
 //!
 //! - [`parse`], the geometry of a mesh: the `vertex` element's `x`, `y`, `z` (and `nx`, `ny`, `nz`
 //!   when all three are there) and the `face` element's index list (`vertex_indices` or
 //!   `vertex_index`), polygons split into fans; every other element and property is skipped.
 //! - [`vertex_normals`], the `vertex` element's `nx ny nz` alone with where each sits, so that
-//!   decoded normals can be written back with only those properties changed ([`PlyNormals`]).
+//!   decoded normals can be written back with only their bytes changed ([`PlyNormals`]).
 //!
-//! Counts are checked against the file's size before anything is allocated.
+//! Values are read as their declared type (an ASCII `float` as an f32), so the ASCII and binary
+//! encodings of one mesh read the same. Counts are checked against the file's size before
+//! anything is allocated.
 
 use super::IoError;
 use glam::DVec3;
+use std::ops::Range;
 use std::path::Path;
 
 /// Reads a PLY file (`-`: standard input) whole, within [`crate::limits::max_file_bytes`]
@@ -81,37 +85,43 @@ struct Element {
     properties: Vec<Property>,
 }
 
-/// Reads values one after another from the body.
+/// Where a value sits in the file: its bytes, and (ASCII) the line it is on.
+#[derive(Clone, Debug, Default)]
+struct Place {
+    bytes: Range<usize>,
+    line: usize,
+}
+
+/// Reads the body's values one after another, each with its [`Place`].
 struct Body<'a> {
     bytes: &'a [u8],
     at: usize,
     encoding: Encoding,
+    /// ASCII: the line `at` is on, and the offset where that line starts.
+    line: usize,
+    line_start: usize,
 }
 
-impl Body<'_> {
-    fn value(&mut self, t: Scalar) -> Result<f64, String> {
+impl<'a> Body<'a> {
+    fn new(bytes: &'a [u8], header: &Header) -> Self {
+        Body { bytes, at: header.body, encoding: header.encoding, line: header.body_line, line_start: header.body }
+    }
+
+    /// The next value, read as its declared type (an ASCII `float` as the f32 a binary file
+    /// would hold, so that both encodings of one mesh read the same), and where it sits.
+    fn value(&mut self, t: Scalar) -> Result<(f64, Place), String> {
         if self.encoding == Encoding::Ascii {
-            while self.at < self.bytes.len() && self.bytes[self.at].is_ascii_whitespace() {
-                self.at += 1;
-            }
-            let start = self.at;
-            while self.at < self.bytes.len() && !self.bytes[self.at].is_ascii_whitespace() {
-                self.at += 1;
-            }
-            let token = std::str::from_utf8(&self.bytes[start..self.at]).map_err(|_| "the body is not text")?;
-            if token.is_empty() {
-                return Err("the file ends inside an element".into());
-            }
-            return token.parse::<f64>().map_err(|_| format!("{token:?} is not a number"));
+            return self.token(t);
         }
-        let b = self.bytes.get(self.at..self.at + t.size).ok_or("the file ends inside an element")?;
+        let start = self.at;
+        let b = self.bytes.get(start..start + t.size).ok_or("the file ends early")?;
         self.at += t.size;
         let mut word = [0u8; 8];
         word[..t.size].copy_from_slice(b);
         if self.encoding == Encoding::Big {
             word[..t.size].reverse();
         }
-        Ok(match (t.size, t.float, t.signed) {
+        let value = match (t.size, t.float, t.signed) {
             (4, true, _) => f32::from_le_bytes(word[..4].try_into().unwrap()) as f64,
             (8, true, _) => f64::from_le_bytes(word),
             (1, false, true) => word[0] as i8 as f64,
@@ -120,8 +130,92 @@ impl Body<'_> {
             (2, false, false) => u16::from_le_bytes([word[0], word[1]]) as f64,
             (4, false, true) => i32::from_le_bytes(word[..4].try_into().unwrap()) as f64,
             _ => u32::from_le_bytes(word[..4].try_into().unwrap()) as f64,
-        })
+        };
+        Ok((value, Place { bytes: start..self.at, line: 0 }))
     }
+
+    fn token(&mut self, t: Scalar) -> Result<(f64, Place), String> {
+        while let Some(&b) = self.bytes.get(self.at).filter(|b| b.is_ascii_whitespace()) {
+            self.at += 1;
+            if b == b'\n' {
+                self.line += 1;
+                self.line_start = self.at;
+            }
+        }
+        let start = self.at;
+        while self.bytes.get(self.at).is_some_and(|b| !b.is_ascii_whitespace()) {
+            self.at += 1;
+        }
+        let token = std::str::from_utf8(&self.bytes[start..self.at]).map_err(|_| self.placed(start, "not text"))?;
+        if token.is_empty() {
+            return Err("the file ends early".into());
+        }
+        let value = if t.float && t.size == 4 { token.parse::<f32>().map(f64::from).ok() } else { token.parse().ok() };
+        let value = value.ok_or_else(|| self.placed(start, &format!("{token:?} is not a number")))?;
+        Ok((value, Place { bytes: start..self.at, line: self.line }))
+    }
+
+    /// `what`, placed at byte `offset` of the current line.
+    fn placed(&self, offset: usize, what: &str) -> String {
+        let column = String::from_utf8_lossy(&self.bytes[self.line_start..offset]).chars().count() + 1;
+        format!("line {}, column {column}: {what}", self.line)
+    }
+}
+
+/// One item of an element as read: each scalar property's value and place (a list property
+/// holds NaN there), and each list property's items.
+#[derive(Default)]
+struct Item {
+    scalars: Vec<(f64, Place)>,
+    lists: Vec<Vec<f64>>,
+}
+
+/// The longest face list read: a polygon of more vertices is a garbled count.
+const MAX_LIST_LEN: usize = 1024;
+
+/// Reads the items of the elements before and at `last`, in file order, handing each to `visit`
+/// with its element's index and its number. The element counts are checked against the body's
+/// size first: every item takes at least one byte (binary) or two characters (ASCII), so a
+/// larger count is garbage, refused before anything is allocated.
+fn walk(
+    bytes: &[u8],
+    header: &Header,
+    last: usize,
+    mut visit: impl FnMut(usize, usize, &Item) -> Result<(), String>,
+) -> Result<(), String> {
+    let elements = &header.elements[..=last];
+    let room = bytes.len() - header.body;
+    if let Some(e) = elements.iter().find(|e| e.count > room) {
+        return Err(format!("element {} claims {} items, more than the file holds", e.name, e.count));
+    }
+    let mut body = Body::new(bytes, header);
+    let mut item = Item::default();
+    for (index, e) in elements.iter().enumerate() {
+        item.scalars.resize(e.properties.len(), Default::default());
+        item.lists.resize(e.properties.len(), Vec::new());
+        for number in 0..e.count {
+            let within = |reason: String| format!("{reason} ({} {number} of {})", e.name, e.count);
+            for (k, p) in e.properties.iter().enumerate() {
+                item.lists[k].clear();
+                match p {
+                    Property::Scalar(_, t) => item.scalars[k] = body.value(*t).map_err(within)?,
+                    Property::List(_, count, t) => {
+                        let (n, place) = body.value(*count).map_err(within)?;
+                        if !(0.0..=MAX_LIST_LEN as f64).contains(&n) || n.fract() != 0.0 {
+                            return Err(within(format!("a list of {n} items")));
+                        }
+                        item.scalars[k] = (f64::NAN, place);
+                        for _ in 0..n as usize {
+                            let (v, _) = body.value(*t).map_err(within)?;
+                            item.lists[k].push(v);
+                        }
+                    }
+                }
+            }
+            visit(index, number, &item)?;
+        }
+    }
+    Ok(())
 }
 
 /// A PLY header: the body's encoding, the elements in file order, where the body starts.
@@ -187,74 +281,47 @@ fn header(bytes: &[u8]) -> Result<Header, String> {
 /// Parses a PLY file's bytes into a mesh's geometry. The error says what is wrong (the caller
 /// names the file).
 pub fn parse(bytes: &[u8]) -> Result<PlyMesh, String> {
-    let Header { encoding, elements, body, .. } = header(bytes)?;
-    // Every element takes at least one byte (binary) or two characters (ASCII) per item: a count
-    // beyond the body's size is garbage, refused before allocating.
-    let room = bytes.len() - body;
-    if let Some(e) = elements.iter().find(|e| e.count > room) {
-        return Err(format!("element {} claims {} items, more than the file holds", e.name, e.count));
-    }
-    let vertex = elements.iter().find(|e| e.name == "vertex").ok_or("no vertex element")?;
-    let named =
-        |e: &Element, name: &str| e.properties.iter().position(|p| matches!(p, Property::Scalar(n, _) if n == name));
-    let xyz = ["x", "y", "z"].map(|n| named(vertex, n));
-    let [Some(x), Some(y), Some(z)] = xyz else {
+    let header = header(bytes)?;
+    let element = |name: &str| header.elements.iter().position(|e| e.name == name);
+    let vertex = element("vertex").ok_or("no vertex element")?;
+    let face = element("face").ok_or("no face element")?;
+    let property = |e: usize, name: &str| header.elements[e].properties.iter().position(|p| p.name() == name);
+    let [Some(x), Some(y), Some(z)] = ["x", "y", "z"].map(|n| property(vertex, n)) else {
         return Err("the vertex element has no x, y and z".into());
     };
-    let normal = match ["nx", "ny", "nz"].map(|n| named(vertex, n)) {
+    let normal = match ["nx", "ny", "nz"].map(|n| property(vertex, n)) {
         [Some(a), Some(b), Some(c)] => Some([a, b, c]),
         _ => None,
     };
-    let face = elements.iter().find(|e| e.name == "face").ok_or("no face element")?;
-    let list = face
-        .properties
-        .iter()
-        .position(|p| matches!(p, Property::List(n, _, _) if n == "vertex_indices" || n == "vertex_index"))
+    let list = property(face, "vertex_indices")
+        .or_else(|| property(face, "vertex_index"))
+        .filter(|&k| matches!(header.elements[face].properties[k], Property::List(..)))
         .ok_or("the face element has no vertex_indices list")?;
 
-    let mut reader = Body { bytes, at: body, encoding };
     let (mut positions, mut normals, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
-    for e in &elements {
-        for item in 0..e.count {
-            let mut values: Vec<f64> = Vec::with_capacity(e.properties.len());
-            let mut indices: Vec<f64> = Vec::new();
-            for (k, p) in e.properties.iter().enumerate() {
-                match p {
-                    Property::Scalar(_, t) => values.push(reader.value(*t)?),
-                    Property::List(_, count, t) => {
-                        let n = reader.value(*count)?;
-                        if !(0.0..=1024.0).contains(&n) || n.fract() != 0.0 {
-                            return Err(format!("{} {item}: a list of {n} items", e.name));
-                        }
-                        values.push(f64::NAN);
-                        for _ in 0..n as usize {
-                            let v = reader.value(*t)?;
-                            if e.name == "face" && k == list {
-                                indices.push(v);
-                            }
-                        }
-                    }
-                }
+    let last = header.elements.len() - 1;
+    walk(bytes, &header, last, |e, number, item| {
+        let at = |k: usize| item.scalars[k].0;
+        if e == vertex {
+            positions.push(DVec3::new(at(x), at(y), at(z)));
+            if let Some([a, b, c]) = normal {
+                normals.push(DVec3::new(at(a), at(b), at(c)));
             }
-            if e.name == "vertex" {
-                positions.push(DVec3::new(values[x], values[y], values[z]));
-                if let Some([a, b, c]) = normal {
-                    normals.push(DVec3::new(values[a], values[b], values[c]));
-                }
-            } else if e.name == "face" {
-                let n = positions.len() as f64;
-                if let Some(bad) = indices.iter().find(|&&i| !(0.0..n).contains(&i) || i.fract() != 0.0) {
-                    return Err(format!(
-                        "face {item}: vertex index {bad} is out of range (vertices come first, {n} of them)"
-                    ));
-                }
-                // A polygon as a fan about its first vertex.
-                for k in 2..indices.len() {
-                    triangles.push([indices[0] as u32, indices[k - 1] as u32, indices[k] as u32]);
-                }
+        } else if e == face {
+            let indices = &item.lists[list];
+            let n = positions.len() as f64;
+            if let Some(bad) = indices.iter().find(|&&i| !(0.0..n).contains(&i) || i.fract() != 0.0) {
+                return Err(format!(
+                    "face {number}: vertex index {bad} is out of range (vertices come first, {n} of them)"
+                ));
+            }
+            // A polygon as a fan about its first vertex.
+            for k in 2..indices.len() {
+                triangles.push([indices[0] as u32, indices[k - 1] as u32, indices[k] as u32]);
             }
         }
-    }
+        Ok(())
+    })?;
     let normals = normal.map(|_| normals);
     Ok((positions, normals, triangles))
 }
@@ -269,227 +336,88 @@ pub struct PlyNormals {
 }
 
 /// The file a PLY's normals were read from and where each sits, so that decoded normals can be
-/// written back with only those properties changed (binary: patched in place; ASCII: the three
-/// tokens replaced).
+/// written back with only those values changed, every other byte kept.
 #[derive(Clone, Debug)]
 pub struct NormalLayout {
     bytes: Vec<u8>,
     encoding: Encoding,
-    /// Binary: byte offset of each vertex's nx, ny, nz.
-    offsets: Vec<[usize; 3]>,
-    /// Binary: whether nx, ny, nz are f64.
+    /// Each vertex's nx, ny, nz.
+    places: Vec<[Place; 3]>,
+    /// Whether nx, ny, nz are doubles.
     double: [bool; 3],
-    /// ASCII: (line start, line end, token indices of nx ny nz) per vertex.
-    ascii: Vec<(usize, usize, [usize; 3])>,
-    /// ASCII: each vertex's line number.
-    lines: Option<Vec<usize>>,
 }
 
-/// Reads the vertex normals of a PLY file's bytes (as [`read`] returns them). Each element is
-/// one line in ASCII (the layout every PLY writer uses), so that a normal has a line number; the
-/// elements after the vertices are not read. Errors name `path`.
+/// Reads the vertex normals of a PLY file's bytes (as [`read`] returns them); the elements after
+/// the vertices are not read. Errors name `path`, and the line and column in an ASCII file.
 pub fn vertex_normals(path: &Path, bytes: Vec<u8>) -> Result<PlyNormals, IoError> {
     let bad = |msg: String| IoError::invalid(path, "PLY", msg);
-    let Header { encoding, elements, body: body_start, body_line } = header(&bytes).map_err(bad)?;
-    let vi = elements.iter().position(|e| e.name == "vertex").ok_or_else(|| bad("no vertex element".into()))?;
-    let vertex = &elements[vi];
-    let mut idx = [0usize; 3];
+    let header = header(&bytes).map_err(bad)?;
+    let vertex =
+        header.elements.iter().position(|e| e.name == "vertex").ok_or_else(|| bad("no vertex element".into()))?;
+    let properties = &header.elements[vertex].properties;
+    let mut index = [0; 3];
     let mut double = [false; 3];
     for (k, name) in ["nx", "ny", "nz"].iter().enumerate() {
-        idx[k] = vertex
-            .properties
+        index[k] = properties
             .iter()
             .position(|p| p.name() == *name)
             .ok_or_else(|| bad(format!("vertex element has no {name} property")))?;
-        match vertex.properties[idx[k]] {
+        match properties[index[k]] {
             Property::Scalar(_, s) if s.float => double[k] = s.size == 8,
             _ => return Err(IoError::unsupported(path, "PLY", format!("{name} is not float or double"))),
         }
     }
-    let n = vertex.count;
-    // A vertex count larger than the bytes can hold is garbage; refuse before allocating.
-    if n > bytes.len() {
-        return Err(bad(format!("vertex count {n} exceeds the file size")));
-    }
-    let mut normals = Vec::with_capacity(n);
-    let (mut offsets, mut ascii, mut lines_at) = (Vec::new(), Vec::new(), None);
-    match encoding {
-        Encoding::Ascii => {
-            let text = std::str::from_utf8(&bytes[body_start..]).map_err(|_| bad("ascii body is not text".into()))?;
-            let mut line_no = body_line;
-            let mut pos = body_start;
-            let mut lines = text.split_inclusive('\n');
-            let mut line_numbers = Vec::with_capacity(n);
-            // Skip elements before the vertices, one line each.
-            let before = elements[..vi].iter().fold(0usize, |acc, e| acc.saturating_add(e.count));
-            for _ in 0..before {
-                let l = lines.next().ok_or_else(|| bad("file ends before the vertex element".into()))?;
-                pos += l.len();
-                line_no += 1;
-            }
-            for v in 0..n {
-                let l = lines.next().ok_or_else(|| bad(format!("file ends at vertex {v} of {n}")))?;
-                let body = l.trim_end_matches(['\n', '\r']);
-                let tokens: Vec<&str> = body.split_whitespace().collect();
-                let mut value = [0f32; 3];
-                for k in 0..3 {
-                    let tok = tokens
-                        .get(idx[k])
-                        .ok_or_else(|| bad(format!("line {line_no}: vertex {v} has only {} values", tokens.len())))?;
-                    // The token is a slice of `body`: its column (in characters) from its offset.
-                    let col = body[..tok.as_ptr() as usize - body.as_ptr() as usize].chars().count() + 1;
-                    value[k] = tok
-                        .parse()
-                        .map_err(|_| bad(format!("line {line_no}, column {col}: {tok:?} is not a number")))?;
-                }
-                if vertex.properties.iter().any(|p| matches!(p, Property::List(..))) {
-                    return Err(IoError::unsupported(path, "PLY", "list properties in the vertex element"));
-                }
-                normals.push(value);
-                ascii.push((pos, pos + body.len(), idx));
-                line_numbers.push(line_no);
-                pos += l.len();
-                line_no += 1;
-            }
-            lines_at = Some(line_numbers);
+    let (mut normals, mut places) = (Vec::new(), Vec::new());
+    walk(&bytes, &header, vertex, |e, _, item| {
+        if e == vertex {
+            normals.push(index.map(|k| item.scalars[k].0 as f32));
+            places.push(index.map(|k| item.scalars[k].1.clone()));
         }
-        Encoding::Little | Encoding::Big => {
-            let mut pos = body_start;
-            let read_uint = |pos: usize, size: usize| -> Option<usize> {
-                let b = bytes.get(pos..pos + size)?;
-                let mut v = 0usize;
-                for k in 0..size {
-                    let byte = if encoding == Encoding::Little { b[size - 1 - k] } else { b[k] };
-                    v = (v << 8) | byte as usize;
-                }
-                Some(v)
-            };
-            for (ei, el) in elements.iter().enumerate() {
-                if ei > vi {
-                    break;
-                }
-                // Every element with properties takes at least one byte: a larger count is
-                // garbage (and would loop for ever).
-                if el.properties.is_empty() {
-                    continue;
-                }
-                if el.count > bytes.len() {
-                    return Err(bad(format!("element {} count {} exceeds the file size", el.name, el.count)));
-                }
-                for v in 0..el.count {
-                    let mut offs = [0usize; 3];
-                    for (pi, p) in el.properties.iter().enumerate() {
-                        match p {
-                            Property::Scalar(_, s) => {
-                                if ei == vi {
-                                    for k in 0..3 {
-                                        if idx[k] == pi {
-                                            offs[k] = pos;
-                                        }
-                                    }
-                                }
-                                pos += s.size;
-                            }
-                            Property::List(_, count_type, item) => {
-                                let count = read_uint(pos, count_type.size)
-                                    .ok_or_else(|| bad(format!("truncated in element {} #{v}", el.name)))?;
-                                // A garbled count must not wrap the offset back into the file.
-                                pos = count
-                                    .checked_mul(item.size)
-                                    .and_then(|n| n.checked_add(pos + count_type.size))
-                                    .ok_or_else(|| {
-                                    bad(format!("list length {count} in element {} #{v} overflows", el.name))
-                                })?;
-                            }
-                        }
-                        if pos > bytes.len() {
-                            return Err(bad(format!("truncated in element {} #{v} of {}", el.name, el.count)));
-                        }
-                    }
-                    if ei == vi {
-                        let mut value = [0f32; 3];
-                        for k in 0..3 {
-                            value[k] = read_float(&bytes, offs[k], double[k], encoding == Encoding::Little);
-                        }
-                        normals.push(value);
-                        offsets.push(offs);
-                    }
-                }
-            }
-        }
-    }
+        Ok(())
+    })
+    .map_err(bad)?;
     if normals.is_empty() {
         return Err(bad("no vertices".into()));
     }
-    Ok(PlyNormals { normals, layout: NormalLayout { bytes, encoding, offsets, double, ascii, lines: lines_at } })
-}
-
-fn read_float(bytes: &[u8], pos: usize, double: bool, little: bool) -> f32 {
-    if double {
-        let mut b = [0u8; 8];
-        b.copy_from_slice(&bytes[pos..pos + 8]);
-        (if little { f64::from_le_bytes(b) } else { f64::from_be_bytes(b) }) as f32
-    } else {
-        let mut b = [0u8; 4];
-        b.copy_from_slice(&bytes[pos..pos + 4]);
-        if little {
-            f32::from_le_bytes(b)
-        } else {
-            f32::from_be_bytes(b)
-        }
-    }
+    Ok(PlyNormals { normals, layout: NormalLayout { encoding: header.encoding, bytes, places, double } })
 }
 
 impl NormalLayout {
     /// Where normal `index` sits, for messages: `line 12` (ASCII) or `vertex 12` (binary).
     pub fn locate(&self, index: usize) -> String {
-        match &self.lines {
-            Some(lines) => lines.get(index).map_or(String::new(), |n| format!("line {n}")),
-            None => format!("vertex {index}"),
+        match (self.encoding, self.places.get(index)) {
+            (Encoding::Ascii, Some(place)) => format!("line {}", place[0].line),
+            _ => format!("vertex {index}"),
         }
     }
 
-    /// The file with its normals replaced by `decoded` (one per normal read), every other
-    /// property kept. ASCII numbers are written with the shortest text that reads back to the
-    /// same f32.
+    /// The file with its normals replaced by `decoded` (one per normal read), every other byte
+    /// kept. ASCII numbers are written with the shortest text that reads back to the same f32.
     pub fn write_back(&self, decoded: &[[f32; 3]]) -> Vec<u8> {
-        match self.encoding {
-            Encoding::Ascii => {
-                let mut out = Vec::with_capacity(self.bytes.len());
-                let mut pos = 0;
-                for (&(a, b, idx), n) in self.ascii.iter().zip(decoded) {
-                    out.extend_from_slice(&self.bytes[pos..a]);
-                    let line = String::from_utf8_lossy(&self.bytes[a..b]);
-                    let mut tokens: Vec<String> = line.split_whitespace().map(str::to_string).collect();
-                    for k in 0..3 {
-                        tokens[idx[k]] = format!("{}", n[k]);
-                    }
-                    out.extend_from_slice(tokens.join(" ").as_bytes());
-                    pos = b;
-                }
-                out.extend_from_slice(&self.bytes[pos..]);
-                out
+        let mut out = Vec::with_capacity(self.bytes.len());
+        let mut pos = 0;
+        for (places, n) in self.places.iter().zip(decoded) {
+            // In file order, whatever order the header declares nx, ny, nz in.
+            let mut values: Vec<(&Place, Vec<u8>)> = (0..3).map(|k| (&places[k], self.encode(k, n[k]))).collect();
+            values.sort_by_key(|(place, _)| place.bytes.start);
+            for (place, bytes) in values {
+                out.extend_from_slice(&self.bytes[pos..place.bytes.start]);
+                out.extend_from_slice(&bytes);
+                pos = place.bytes.end;
             }
-            Encoding::Little | Encoding::Big => {
-                let little = self.encoding == Encoding::Little;
-                let mut out = self.bytes.clone();
-                for (offs, n) in self.offsets.iter().zip(decoded) {
-                    for k in 0..3 {
-                        let p = offs[k];
-                        if self.double[k] {
-                            let v = n[k] as f64;
-                            out[p..p + 8].copy_from_slice(&if little { v.to_le_bytes() } else { v.to_be_bytes() });
-                        } else {
-                            out[p..p + 4].copy_from_slice(&if little {
-                                n[k].to_le_bytes()
-                            } else {
-                                n[k].to_be_bytes()
-                            });
-                        }
-                    }
-                }
-                out
-            }
+        }
+        out.extend_from_slice(&self.bytes[pos..]);
+        out
+    }
+
+    /// Component `k` of a normal as the file stores it.
+    fn encode(&self, k: usize, v: f32) -> Vec<u8> {
+        match (self.encoding, self.double[k]) {
+            (Encoding::Ascii, _) => format!("{v}").into_bytes(),
+            (Encoding::Little, true) => (v as f64).to_le_bytes().to_vec(),
+            (Encoding::Little, false) => v.to_le_bytes().to_vec(),
+            (Encoding::Big, true) => (v as f64).to_be_bytes().to_vec(),
+            (Encoding::Big, false) => v.to_be_bytes().to_vec(),
         }
     }
 }
@@ -536,10 +464,37 @@ mod tests {
         assert_eq!(parse(&binary(true)).unwrap(), expected);
         let mut cut = binary(false);
         cut.truncate(cut.len() - 3);
-        assert!(parse(&cut).unwrap_err().contains("ends inside"));
+        assert!(parse(&cut).unwrap_err().contains("ends early"));
         let bad = ascii.replace("7 4 0 1 2 3", "7 3 0 1 9");
         assert!(parse(bad.as_bytes()).unwrap_err().contains("out of range"));
         let huge = ascii.replace("element vertex 4", "element vertex 4000000000");
         assert!(parse(huge.as_bytes()).unwrap_err().contains("more than the file holds"));
+    }
+
+    #[test]
+    fn ascii_floats_read_as_the_f32_a_binary_file_holds() {
+        // 0.1 is not an f32: read as the declared float, ASCII and binary agree to the bit.
+        let ascii = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                     property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                     0.1 0 0\n0 0.1 0\n0 0 0.1\n3 0 1 2\n";
+        let (positions, ..) = parse(ascii.as_bytes()).unwrap();
+        assert_eq!(positions[0].x, 0.1f32 as f64);
+    }
+
+    #[test]
+    fn normals_write_back_changes_only_their_bytes() {
+        // Tabs, runs of spaces and a list in the vertex element are kept; nz is declared first.
+        let text = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float nz\nproperty list uchar int ids\n\
+                    property float x\nproperty float nx\nproperty float ny\nend_header\n\
+                    1  2 7 8\t5 0 0\n0 0\t6   1 0\n";
+        let read = vertex_normals(Path::new("n.ply"), text.as_bytes().to_vec()).unwrap();
+        assert_eq!(read.normals, vec![[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]);
+        assert_eq!(read.layout.locate(1), "line 11");
+        let out = read.layout.write_back(&[[0.5, -1.0, 0.25], [0.0, 1.0, -0.5]]);
+        let body = &String::from_utf8(out).unwrap()[text.find("1  2").unwrap()..];
+        assert_eq!(body, "0.25  2 7 8\t5 0.5 -1\n-0.5 0\t6   0 1\n");
+        let bad = text.replace("6   1", "6   q");
+        let e = vertex_normals(Path::new("n.ply"), bad.into_bytes()).unwrap_err().to_string();
+        assert!(e.contains("n.ply") && e.contains("line 11, column 9") && e.contains("vertex 1 of 2"), "{e}");
     }
 }

@@ -15,8 +15,8 @@
 //!   paper defines directly as ρ̂ (its microfacet eq. 11).
 
 use super::brdf_sh::{self, BrdfGrid, BrdfSh};
-use crate::brdf::Brdf;
 use crate::brdf::ggx::SplitSumLobe;
+use crate::brdf::Brdf;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::sync::OnceLock;

@@ -19,11 +19,11 @@
 //! resolution, which is the point of the comparison.
 
 use super::{Hit, Shade};
+use crate::brdf::ggx::SplitSumLobe;
 use crate::brdf::models::GltfMaterial;
 use crate::envmap::EnvMap;
 use crate::ibl::cube::CubeMap;
 use crate::ibl::dfg::split_sum_terms;
-use crate::brdf::ggx::SplitSumLobe;
 use crate::ibl::manifest::{IblBody, FACE_ORDER, FORMAT, VERSION};
 use crate::ibl::reference::{LobeIntegral, Reference};
 use crate::io::document::{named_file, read_document, BundleError};
