@@ -61,6 +61,7 @@ pub struct EnvArgs {
     #[arg(long, default_value = "error")]
     pub negative: NegativePolicy,
 
+    /// How the map is turned on reading.
     #[command(flatten)]
     pub orient: OrientArgs,
 }

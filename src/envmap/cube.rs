@@ -10,7 +10,7 @@ use glam::{DMat3, DVec3};
 
 /// Cube frame → world: cube +Y (up) is world +Z; chosen so the DirectX SDK cubes of Debevec's
 /// probes agree with pbrt's lat-long conversion (checked in the tests).
-pub const WORLD_FROM_CUBE: DMat3 = DMat3::from_cols(
+pub(crate) const WORLD_FROM_CUBE: DMat3 = DMat3::from_cols(
     DVec3::new(0.0, -1.0, 0.0), // cube x
     DVec3::new(0.0, 0.0, 1.0),  // cube y
     DVec3::new(-1.0, 0.0, 0.0), // cube z
@@ -63,7 +63,7 @@ impl Face {
 }
 
 /// World direction at continuous face position (px, py) ∈ [0, n]².
-pub fn direction_at(face: Face, n: usize, px: f64, py: f64) -> DVec3 {
+pub(crate) fn direction_at(face: Face, n: usize, px: f64, py: f64) -> DVec3 {
     let s = 2.0 * px / n as f64 - 1.0;
     let t = 2.0 * py / n as f64 - 1.0;
     (WORLD_FROM_CUBE * face.direction(s, t)).normalize()
@@ -76,7 +76,7 @@ fn area_element(a: f64, b: f64) -> f64 {
 }
 
 /// Centre direction and exact solid angle of texel (x, y) of an n×n face.
-pub fn texel(face: Face, n: usize, x: usize, y: usize) -> (DVec3, f64) {
+pub(crate) fn texel(face: Face, n: usize, x: usize, y: usize) -> (DVec3, f64) {
     let h = 2.0 / n as f64;
     let (s0, t0) = (x as f64 * h - 1.0, y as f64 * h - 1.0);
     let (s1, t1) = (s0 + h, t0 + h);
@@ -85,7 +85,7 @@ pub fn texel(face: Face, n: usize, x: usize, y: usize) -> (DVec3, f64) {
 }
 
 /// The face a world direction hits and its face coordinates (s, t) ∈ [−1, 1]².
-pub fn face_coords(dir: DVec3) -> (Face, f64, f64) {
+pub(crate) fn face_coords(dir: DVec3) -> (Face, f64, f64) {
     select_face(WORLD_FROM_CUBE.transpose() * dir)
 }
 
@@ -128,7 +128,7 @@ fn cross_cell(layout: Layout, face: Face) -> (usize, usize, bool) {
 }
 
 /// Maps a cross pixel to (face, face x, face y), or `None` for the empty cells.
-pub fn cross_to_face(layout: Layout, n: usize, x: usize, y: usize) -> Option<(Face, usize, usize)> {
+pub(crate) fn cross_to_face(layout: Layout, n: usize, x: usize, y: usize) -> Option<(Face, usize, usize)> {
     let (cx, cy) = (x / n, y / n);
     for face in FACES {
         let (col, row, rotated) = cross_cell(layout, face);
@@ -141,7 +141,7 @@ pub fn cross_to_face(layout: Layout, n: usize, x: usize, y: usize) -> Option<(Fa
 }
 
 /// Maps a face texel to its cross pixel.
-pub fn face_to_cross(layout: Layout, n: usize, face: Face, fx: usize, fy: usize) -> (usize, usize) {
+pub(crate) fn face_to_cross(layout: Layout, n: usize, face: Face, fx: usize, fy: usize) -> (usize, usize) {
     let (col, row, rotated) = cross_cell(layout, face);
     let (fx, fy) = if rotated { (n - 1 - fx, n - 1 - fy) } else { (fx, fy) };
     (col * n + fx, row * n + fy)

@@ -18,7 +18,7 @@ pub const WORLD_FROM_PROBE: DMat3 = DMat3::from_cols(
 );
 
 /// Direction at continuous image position (px, py) ∈ [0, n]², or `None` outside the disc.
-pub fn direction_at(n: usize, px: f64, py: f64) -> Option<DVec3> {
+pub(crate) fn direction_at(n: usize, px: f64, py: f64) -> Option<DVec3> {
     let u = 2.0 * px / n as f64 - 1.0;
     let v = 1.0 - 2.0 * py / n as f64;
     let r = (u * u + v * v).sqrt();
@@ -36,7 +36,7 @@ pub fn direction_at(n: usize, px: f64, py: f64) -> Option<DVec3> {
 
 /// Centre direction and solid angle of pixel (x, y) of an n×n probe, `None` if the centre lies
 /// outside the disc. dΩ = π sin(πr)/r du dv, integrated over the pixel (clipped to the disc).
-pub fn texel(n: usize, x: usize, y: usize) -> Option<(DVec3, f64)> {
+pub(crate) fn texel(n: usize, x: usize, y: usize) -> Option<(DVec3, f64)> {
     let dir = direction_at(n, x as f64 + 0.5, y as f64 + 0.5)?;
     Some((dir, solid_angle(n, x, y)))
 }
@@ -82,7 +82,7 @@ fn solid_angle(n: usize, x: usize, y: usize) -> f64 {
 
 /// Continuous pixel position (texel centres at half-integers minus 0.5, i.e. `x` for pixel x)
 /// of a world direction in an n×n probe.
-pub fn pixel_of(n: usize, dir: DVec3) -> (f64, f64) {
+pub(crate) fn pixel_of(n: usize, dir: DVec3) -> (f64, f64) {
     let local = WORLD_FROM_PROBE.transpose() * dir;
     let alpha = local.z.clamp(-1.0, 1.0).acos();
     let rho = (local.x * local.x + local.y * local.y).sqrt();

@@ -21,6 +21,7 @@ pub enum FaceFormat {
 #[derive(Debug, Parser)]
 #[command(name = "convert", version)]
 pub struct Args {
+    /// The environment map read and how (shared by every stage that reads one).
     #[command(flatten)]
     pub input: EnvArgs,
 
@@ -46,9 +47,11 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = FaceFormat::Exr)]
     pub face_format: FaceFormat,
 
+    /// The exposure of PNG previews.
     #[command(flatten)]
     pub exposure: Exposure,
 
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }
