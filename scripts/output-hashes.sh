@@ -5,7 +5,8 @@
 # `ibl` on the Grace probe, and `transfer` on the test mesh, into OUTDIR, then prints
 # `sha256  path` for every file, sorted. JSON documents are hashed with their timing fields
 # (any key ending in `seconds`, and `timings`) removed, since those change from run to run, and
-# OUTDIR written as `OUT` wherever a file records its own path.
+# OUTDIR written as `OUT` and the repository's root as `REPO` wherever a file records a path (the
+# documents' provenance names the binary that wrote them, which may be another checkout's).
 #
 #   scripts/output-hashes.sh /tmp/hashes > before.txt    # on the old commit
 #   scripts/output-hashes.sh /tmp/hashes > after.txt     # on the new one
@@ -54,12 +55,13 @@ echo "output-hashes: transfer on the test mesh" >&2
 "$bin/transfer" testdata/meshes/floor-ball.obj --mode shadowed --rays 64 -o "$out/lightmap.json" --glb "$out/lightmap.glb" \
   --lightmap 64x64 "$out/lightmap.exr" -q
 
+repo=$PWD
 cd "$out"
 find . -type f ! -name '*.log' | sort | while read -r file; do
   case "$file" in
     *.json) hash=$(jq -S 'walk(if type == "object" then with_entries(select((.key | test("seconds$|^timings$")) | not)) else . end)' \
-      "$file" | sed "s|$out|OUT|g" | sha256sum | cut -d' ' -f1) ;;
-    *) hash=$(sed "s|$out|OUT|g" "$file" | sha256sum | cut -d' ' -f1) ;;
+      "$file" | sed "s|$out|OUT|g; s|$repo|REPO|g" | sha256sum | cut -d' ' -f1) ;;
+    *) hash=$(sed "s|$out|OUT|g; s|$repo|REPO|g" "$file" | sha256sum | cut -d' ' -f1) ;;
   esac
   echo "$hash  $file"
 done
