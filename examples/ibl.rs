@@ -11,7 +11,9 @@
 
 use anyhow::Context;
 use prtkit::envmap::LoadOptions;
+use prtkit::ibl::manifest;
 use prtkit::ibl::stage::{self, Config};
+use prtkit::io::write_atomic;
 use prtkit::progress::NoProgress;
 use std::path::{Path, PathBuf};
 
@@ -27,13 +29,25 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     let bake = stage::run(&config, &map, &NoProgress)?;
     let dir = out.join("ibl");
     std::fs::create_dir_all(&dir)?;
-    for (name, bytes) in &bake.files {
-        std::fs::write(dir.join(name), bytes).with_context(|| format!("cannot write {name}"))?;
-    }
+    write_bake(&bake, &dir)?;
     for level in &bake.document.body.specular.levels {
         if let Some(rms) = level.rms_rel_error {
             println!("level {} ({}², r = {:.2}): {:.3} % RMS", level.level, level.size, level.roughness, 100.0 * rms);
         }
     }
     Ok(())
+}
+
+/// Writes every file of the bake into `dir` under the name the manifest gives it, encoded as
+/// the binary encodes it: the textures in their container, the documents as JSON, the snippets
+/// as text.
+fn write_bake(bake: &stage::Output, dir: &Path) -> anyhow::Result<()> {
+    for (name, texture, format) in bake.textures() {
+        write_atomic(&dir.join(name), &bake.container.encode(&texture, format)?)?;
+    }
+    write_atomic(&dir.join(&bake.document.body.sh.file), bake.sh_document.to_json().as_bytes())?;
+    for (name, text) in bake.shaders() {
+        write_atomic(&dir.join(name), text.as_bytes())?;
+    }
+    Ok(write_atomic(&dir.join(manifest::FILE), bake.document.to_json().as_bytes())?)
 }

@@ -8,6 +8,7 @@
 mod common;
 
 use prtkit::envmap::{resample, Layout, LoadOptions};
+use prtkit::ibl::manifest;
 use prtkit::ibl::stage::{self, Config};
 use prtkit::progress::NoProgress;
 use prtkit::render::grid::{render_grid, MaterialGrid, DEFAULT_METALNESS, DEFAULT_ROUGHNESS};
@@ -41,10 +42,14 @@ fn main() {
         let env = resample(&loaded.map, Layout::LatLong, 256, 128, 2).expect("resampling");
         let baked = stage::run(&Config::default(), &env, &NoProgress).expect("the bake");
         let tmp = tempfile::tempdir().expect("a temporary directory");
-        for (file, bytes) in &baked.files {
+        // What the bake is read back from: its textures and its manifest.
+        for (file, texture, format) in baked.textures() {
+            let bytes = baked.container.encode(&texture, format).expect("encoding the bake");
             std::fs::write(tmp.path().join(file), bytes).expect("writing the bake");
         }
-        let bake = IblBake::load(&tmp.path().join("ibl.json")).expect("reading the bake back");
+        let manifest = tmp.path().join(manifest::FILE);
+        std::fs::write(&manifest, baked.document.to_json()).expect("writing the bake");
+        let bake = IblBake::load(&manifest).expect("reading the bake back");
         let cells =
             render_grid(&grid, BASE, &bake, &env, &Scene::unit_sphere(), &camera, &NoProgress).expect("the grid").cells;
         let n = grid.roughness.len();

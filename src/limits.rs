@@ -115,6 +115,35 @@ pub fn check_memory(what: &str, bytes: u128) -> Result<(), LimitError> {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Cube maps, GPU textures and image-based lighting
+// ---------------------------------------------------------------------------------------------
+
+/// Widest face a cube map holds (`ibl::cube::CubeMap`, the cube pyramid of the angular
+/// prefilter): 8192 texels. Six 8192² faces of RGB f32 are 4.5 GiB, and the next power of two
+/// 18 GiB, far beyond what any engine loads as one environment.
+pub const MAX_CUBE_FACE_SIZE: usize = 8192;
+
+/// Largest face size `ibl` bakes, for the specular chain's first and last levels and the
+/// irradiance cube: 4096. The chain of a 4096² cube is 6 × 4096² × 4/3 = 2²⁷ texels, 1.5 GiB as
+/// RGB f32 and 1 GiB more as RGBA16F in its file, both held at once; within
+/// [`MAX_CUBE_FACE_SIZE`], so every level the bake makes is a cube map.
+pub const MAX_IBL_FACE_SIZE: usize = 4096;
+const _: () = assert!(MAX_IBL_FACE_SIZE <= MAX_CUBE_FACE_SIZE);
+
+/// Largest side of the split-sum DFG table: 1024² texels, each an integral over the
+/// hemisphere; 8× the default side, far past what a shader's bilinear lookup of these smooth
+/// functions resolves.
+pub const MAX_DFG_SIZE: usize = 1024;
+
+/// Most texels per level `ibl` measures against the angular integral: 4096, each a cone sum
+/// over the input map.
+pub const MAX_IBL_MEASURED_TEXELS: usize = 4096;
+
+/// Widest side of a texture the KTX2 and DDS writers encode: 2¹⁶ texels, so that every level's
+/// width, height and pitch fit the files' 32-bit fields.
+pub const MAX_TEXTURE_SIDE: usize = 1 << 16;
+
+// ---------------------------------------------------------------------------------------------
 // Documents
 // ---------------------------------------------------------------------------------------------
 

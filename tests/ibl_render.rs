@@ -22,10 +22,12 @@ use std::f64::consts::PI;
 fn bake(env: &EnvMap, config: Config) -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let out = stage::run(&config, env, &NoProgress).unwrap();
-    for (name, bytes) in &out.files {
-        std::fs::write(dir.path().join(name), bytes).unwrap();
+    // What `render --shading ibl` reads: the textures and the manifest.
+    for (name, texture, format) in out.textures() {
+        std::fs::write(dir.path().join(name), out.container.encode(&texture, format).unwrap()).unwrap();
     }
-    let manifest = dir.path().join("ibl.json");
+    let manifest = dir.path().join(prtkit::ibl::manifest::FILE);
+    std::fs::write(&manifest, out.document.to_json()).unwrap();
     (dir, manifest)
 }
 

@@ -373,9 +373,17 @@ fn ibl_library_and_binary_write_the_same_bytes() {
     let (argv, _) = b.binary("ibl", &[&b.sky, "-o", "bake", "--size", "32", "--samples", "16", "-q"]);
     let config = Config { size: 32, samples: 16, source: b.sky.clone(), args: argv, ..Config::default() };
     let out = run(&config, &b.env(), &NoProgress).unwrap();
-    let names: Vec<&str> = out.files.iter().map(|(name, _)| name.as_str()).collect();
-    assert_eq!(common::entries(&b.root.join("bake")).len(), names.len(), "{names:?}");
-    for (name, bytes) in &out.files {
+    let mut files = vec![
+        (prtkit::ibl::manifest::FILE.to_string(), out.document.to_json().into_bytes()),
+        (out.document.body.sh.file.clone(), out.sh_document.to_json().into_bytes()),
+    ];
+    files.extend(
+        out.textures()
+            .map(|(name, texture, format)| (name.to_string(), out.container.encode(&texture, format).unwrap())),
+    );
+    files.extend(out.shaders().map(|(name, text)| (name.to_string(), text.into_bytes())));
+    assert_eq!(common::entries(&b.root.join("bake")).len(), files.len());
+    for (name, bytes) in &files {
         b.same(&format!("bake/{name}"), bytes);
     }
 }

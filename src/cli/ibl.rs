@@ -6,10 +6,14 @@ mod args;
 use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
 use super::outputs::{check_output_dir, Outputs};
-use crate::ibl::stage::{self, Config};
+use crate::ibl::manifest;
+use crate::ibl::stage::{self, Config, Error, FaceSize};
 use crate::io::Output;
-use anyhow::{bail, Result};
+use crate::limits::MAX_IBL_FACE_SIZE;
+use anyhow::{anyhow, bail, Result};
 pub use args::*;
+use std::path::Path;
+use std::time::Instant;
 
 impl From<&Args> for Config {
     fn from(args: &Args) -> Config {
@@ -19,7 +23,7 @@ impl From<&Args> for Config {
             irradiance_size: args.irradiance_size,
             roughness_map: args.roughness_map,
             format: args.format.format(),
-            container: args.container,
+            container: args.container.container(),
             up: args.up,
             rotate_degrees: args.rotate,
             mirror: args.mirror,
@@ -43,7 +47,7 @@ impl Stage for Args {
             bail!("-o -: a bake is a directory of files (ibl.json, the textures, the SH), not one stream; give a directory");
         }
         let config = Config::from(&self);
-        config.check()?;
+        config.check().map_err(flag_error)?;
         // DIR is created by the commit's output set (and removed if anything fails); an
         // existing directory with files in it is refused so that no stale file is mixed in.
         if self.output.exists() {
@@ -78,10 +82,21 @@ impl Stage for Args {
                 level.seconds
             ));
         }
+        // The files are encoded before the narration ends, so that it says how long that took.
+        let mut outputs = Outputs::new();
+        outputs.create_dir(&self.output)?;
+        let t_encode = Instant::now();
+        stage_bake(&mut outputs, &self.output, &out)?;
         let t = &body.timings;
         ctx.note(format!(
-            "baked in {:.3} s (prepare {:.3}, specular {:.3}, irradiance and SH {:.3}, DFG {:.3} beside them, encode {:.3}), measured in {:.3} s",
-            t.bake, t.prepare, t.specular, t.irradiance, t.dfg, t.encode, t.measure
+            "baked in {:.3} s (prepare {:.3}, specular {:.3}, irradiance and SH {:.3}, DFG {:.3} beside them), encoded in {:.3} s, measured in {:.3} s",
+            t.bake,
+            t.prepare,
+            t.specular,
+            t.irradiance,
+            t.dfg,
+            t_encode.elapsed().as_secs_f64(),
+            t.measure
         ));
 
         // Values above what the format holds are saturated by its encoding: said, with the remedy.
@@ -95,13 +110,40 @@ impl Stage for Args {
                 format.unwrap_or_default()
             ));
         }
-
-        let mut outputs = Outputs::new();
-        outputs.create_dir(&self.output)?;
-        for (name, bytes) in out.files {
-            outputs.bytes(&Output::File(self.output.join(name)), bytes)?;
-        }
         outputs.commit()?;
         Ok(Outcome::Success)
     }
+}
+
+/// The library's refusal of a flag's value, worded with the flag (the library speaks of the
+/// bake, not of the command line).
+fn flag_error(error: Error) -> anyhow::Error {
+    match error {
+        Error::Size { which, size } => {
+            let flag = match which {
+                FaceSize::First => "--size",
+                FaceSize::Last => "--min-size",
+                FaceSize::Irradiance => "--irradiance-size",
+            };
+            anyhow!("{flag} {size}: a face size must be a power of two between 1 and {MAX_IBL_FACE_SIZE}")
+        }
+        Error::MinSize { min, size } => anyhow!("--min-size {min} is larger than --size {size}"),
+        Error::Rotation(degrees) => anyhow!("--rotate {degrees} must be a finite angle"),
+        Error::Clamp(max) => anyhow!("--clamp {max} must be positive"),
+        error => error.into(),
+    }
+}
+
+/// Stages every file of the bake in `dir` under the name the manifest gives it, the manifest
+/// last: the textures in their container, the documents as JSON, the shader snippets as text.
+fn stage_bake(outputs: &mut Outputs, dir: &Path, bake: &stage::Output) -> Result<()> {
+    let file = |name: &str| Output::File(dir.join(name));
+    for (name, texture, format) in bake.textures() {
+        outputs.texture(&file(name), bake.container, &texture, format)?;
+    }
+    outputs.json(&file(&bake.document.body.sh.file), &bake.sh_document)?;
+    for (name, text) in bake.shaders() {
+        outputs.bytes(&file(name), text.into_bytes())?;
+    }
+    outputs.json(&file(manifest::FILE), &bake.document)
 }

@@ -1,6 +1,9 @@
 //! The outputs of one command line, written all or none (`io::OutputSet`): documents as JSON,
-//! images by their file's extension (EXR on standard output), summaries on stdout.
+//! images by their file's extension (EXR on standard output), GPU textures in their container
+//! (`io::texture`), summaries on stdout.
 
+use crate::io::gpu_format::{TexelFormat, Texture};
+use crate::io::texture::Container;
 use crate::io::{self, document::to_json_pretty, Output, OutputSet, RgbImage};
 use anyhow::{Context as _, Result};
 use serde::Serialize;
@@ -49,6 +52,18 @@ impl Outputs {
         let refs: Vec<(&str, &RgbImage)> = layers.iter().map(|(n, i)| (n.as_str(), i)).collect();
         let bytes =
             io::exr::encode_layers(&refs).map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", output.display()))?;
+        self.bytes(output, bytes)
+    }
+
+    /// Stages a GPU texture packed in `format`, in `container` (KTX2 or DDS).
+    pub fn texture(
+        &mut self,
+        output: &Output,
+        container: Container,
+        texture: &Texture,
+        format: TexelFormat,
+    ) -> Result<()> {
+        let bytes = container.encode(texture, format).with_context(|| format!("cannot encode {}", output.display()))?;
         self.bytes(output, bytes)
     }
 

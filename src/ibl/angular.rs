@@ -60,9 +60,12 @@ pub enum AngularError {
     /// Roughness 0 asks for the environment itself, which the pyramid must hold at that size.
     #[error("roughness 0 copies the source, but the pyramid has no {0}² level")]
     NoLevel(usize),
-    /// A truncation tolerance outside [0, 1) or a texel ratio that is not positive.
-    #[error("bad angular options: {0}")]
-    Options(String),
+    /// A truncation tolerance ε outside [0, 1).
+    #[error("the truncation tolerance ε = {0} is outside [0, 1)")]
+    Epsilon(f64),
+    /// A largest source texel (as a fraction of the lobe's solid angle) that is not positive.
+    #[error("the texel ratio {0} is not positive")]
+    TexelRatio(f64),
 }
 
 /// How the angular prefilter trades accuracy for time.
@@ -187,11 +190,11 @@ impl AngularPrefilter {
         options: &AngularOptions,
         progress: &dyn Progress,
     ) -> Result<(CubeMap, LevelSource), AngularError> {
-        if !(0.0..1.0).contains(&options.epsilon) || options.texel_ratio.is_nan() || options.texel_ratio <= 0.0 {
-            return Err(AngularError::Options(format!(
-                "ε = {} must be in [0, 1) and the texel ratio {} positive",
-                options.epsilon, options.texel_ratio
-            )));
+        if !(0.0..1.0).contains(&options.epsilon) {
+            return Err(AngularError::Epsilon(options.epsilon));
+        }
+        if options.texel_ratio.is_nan() || options.texel_ratio <= 0.0 {
+            return Err(AngularError::TexelRatio(options.texel_ratio));
         }
         let mut out = CubeMap::new(size)?;
         if perceptual_roughness == 0.0 {
@@ -224,13 +227,8 @@ impl AngularPrefilter {
 
     /// The exact reference at direction R: the kernel over its whole support (no truncation)
     /// against the full-resolution base level taken as piecewise constant, each base texel split
-    /// into `supersample`² sub-texels with their own directions and exact solid angles.
-    pub fn reference_texel(&self, axis: DVec3, lobe: &SplitSumLobe, supersample: usize) -> [f64; 3] {
-        let fine = self.chain.base().size() * supersample.max(1);
-        self.reference_with(axis, lobe, supersample.max(1), &texel_solid_angles(fine).unwrap_or_default())
-    }
-
-    /// [`Self::reference_texel`] with the solid angles of the supersampled grid precomputed.
+    /// into k² sub-texels with their own directions and exact solid angles (`omega`, one face of
+    /// the supersampled grid's).
     fn reference_with(&self, axis: DVec3, lobe: &SplitSumLobe, k: usize, omega: &[f64]) -> [f64; 3] {
         let base = self.chain.base();
         let n = base.size();
@@ -244,9 +242,10 @@ impl AngularPrefilter {
         .unwrap_or([0.0; 3])
     }
 
-    /// Measures a prefiltered level against [`Self::reference_texel`] on `samples` texels spread
-    /// evenly over the six faces (a fixed stride: the same texels every run), pooling texels whose
-    /// reference magnitude is above 1 % of the sampled mean.
+    /// Measures a prefiltered level against the exact reference (`supersample`² sub-texels per
+    /// base texel, whole support) on `samples` texels spread evenly over the six faces (a fixed
+    /// stride: the same texels every run), pooling texels whose reference magnitude is above 1 %
+    /// of the sampled mean.
     pub fn measure(
         &self,
         level: &CubeMap,
@@ -497,7 +496,9 @@ mod tests {
             AngularError::NoLevel(32)
         );
         let bad = AngularOptions { epsilon: 1.0, texel_ratio: 0.1 };
-        assert!(matches!(pre.prefilter(8, 0.5, &bad, &NoProgress), Err(AngularError::Options(_))));
+        assert_eq!(pre.prefilter(8, 0.5, &bad, &NoProgress).unwrap_err(), AngularError::Epsilon(1.0));
+        let bad = AngularOptions { epsilon: 1e-4, texel_ratio: 0.0 };
+        assert_eq!(pre.prefilter(8, 0.5, &bad, &NoProgress).unwrap_err(), AngularError::TexelRatio(0.0));
         assert!(matches!(
             pre.prefilter(8, 1.5, &AngularOptions::default(), &NoProgress),
             Err(AngularError::Roughness(_))

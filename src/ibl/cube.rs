@@ -33,6 +33,7 @@
 use crate::envmap::{EnvMap, Face, FACES};
 use crate::io::gpu_format::{Texture, TextureShape};
 use crate::io::RgbImage;
+use crate::limits::MAX_CUBE_FACE_SIZE;
 use crate::sphere::latlong::bilinear_taps;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -48,14 +49,11 @@ pub const WORLD_FROM_PRTKIT: DMat3 = DMat3::from_cols(
 pub const PRTKIT_FROM_WORLD: DMat3 =
     DMat3::from_cols(DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.0, -1.0, 0.0));
 
-/// Largest face size accepted (a 16384² RGB f32 cube is 19 GiB: far beyond what anyone bakes).
-pub const MAX_FACE_SIZE: usize = 8192;
-
 /// Errors about cube-map geometry.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum CubeError {
-    /// A face size of 0 or above [`MAX_FACE_SIZE`].
-    #[error("a cube face must be between 1 and {MAX_FACE_SIZE} texels wide, got {0}")]
+    /// A face size of 0 or above [`MAX_CUBE_FACE_SIZE`].
+    #[error("a cube face must be between 1 and {MAX_CUBE_FACE_SIZE} texels wide, got {0}")]
     Size(usize),
     /// A level cannot be halved (odd size).
     #[error("a {0}² cube face cannot be halved into a mip level")]
@@ -121,7 +119,7 @@ pub fn texel_solid_angles(size: usize) -> Result<Vec<f64>, CubeError> {
 }
 
 fn check_size(size: usize) -> Result<(), CubeError> {
-    if size == 0 || size > MAX_FACE_SIZE {
+    if size == 0 || size > MAX_CUBE_FACE_SIZE {
         return Err(CubeError::Size(size));
     }
     Ok(())
@@ -212,6 +210,12 @@ impl CubeMap {
     /// All texels as interleaved RGB, faces in order, rows top to bottom.
     pub fn texels(&self) -> &[f32] {
         &self.data
+    }
+
+    /// The cube as texture data for the KTX2 and DDS writers (`crate::io::texture`): one level,
+    /// three channels.
+    pub fn as_texture(&self) -> Texture<'_> {
+        Texture { shape: TextureShape::Cube { size: self.size }, channels: 3, levels: vec![&self.data] }
     }
 
     /// Mutable interleaved texels (same layout).
@@ -325,13 +329,8 @@ impl CubeMipChain {
         self.levels.is_empty()
     }
 
-    /// Consumes the chain into its levels.
-    pub fn into_levels(self) -> Vec<CubeMap> {
-        self.levels
-    }
-
-    /// The chain as texture data for the KTX2 and DDS writers (`crate::io::ktx2::encode`,
-    /// `crate::io::dds::encode`): a cube, three channels, largest level first.
+    /// The chain as texture data for the KTX2 and DDS writers (`crate::io::texture`): a cube,
+    /// three channels, largest level first.
     pub fn as_texture(&self) -> Texture<'_> {
         Texture {
             shape: TextureShape::Cube { size: self.base().size },

@@ -37,13 +37,11 @@
 //!   Conty 2017), which makes a white furnace with F0 = 1 reflect exactly 1.
 
 use crate::brdf::ggx::{lobe_rule, Ggx, GgxError};
+use crate::io::gpu_format::{Texture, TextureShape};
+use crate::limits::MAX_DFG_SIZE;
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
-
-/// Largest table side accepted: 1024² texels, each an integral over the hemisphere (8× the
-/// default's side, far past what a shader's bilinear lookup of these smooth functions resolves).
-pub const MAX_SIZE: usize = 1024;
 
 /// Default table side (Filament's and the glTF Sample Viewer's 128²).
 pub const DEFAULT_SIZE: usize = 128;
@@ -55,8 +53,8 @@ pub const DEFAULT_ORDER: usize = 16;
 /// Errors of the DFG integrals.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum DfgError {
-    /// A table side of 0 or above [`MAX_SIZE`].
-    #[error("the DFG table side must be between 1 and {MAX_SIZE}, got {0}")]
+    /// A table side of 0 or above [`MAX_DFG_SIZE`].
+    #[error("the DFG table side must be between 1 and {MAX_DFG_SIZE}, got {0}")]
     Size(usize),
     /// n·v outside (0, 1].
     #[error("n·v must be in (0, 1], got {0}")]
@@ -194,9 +192,7 @@ static SHIPPED: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/dat
 /// per θ_h piece (rows in parallel; every texel is computed independently, so the result does
 /// not depend on the thread count).
 pub fn integrate_table(size: usize, order: usize) -> Result<Vec<SplitSumTerms>, DfgError> {
-    if size == 0 || size > MAX_SIZE {
-        return Err(DfgError::Size(size));
-    }
+    check_size(size)?;
     Ok((0..size)
         .into_par_iter()
         .flat_map_iter(|row| {
@@ -204,6 +200,14 @@ pub fn integrate_table(size: usize, order: usize) -> Result<Vec<SplitSumTerms>, 
             (0..size).map(move |col| integrate(DfgTable::texel_coordinate(size, col), ggx, order))
         })
         .collect())
+}
+
+/// Refuses a table side of 0 or above [`MAX_DFG_SIZE`].
+pub fn check_size(size: usize) -> Result<(), DfgError> {
+    if size == 0 || size > MAX_DFG_SIZE {
+        return Err(DfgError::Size(size));
+    }
+    Ok(())
 }
 
 /// The shipped table's terms, decoded.
@@ -258,9 +262,14 @@ impl DfgTable {
         &self.values
     }
 
-    /// The texels as interleaved channels (x0, y0, x1, y1, …), the layout texture writers take.
-    pub fn interleaved(&self) -> Vec<f32> {
-        self.values.iter().flatten().copied().collect()
+    /// The table as texture data for the KTX2 and DDS writers (`crate::io::texture`): one
+    /// N × N level, two interleaved channels (x0, y0, x1, y1, …), row 0 first.
+    pub fn as_texture(&self) -> Texture<'_> {
+        Texture {
+            shape: TextureShape::Texture2d { width: self.size, height: self.size },
+            channels: 2,
+            levels: vec![self.values.as_flattened()],
+        }
     }
 }
 
@@ -414,11 +423,11 @@ mod tests {
     fn layout_and_errors() {
         let t = DfgTable::new(4, DfgVariant::ScaleBias).unwrap();
         assert_eq!(t.values().len(), 16);
-        assert_eq!(t.interleaved().len(), 32);
+        assert_eq!(t.as_texture().levels[0].len(), 32);
         let direct = split_sum_terms(DfgTable::texel_coordinate(4, 1), DfgTable::texel_coordinate(4, 2)).unwrap();
         assert_eq!(t.get(2, 1), [direct.scale as f32, direct.bias as f32]);
         assert_eq!(DfgTable::new(0, DfgVariant::ScaleBias), Err(DfgError::Size(0)));
-        assert_eq!(DfgTable::new(MAX_SIZE + 1, DfgVariant::ScaleBias), Err(DfgError::Size(MAX_SIZE + 1)));
+        assert_eq!(DfgTable::new(MAX_DFG_SIZE + 1, DfgVariant::ScaleBias), Err(DfgError::Size(MAX_DFG_SIZE + 1)));
         assert_eq!(split_sum_terms(0.0, 0.5), Err(DfgError::NDotV(0.0)));
         assert!(split_sum_terms(f64::NAN, 0.5).is_err());
         assert!(matches!(split_sum_terms(0.5, 2.0), Err(DfgError::Roughness(_))));

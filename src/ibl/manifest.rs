@@ -9,6 +9,8 @@ use serde::{Deserialize, Serialize};
 pub const FORMAT: &str = "prtkit.ibl";
 /// Format name of the SH irradiance document.
 pub const SH_FORMAT: &str = "prtkit.ibl-sh";
+/// The manifest's file name in the bake's directory.
+pub const FILE: &str = "ibl.json";
 /// Schema version of both.
 pub const VERSION: u32 = 1;
 
@@ -208,9 +210,7 @@ pub struct Timings {
     pub irradiance: f64,
     /// The DFG table.
     pub dfg: f64,
-    /// Encoding the files.
-    pub encode: f64,
-    /// The bake without measurement.
+    /// The bake without measurement (the files are encoded by the caller, after it).
     pub bake: f64,
     /// Measuring the levels against the angular reference.
     pub measure: f64,

@@ -1,7 +1,6 @@
-//! Image-based lighting for glTF/PBR engines: the building blocks of the `ibl` stage.
+//! Image-based lighting for glTF/PBR engines: the building blocks of the `ibl` stage, on the GGX
+//! of [`crate::brdf::ggx`].
 //!
-//! - [`ggx`]: the GGX distribution, the height-correlated Smith visibility and the split-sum
-//!   prefilter lobe with its zonal SH coefficients (Karis 2013; Heitz 2014; Walter et al. 2007).
 //! - [`dfg`]: the split-sum scale/bias table (and Filament's multiple-scattering variant),
 //!   integrated by deterministic quadrature.
 //! - [`cube`]: cube maps in the Vulkan/KTX face order and orientation, texel geometry, mip chains

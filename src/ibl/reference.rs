@@ -1024,7 +1024,7 @@ impl ConeSum {
 #[derive(Debug, thiserror::Error)]
 pub enum ReferenceError {
     /// The environment is not lat-long.
-    #[error("the angular reference integrates lat-long environments; this one is {0} (resample it with `prtkit convert --to latlong`)")]
+    #[error("the angular reference integrates lat-long environments; this one is {0} (resample it to lat-long first)")]
     NotLatLong(&'static str),
 }
 

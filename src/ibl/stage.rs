@@ -1,7 +1,8 @@
-//! The `ibl` stage as one library call: an environment map in, the files a glTF/PBR engine loads
-//! out — the GGX-prefiltered specular cube with its mip chain, the irradiance cube, order-2 SH
+//! The `ibl` stage as one library call: an environment map in, what a glTF/PBR engine loads out
+//! — the GGX-prefiltered specular cube with its mip chain, the irradiance cube, order-2 SH
 //! irradiance with shader snippets, the split-sum DFG table and the `prtkit.ibl` manifest
-//! (`docs/ibl.md`).
+//! (`docs/ibl.md`) — as values; the caller encodes the files ([`crate::io::texture`] for the
+//! textures, as `cli/outputs.rs` does).
 //!
 //! **Levels.** Level k of an L-level chain has face size `size >> k` and perceptual roughness
 //! r_k = k/(L − 1) (`linear`), or Filament's r_k = 1 − √(1 − k/(L − 1)), the inverse of its
@@ -21,17 +22,19 @@
 //! texels; the manifest records the errors.
 
 use super::angular::{AngularError, AngularOptions, AngularPrefilter};
-use super::cube::{CubeError, CubeMap, CubeMipChain, MAX_FACE_SIZE, WORLD_FROM_PRTKIT};
-use super::dfg::{DfgError, DfgTable, DfgVariant};
+use super::cube::{CubeError, CubeMap, CubeMipChain, WORLD_FROM_PRTKIT};
+use super::dfg::{self, DfgError, DfgTable, DfgVariant};
 use super::frequency::{FilteredSphere, LatLongSource};
-use super::manifest::{self, Costs, IblBody, Level, ShBody};
-use super::reference::Reference;
+use super::manifest::{self, Costs, IblBody, Level, ShBody, Timings};
+use super::reference::{Reference, ReferenceError};
 use super::sh_irradiance::IrradianceSh;
 use crate::brdf::ggx::{GgxError, SplitSumLobe};
 use crate::envmap::zonal::ZonalError;
 use crate::envmap::{self, EnvMap, EnvMapError, Layout, Orientation};
-use crate::io::gpu_format::{TexelFormat, Texture, TextureError, TextureShape};
-use crate::io::{dds, ktx2, Document, Provenance};
+use crate::io::gpu_format::{TexelFormat, Texture};
+use crate::io::texture::Container;
+use crate::io::{Document, Provenance};
+use crate::limits::{LimitError, MAX_IBL_FACE_SIZE};
 use crate::progress::Progress;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -73,32 +76,6 @@ impl RoughnessMap {
             RoughnessMap::Filament => {
                 "r_k = 1 - sqrt(1 - k / (levels - 1)), the inverse of Filament's lod = r (2 - r) (lodToPerceptualRoughness)"
             }
-        }
-    }
-}
-
-/// File container.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Container {
-    /// KTX 2.0.
-    Ktx2,
-    /// DDS with the DX10 header.
-    Dds,
-}
-
-impl Container {
-    /// File extension and name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Container::Ktx2 => "ktx2",
-            Container::Dds => "dds",
-        }
-    }
-
-    fn encode(self, texture: &Texture, format: TexelFormat) -> Result<Vec<u8>, TextureError> {
-        match self {
-            Container::Ktx2 => ktx2::encode(texture, format),
-            Container::Dds => dds::encode(texture, format),
         }
     }
 }
@@ -206,31 +183,52 @@ impl Default for Config {
     }
 }
 
-/// Largest face size `ibl` bakes (a 4096² RGBA16F chain is 512 MiB in memory as f32).
-pub const MAX_SIZE: usize = 4096;
+/// Which face size of the bake a value is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceSize {
+    /// The first (largest) specular level's, [`Config::size`].
+    First,
+    /// The last (smallest) specular level's, [`Config::min_size`].
+    Last,
+    /// The irradiance cube's, [`Config::irradiance_size`].
+    Irradiance,
+}
+
+impl std::fmt::Display for FaceSize {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            FaceSize::First => "the first specular level",
+            FaceSize::Last => "the last specular level",
+            FaceSize::Irradiance => "the irradiance cube",
+        })
+    }
+}
 
 /// Errors of the stage.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// A face size that is not a power of two in range.
-    #[error("{what} {size}: a face size must be a power of two between 1 and {MAX_SIZE}")]
+    /// A face size that is not a power of two in 1..=[`MAX_IBL_FACE_SIZE`].
+    #[error("the face size {size} of {which} is not a power of two between 1 and {MAX_IBL_FACE_SIZE}")]
     Size {
-        /// Which option.
-        what: &'static str,
+        /// Whose face size.
+        which: FaceSize,
         /// The value.
         size: usize,
     },
-    /// --min-size above --size.
-    #[error("--min-size {min} is larger than --size {size}")]
+    /// The last specular level larger than the first.
+    #[error("the last specular level's face size {min} is larger than the first's, {size}")]
     MinSize {
-        /// Smallest.
+        /// The last level's face size.
         min: usize,
-        /// Largest.
+        /// The first level's face size.
         size: usize,
     },
-    /// A bad number.
-    #[error("{0}")]
-    Option(String),
+    /// A rotation about the up axis that is not a finite angle.
+    #[error("the rotation {0} degrees is not a finite angle")]
+    Rotation(f64),
+    /// A radiance ceiling that is not positive (or NaN).
+    #[error("the radiance ceiling {0} is not positive")]
+    Clamp(f64),
     /// The cubes need an RGB format.
     #[error("{0} is a two-channel format; the cubes need rgba16f, rgba32f, b10g11r11 or e5b9g9r9")]
     Format(&'static str),
@@ -248,25 +246,24 @@ pub enum Error {
     Angular(#[from] AngularError),
     /// The bake would need more memory than the budget allows.
     #[error(transparent)]
-    Memory(#[from] crate::limits::LimitError),
+    Memory(#[from] LimitError),
     /// The reference.
     #[error("angular reference: {0}")]
-    Reference(#[from] super::reference::ReferenceError),
+    Reference(#[from] ReferenceError),
     /// GGX.
     #[error(transparent)]
     Ggx(#[from] GgxError),
-    /// DFG.
+    /// DFG, its table side among them.
     #[error(transparent)]
     Dfg(#[from] DfgError),
-    /// Encoding.
-    #[error(transparent)]
-    Texture(#[from] TextureError),
 }
 
-/// What `ibl` produces.
+/// What `ibl` produces: the values of every file of DIR (`docs/ibl.md`), which the caller
+/// encodes with [`crate::io::texture`] and [`Document::to_json`] — [`Output::textures`] and
+/// [`Output::shaders`] name each as the manifest does.
 #[derive(Clone, Debug)]
 pub struct Output {
-    /// The manifest.
+    /// The manifest, `ibl.json`.
     pub document: Document<IblBody>,
     /// The SH document.
     pub sh_document: Document<ShBody>,
@@ -278,13 +275,37 @@ pub struct Output {
     pub irradiance: CubeMap,
     /// The DFG table.
     pub dfg: DfgTable,
-    /// The files to write in DIR: (name, bytes), the manifest last.
-    pub files: Vec<(String, Vec<u8>)>,
+    /// The container of the three texture files.
+    pub container: Container,
+    /// The texel format of the cubes.
+    pub format: TexelFormat,
+    /// The texel format of the DFG table: RG16F, or RG32F beside RGBA32F cubes.
+    pub dfg_format: TexelFormat,
 }
 
-fn check_size(what: &'static str, size: usize) -> Result<(), Error> {
-    if size == 0 || !size.is_power_of_two() || size > MAX_SIZE.min(MAX_FACE_SIZE) {
-        return Err(Error::Size { what, size });
+impl Output {
+    /// The texture files — the specular chain, the irradiance cube, the DFG table — each as
+    /// (its name in DIR, its texels, the format to pack them in).
+    pub fn textures(&self) -> [(&str, Texture<'_>, TexelFormat); 3] {
+        let body = &self.document.body;
+        [
+            (&body.specular.file, self.specular.as_texture(), self.format),
+            (&body.irradiance.file, self.irradiance.as_texture(), self.format),
+            (&body.dfg.file, self.dfg.as_texture(), self.dfg_format),
+        ]
+    }
+
+    /// The SH shader snippets — GLSL, HLSL, WGSL — each as (its name in DIR, its text), naming
+    /// the frame as the documents' conventions do.
+    pub fn shaders(&self) -> [(&str, String); 3] {
+        let (names, frame) = (&self.document.body.sh.shaders, &self.document.conventions.frame);
+        [(&names[0], self.sh.glsl(frame)), (&names[1], self.sh.hlsl(frame)), (&names[2], self.sh.wgsl(frame))]
+    }
+}
+
+fn check_size(which: FaceSize, size: usize) -> Result<(), Error> {
+    if size == 0 || !size.is_power_of_two() || size > MAX_IBL_FACE_SIZE {
+        return Err(Error::Size { which, size });
     }
     Ok(())
 }
@@ -292,27 +313,24 @@ fn check_size(what: &'static str, size: usize) -> Result<(), Error> {
 impl Config {
     /// Checks sizes and numbers.
     pub fn check(&self) -> Result<(), Error> {
-        check_size("--size", self.size)?;
-        check_size("--min-size", self.min_size)?;
-        check_size("--irradiance-size", self.irradiance_size)?;
+        check_size(FaceSize::First, self.size)?;
+        check_size(FaceSize::Last, self.min_size)?;
+        check_size(FaceSize::Irradiance, self.irradiance_size)?;
         if self.min_size > self.size {
             return Err(Error::MinSize { min: self.min_size, size: self.size });
         }
         if !self.rotate_degrees.is_finite() {
-            return Err(Error::Option(format!("--rotate {} must be a finite angle", self.rotate_degrees)));
+            return Err(Error::Rotation(self.rotate_degrees));
         }
         if let Some(c) = self.clamp {
             if c.is_nan() || c <= 0.0 {
-                return Err(Error::Option(format!("--clamp {c} must be positive")));
+                return Err(Error::Clamp(c));
             }
         }
         if matches!(self.format, TexelFormat::Rg16Float | TexelFormat::Rg32Float) {
             return Err(Error::Format(self.format.name()));
         }
-        if self.dfg_size == 0 || self.dfg_size > super::dfg::MAX_SIZE {
-            return Err(Error::Option(format!("DFG size {} must be in 1..={}", self.dfg_size, super::dfg::MAX_SIZE)));
-        }
-        Ok(())
+        Ok(dfg::check_size(self.dfg_size)?)
     }
 
     /// Number of specular levels.
@@ -320,9 +338,19 @@ impl Config {
         (self.size / self.min_size).trailing_zeros() as usize + 1
     }
 
+    /// The texel format of the DFG table: two channels, single floats beside RGBA32F cubes.
+    pub fn dfg_format(&self) -> TexelFormat {
+        if self.format == TexelFormat::Rgba32Float {
+            TexelFormat::Rg32Float
+        } else {
+            TexelFormat::Rg16Float
+        }
+    }
+
     /// The memory a bake of an input of `input_texels` holds at its peak, planned before any of
     /// it is allocated: the working lat-long map and its filter source (RGB f32 each), every
-    /// specular level and the irradiance cube (RGB f32), and the encoded files (`format`).
+    /// specular level and the irradiance cube (RGB f32), and their files encoded (`format`)
+    /// while the values are still held.
     pub fn planned_bytes(&self, input_texels: u64) -> u128 {
         let cube_texels: u128 = (0..self.levels()).map(|k| 6 * ((self.size >> k) as u128).pow(2)).sum::<u128>()
             + 6 * (self.irradiance_size as u128).pow(2);
@@ -480,22 +508,195 @@ fn bake_level(
         }
     };
     let level = Level {
-        level: k,
+        rule_subsamples: rule,
+        estimated_cost: Some(costs),
+        seconds: start.elapsed().as_secs_f64(),
+        ..unmeasured(k, size, r, method, source)
+    };
+    Ok(Baked { cube, level })
+}
+
+/// A level's manifest entry before it is measured.
+fn unmeasured(level: usize, size: usize, roughness: f64, method: Method, source: String) -> Level {
+    Level {
+        level,
         size,
-        roughness: r,
+        roughness,
         method: method.name().into(),
         order: None,
         source,
-        rule_subsamples: rule,
-        estimated_cost: Some(costs),
+        rule_subsamples: None,
+        estimated_cost: None,
         max_rel_error: None,
         rms_rel_error: None,
         reference_bound: None,
         samples: 0,
         min_value: 0.0,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds: 0.0,
+    }
+}
+
+/// The cubes of a bake and the seconds each part took.
+struct Cubes {
+    /// The specular levels, largest first.
+    specular: Vec<Baked>,
+    irradiance: Baked,
+    specular_seconds: f64,
+    irradiance_seconds: f64,
+}
+
+/// The specular chain and the irradiance cube of the working lat-long map.
+fn bake_cubes(
+    config: &Config,
+    latlong: &EnvMap,
+    source: &LatLongSource,
+    progress: &dyn Progress,
+) -> Result<Cubes, Error> {
+    // Level 0: the environment resampled (2 × 2 lookups per texel, a box over its footprint).
+    let t_spec = Instant::now();
+    let base = CubeMap::resample(latlong, config.size, 2, config.world_from_prtkit().transpose())?;
+    let image = latlong.image();
+    let resampled = format!("{} {}x{}", latlong.layout().name(), image.width, image.height);
+    let level = Level {
+        seconds: t_spec.elapsed().as_secs_f64(),
+        ..unmeasured(0, config.size, 0.0, Method::Resample, resampled)
     };
-    Ok(Baked { cube, level })
+    let mut specular = vec![Baked { cube: base.clone(), level }];
+    let levels = config.levels();
+    for k in 1..levels {
+        let r = config.roughness_map.roughness(k, levels);
+        specular.push(bake_level(config, source, &base, (k, config.size >> k, r), progress)?);
+    }
+    let specular_seconds = t_spec.elapsed().as_secs_f64();
+    // Irradiance: the r = 1 lobe is the clamped cosine over π, so the level is E/π.
+    let t_irr = Instant::now();
+    let irradiance = bake_level(config, source, &base, (0, config.irradiance_size, 1.0), progress)?;
+    Ok(Cubes { specular, irradiance, specular_seconds, irradiance_seconds: t_irr.elapsed().as_secs_f64() })
+}
+
+/// Records every level's most negative texel and, with `samples` > 0, measures the levels with
+/// r > 0 against the angular integral of the input ([`Reference`]). Returns what they were
+/// measured against when it is not the texel-by-texel sum over the input.
+fn measure(config: &Config, latlong: &EnvMap, levels: Vec<&mut Baked>) -> Result<Option<String>, Error> {
+    let mut levels = levels;
+    for b in levels.iter_mut() {
+        b.level.min_value = b.cube.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64;
+    }
+    if config.samples == 0 {
+        return Ok(None);
+    }
+    let reference = Reference::new(latlong)?;
+    let env_from_cube = config.world_from_prtkit().transpose();
+    // The levels are measured side by side: each sets up its own lobe's texel rule.
+    let levels: Vec<&mut Baked> = levels.into_iter().filter(|b| b.level.roughness > 0.0).collect();
+    let measured = levels
+        .par_iter()
+        .map(|b| {
+            let lobe = SplitSumLobe::new(b.level.roughness)?;
+            Ok(reference.measure(&b.cube, &lobe, env_from_cube, config.samples))
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
+    for (b, m) in levels.into_iter().zip(measured) {
+        b.level.max_rel_error = Some(m.max_rel_error);
+        b.level.rms_rel_error = Some(m.rms_rel_error);
+        b.level.reference_bound = reference.is_bounded().then_some(m.reference_bound);
+        b.level.samples = m.samples;
+    }
+    Ok(reference.is_bounded().then(|| reference.describe()))
+}
+
+/// What a texel of the irradiance cube and the SH snippets' result are.
+const IRRADIANCE_SCALE: &str = "E(n)/pi: the radiance a white Lambertian surface reflects (multiply by the albedo)";
+
+/// What a level of the specular chain holds.
+const SPECULAR_LOBE: &str =
+    "split-sum GGX (Karis 2013): N = V = R, weights D(h) max(N.L, 0), normalized; perceptual roughness r, alpha = r^2";
+
+/// Where a value of the DFG table is and how a shader combines it, by variant.
+fn dfg_layout(variant: DfgVariant) -> &'static str {
+    match variant {
+        DfgVariant::ScaleBias => "texel (row j, column i) at n.v = (i+0.5)/N, r = (j+0.5)/N, row 0 smoothest; sample uv = (n.v, r), clamp, linear; (x, y) = (A, B): specular = prefiltered * (F0 * x + y)",
+        DfgVariant::MultiScatter => "texel (row j, column i) at n.v = (i+0.5)/N, r = (j+0.5)/N, row 0 smoothest; sample uv = (n.v, r), clamp, linear; (x, y) = (B, A + B), Filament's DFV_Multiscatter: specular = prefiltered * mix(x, y, F0) * (1 + F0 (1/y - 1))",
+    }
+}
+
+/// The manifest's body: every file of DIR, what it holds and how each level was made.
+fn manifest_body(
+    config: &Config,
+    env: &EnvMap,
+    cubes: (Vec<Level>, Level),
+    dfg: &DfgTable,
+    measured_against: Option<String>,
+    timings: Timings,
+) -> IblBody {
+    let ext = config.container.name();
+    let (levels, irradiance) = cubes;
+    IblBody {
+        source: config.source.clone(),
+        source_hash: Some(env.content_hash()),
+        measured_against,
+        frame: config.frame(env.orientation()),
+        specular: manifest::Specular {
+            file: format!("specular.{ext}"),
+            container: ext.into(),
+            format: config.format.name().into(),
+            roughness_map: config.roughness_map.name().into(),
+            roughness_formula: config.roughness_map.formula().into(),
+            lobe: SPECULAR_LOBE.into(),
+            levels,
+        },
+        irradiance: manifest::Irradiance {
+            file: format!("irradiance.{ext}"),
+            size: config.irradiance_size,
+            format: config.format.name().into(),
+            scale: IRRADIANCE_SCALE.into(),
+            level: irradiance,
+        },
+        sh: manifest::ShFiles {
+            file: "sh.json".into(),
+            shaders: vec!["sh.glsl".into(), "sh.hlsl".into(), "sh.wgsl".into()],
+            scale: IRRADIANCE_SCALE.into(),
+        },
+        dfg: manifest::Dfg {
+            file: format!("dfg.{ext}"),
+            size: dfg.size(),
+            variant: match config.dfg {
+                DfgVariant::ScaleBias => "scale-bias".into(),
+                DfgVariant::MultiScatter => "multiscatter".into(),
+            },
+            format: config.dfg_format().name().into(),
+            layout: dfg_layout(config.dfg).into(),
+        },
+        timings,
+    }
+}
+
+/// The `prtkit.ibl-sh` body.
+fn sh_body(config: &Config, input: Orientation, sh: &IrradianceSh) -> ShBody {
+    ShBody {
+        frame: config.frame(input),
+        basis: ["1", "y", "z", "x", "x*y", "y*z", "3*z*z - 1", "x*z", "x*x - y*y"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
+        scale: IRRADIANCE_SCALE.into(),
+        coefficients: sh.shader.to_vec(),
+        radiance: sh.radiance.rgb.clone(),
+    }
+}
+
+/// A document of the bake: its conventions name the frame the files are in (the output frame,
+/// not prtkit's) and how the input was turned on reading.
+fn document<T: serde::Serialize>(
+    format: &str,
+    provenance: Provenance,
+    body: T,
+    frame: &str,
+    input: Orientation,
+) -> Document<T> {
+    let mut document = Document::new(format, manifest::VERSION, provenance, body);
+    document.conventions.frame = frame.to_string();
+    document.with_input_orientation(input.describe())
 }
 
 /// Runs `ibl` on `env` (any layout, prtkit's frame).
@@ -504,10 +705,9 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     let input_texels = env.images().iter().map(|i| (i.width * i.height) as u64).sum();
     crate::limits::check_memory("the bake", config.planned_bytes(input_texels))?;
     let t0 = Instant::now();
-    let mut timings = manifest::Timings::default();
+    let mut timings = Timings::default();
     let latlong = working_latlong(config, env)?;
     let source = LatLongSource::new(latlong.image().clone());
-    let env_from_cube = config.world_from_prtkit().transpose();
     timings.prepare = t0.elapsed().as_secs_f64();
 
     // The DFG table depends on nothing else, the SH only on the input: they run beside the cubes.
@@ -522,189 +722,36 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
                 },
             )
         },
-        || -> Result<_, Error> {
-            // Level 0: the environment resampled (2 × 2 lookups per texel, a box over its footprint).
-            let t_spec = Instant::now();
-            let base = CubeMap::resample(&latlong, config.size, 2, env_from_cube)?;
-            let levels = config.levels();
-            let mut baked = vec![Baked {
-                cube: base.clone(),
-                level: Level {
-                    level: 0,
-                    size: config.size,
-                    roughness: 0.0,
-                    method: Method::Resample.name().into(),
-                    order: None,
-                    source: format!("{} {}x{}", latlong.layout().name(), latlong.image().width, latlong.image().height),
-                    rule_subsamples: None,
-                    estimated_cost: None,
-                    max_rel_error: None,
-                    rms_rel_error: None,
-                    reference_bound: None,
-                    samples: 0,
-                    min_value: base.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64,
-                    seconds: t_spec.elapsed().as_secs_f64(),
-                },
-            }];
-            for k in 1..levels {
-                let r = config.roughness_map.roughness(k, levels);
-                let size = config.size >> k;
-                baked.push(bake_level(config, &source, &base, (k, size, r), progress)?);
-            }
-            let specular_seconds = t_spec.elapsed().as_secs_f64();
-            // Irradiance: the r = 1 lobe is the clamped cosine over π, so the level is E/π.
-            let t_irr = Instant::now();
-            let mut irradiance = bake_level(config, &source, &base, (0, config.irradiance_size, 1.0), progress)?;
-            irradiance.level.roughness = 1.0;
-            Ok((baked, irradiance, specular_seconds, t_irr.elapsed().as_secs_f64()))
-        },
+        || bake_cubes(config, &latlong, &source, progress),
     );
     let (dfg, dfg_time) = dfg?;
-    let (mut baked, mut irradiance, specular_seconds, irradiance_seconds) = cubes?;
+    let Cubes { mut specular, mut irradiance, specular_seconds, irradiance_seconds } = cubes?;
     timings.dfg = dfg_time.as_secs_f64();
     timings.specular = specular_seconds;
     timings.irradiance = irradiance_seconds + sh_time.as_secs_f64();
+    timings.bake = t0.elapsed().as_secs_f64();
 
-    let baked_seconds = t0.elapsed().as_secs_f64();
-
-    // Measure.
     let t_measure = Instant::now();
-    let mut measured_against = None;
-    for b in baked.iter_mut().chain(std::iter::once(&mut irradiance)) {
-        b.level.min_value = b.cube.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64;
-    }
-    if config.samples > 0 {
-        let reference = Reference::new(&latlong)?;
-        // The levels are measured side by side: each sets up its own lobe's texel rule.
-        let levels: Vec<&mut Baked> =
-            baked.iter_mut().chain(std::iter::once(&mut irradiance)).filter(|b| b.level.roughness > 0.0).collect();
-        let measured = levels
-            .par_iter()
-            .map(|b| {
-                let lobe = SplitSumLobe::new(b.level.roughness)?;
-                Ok(reference.measure(&b.cube, &lobe, env_from_cube, config.samples))
-            })
-            .collect::<Result<Vec<_>, Error>>()?;
-        for (b, m) in levels.into_iter().zip(measured) {
-            b.level.max_rel_error = Some(m.max_rel_error);
-            b.level.rms_rel_error = Some(m.rms_rel_error);
-            b.level.reference_bound = reference.is_bounded().then_some(m.reference_bound);
-            b.level.samples = m.samples;
-        }
-        measured_against = reference.is_bounded().then(|| reference.describe());
-    }
+    let measured_against = measure(config, &latlong, specular.iter_mut().chain([&mut irradiance]).collect())?;
     timings.measure = t_measure.elapsed().as_secs_f64();
 
-    // Encode.
-    let t_enc = Instant::now();
-    let ext = config.container.name();
     // The levels move into the chain: the largest bakes hold one copy of their cubes.
-    let (cubes, levels): (Vec<CubeMap>, Vec<Level>) = baked.into_iter().map(|b| (b.cube, b.level)).unzip();
-    let chain = CubeMipChain::new(cubes)?;
-    let specular_bytes = config.container.encode(&chain.as_texture(), config.format)?;
-    let irradiance_bytes = config.container.encode(
-        &Texture {
-            shape: TextureShape::Cube { size: config.irradiance_size },
-            channels: 3,
-            levels: vec![irradiance.cube.texels()],
-        },
-        config.format,
-    )?;
-    let dfg_format =
-        if config.format == TexelFormat::Rgba32Float { TexelFormat::Rg32Float } else { TexelFormat::Rg16Float };
-    let rg = dfg.interleaved();
-    let dfg_bytes = config.container.encode(
-        &Texture {
-            shape: TextureShape::Texture2d { width: dfg.size(), height: dfg.size() },
-            channels: 2,
-            levels: vec![&rg],
-        },
-        dfg_format,
-    )?;
-    let frame_words = config.frame_words(env.orientation());
-    timings.encode = t_enc.elapsed().as_secs_f64();
-    timings.bake = baked_seconds + timings.encode;
-
+    let (cubes, levels): (Vec<CubeMap>, Vec<Level>) = specular.into_iter().map(|b| (b.cube, b.level)).unzip();
+    let body = manifest_body(config, env, (levels, irradiance.level), &dfg, measured_against, timings);
+    let (frame, input) = (config.frame_words(env.orientation()), env.orientation());
     let provenance = Provenance::new("ibl", &config.args, vec![config.source.clone()]);
-    let scale = "E(n)/pi: the radiance a white Lambertian surface reflects (multiply by the albedo)".to_string();
-    let body = IblBody {
-        source: config.source.clone(),
-        source_hash: Some(env.content_hash()),
-        measured_against,
-        frame: config.frame(env.orientation()),
-        specular: manifest::Specular {
-            file: format!("specular.{ext}"),
-            container: ext.into(),
-            format: config.format.name().into(),
-            roughness_map: config.roughness_map.name().into(),
-            roughness_formula: config.roughness_map.formula().into(),
-            lobe: "split-sum GGX (Karis 2013): N = V = R, weights D(h) max(N.L, 0), normalized; perceptual roughness r, alpha = r^2".into(),
-            levels,
-        },
-        irradiance: manifest::Irradiance {
-            file: format!("irradiance.{ext}"),
-            size: config.irradiance_size,
-            format: config.format.name().into(),
-            scale: scale.clone(),
-            level: irradiance.level.clone(),
-        },
-        sh: manifest::ShFiles {
-            file: "sh.json".into(),
-            shaders: vec!["sh.glsl".into(), "sh.hlsl".into(), "sh.wgsl".into()],
-            scale: scale.clone(),
-        },
-        dfg: manifest::Dfg {
-            file: format!("dfg.{ext}"),
-            size: dfg.size(),
-            variant: match config.dfg {
-                DfgVariant::ScaleBias => "scale-bias".into(),
-                DfgVariant::MultiScatter => "multiscatter".into(),
-            },
-            format: dfg_format.name().into(),
-            layout: match config.dfg {
-                DfgVariant::ScaleBias => "texel (row j, column i) at n.v = (i+0.5)/N, r = (j+0.5)/N, row 0 smoothest; sample uv = (n.v, r), clamp, linear; (x, y) = (A, B): specular = prefiltered * (F0 * x + y)".into(),
-                DfgVariant::MultiScatter => "texel (row j, column i) at n.v = (i+0.5)/N, r = (j+0.5)/N, row 0 smoothest; sample uv = (n.v, r), clamp, linear; (x, y) = (B, A + B), Filament's DFV_Multiscatter: specular = prefiltered * mix(x, y, F0) * (1 + F0 (1/y - 1))".into(),
-            },
-        },
-        timings,
-    };
-    // The conventions block names the frame the files are in: the output frame, not prtkit's.
-    fn in_frame<T: serde::Serialize>(mut document: Document<T>, frame: &str, input: Orientation) -> Document<T> {
-        document.conventions.frame = frame.to_string();
-        document.with_input_orientation(input.describe())
-    }
-    let document = Document::new(manifest::FORMAT, manifest::VERSION, provenance.clone(), body);
-    let document = in_frame(document, &frame_words, env.orientation());
-    let sh_document = in_frame(
-        Document::new(
-            manifest::SH_FORMAT,
-            manifest::VERSION,
-            provenance,
-            ShBody {
-                frame: config.frame(env.orientation()),
-                basis: ["1", "y", "z", "x", "x*y", "y*z", "3*z*z - 1", "x*z", "x*x - y*y"]
-                    .iter()
-                    .map(|s| s.to_string())
-                    .collect(),
-                scale,
-                coefficients: sh.shader.to_vec(),
-                radiance: sh.radiance.rgb.clone(),
-            },
-        ),
-        &frame_words,
-        env.orientation(),
-    );
-    let files = vec![
-        (format!("specular.{ext}"), specular_bytes),
-        (format!("irradiance.{ext}"), irradiance_bytes),
-        (format!("dfg.{ext}"), dfg_bytes),
-        ("sh.json".to_string(), sh_document.to_json().into_bytes()),
-        ("sh.glsl".to_string(), sh.glsl(&frame_words).into_bytes()),
-        ("sh.hlsl".to_string(), sh.hlsl(&frame_words).into_bytes()),
-        ("sh.wgsl".to_string(), sh.wgsl(&frame_words).into_bytes()),
-        ("ibl.json".to_string(), document.to_json().into_bytes()),
-    ];
-    Ok(Output { document, sh_document, sh, specular: chain, irradiance: irradiance.cube, dfg, files })
+    let sh_document = document(manifest::SH_FORMAT, provenance.clone(), sh_body(config, input, &sh), &frame, input);
+    Ok(Output {
+        document: document(manifest::FORMAT, provenance, body, &frame, input),
+        sh_document,
+        sh,
+        specular: CubeMipChain::new(cubes)?,
+        irradiance: irradiance.cube,
+        dfg,
+        container: config.container,
+        format: config.format,
+        dfg_format: config.dfg_format(),
+    })
 }
 
 #[cfg(test)]

@@ -24,6 +24,7 @@
 //!   through every filter that reads it.
 //! - RGB9E5 follows the extension's algorithm exactly, including its round-half-up of mantissas.
 
+use crate::limits::MAX_TEXTURE_SIDE;
 use half::f16;
 
 /// Errors of encoding texels.
@@ -434,8 +435,8 @@ impl Texture<'_> {
     pub fn check(&self) -> Result<(), TextureError> {
         let (w, h, faces) = self.shape.dimensions();
         let bad = |why: String| Err(TextureError::Invalid(why));
-        if w == 0 || h == 0 || w > 1 << 16 || h > 1 << 16 {
-            return bad(format!("level 0 is {w}×{h}; each side must be in 1..=65536"));
+        if w == 0 || h == 0 || w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {
+            return bad(format!("level 0 is {w}×{h}; each side must be in 1..={MAX_TEXTURE_SIDE}"));
         }
         let max_levels = usize::BITS - w.max(h).leading_zeros(); // ⌊log2 max⌋ + 1
         if self.levels.is_empty() || self.levels.len() > max_levels as usize {

@@ -1,5 +1,6 @@
 //! File formats: HDR images (OpenEXR, Radiance `.hdr`, PFM), tone-mapped PNG, meshes (OBJ, PLY, glTF),
-//! JSON documents, and atomic writes. Everything that touches a file format lives here, once.
+//! GPU textures (KTX2, DDS), JSON documents, and atomic writes. Everything that touches a file
+//! format lives here, once.
 
 pub mod atomic;
 pub mod dds;
@@ -17,6 +18,7 @@ pub mod ply;
 pub mod png;
 pub mod read;
 pub mod rgbe;
+pub mod texture;
 
 pub use self::image::{ImageFormat, RgbImage};
 pub use atomic::{write_atomic, Output, OutputSet};

@@ -2,8 +2,10 @@
 
 use crate::cli::options::{EnvArgs, Execution};
 use crate::ibl::dfg::DfgVariant;
-use crate::ibl::stage::{Container, RoughnessMap, Up};
+use crate::ibl::stage::{RoughnessMap, Up};
 use crate::io::gpu_format::TexelFormat;
+use crate::io::texture::Container;
+use crate::limits::MAX_IBL_MEASURED_TEXELS;
 use clap::{Parser, ValueEnum};
 use std::path::PathBuf;
 
@@ -28,6 +30,25 @@ impl CubeFormat {
             CubeFormat::Rgba32f => TexelFormat::Rgba32Float,
             CubeFormat::B10g11r11 => TexelFormat::B10G11R11Ufloat,
             CubeFormat::E5b9g9r9 => TexelFormat::E5B9G9R9Ufloat,
+        }
+    }
+}
+
+/// Texture file containers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ContainerArg {
+    /// KTX 2.0.
+    Ktx2,
+    /// DDS with the DX10 header.
+    Dds,
+}
+
+impl ContainerArg {
+    /// The library's container.
+    pub fn container(self) -> Container {
+        match self {
+            ContainerArg::Ktx2 => Container::Ktx2,
+            ContainerArg::Dds => Container::Dds,
         }
     }
 }
@@ -86,8 +107,8 @@ pub struct Args {
     pub format: CubeFormat,
 
     /// File container.
-    #[arg(long, value_enum, default_value_t = Container::Ktx2)]
-    pub container: Container,
+    #[arg(long, value_enum, default_value_t = ContainerArg::Ktx2)]
+    pub container: ContainerArg,
 
     /// Up axis of the output frame: y (glTF: prtkit's +Z becomes +Y) or z (prtkit's frame).
     #[arg(long, value_enum, default_value_t = Up::Y)]
@@ -111,7 +132,7 @@ pub struct Args {
 
     /// Texels per level measured against the angular integral for the manifest (0: skip; at most
     /// 4096: each is a cone sum over the input map).
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(0..=4096))]
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(0..=MAX_IBL_MEASURED_TEXELS as u64))]
     pub samples: u64,
 
     #[command(flatten)]
