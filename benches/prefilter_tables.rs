@@ -62,8 +62,14 @@ fn table4(env: &EnvMap, md: &mut String) {
         // §7.4: frequency ε = .01 with F_B = 1 + √(6s) (conservative); angular ε = .05.
         let f_b = (1.0 + (6.0 * s).sqrt()).ceil() as usize;
         let (freq_s, freq) = best_of(10, || {
-            let r = pipeline::frequency(&model, Lighting::Map(env), Orders::Fixed { f: f_b, p: 0 }, S, S, &NoProgress)
-                .expect("frequency");
+            let r = pipeline::frequency(
+                &model,
+                Lighting::Map(env),
+                Orders::Fixed { f: f_b, p: 0 },
+                Some((S, S)),
+                &NoProgress,
+            )
+            .expect("frequency");
             shrm::reflection_map(&r.shrm, DVec3::Z)
         });
         let (ang_s, ang) = best_of(10, || {
@@ -102,7 +108,8 @@ fn table5(env: &EnvMap, angular_views: usize, md: &mut String) {
         let orders = Orders::Epsilon { epsilon: 0.03, max_p: 6 };
         let (freq_s, (shrm_s, f_b, p_b, eps, maps)) = best_of(3, || {
             let t = Instant::now();
-            let r = pipeline::frequency(&model, Lighting::Map(env), orders, S, S, &NoProgress).expect("frequency");
+            let r =
+                pipeline::frequency(&model, Lighting::Map(env), orders, Some((S, S)), &NoProgress).expect("frequency");
             let global = shrm::to_global(&r.shrm);
             let shrm_s = t.elapsed().as_secs_f64();
             let maps = shrm::reflection_maps(&global, &views);
@@ -178,8 +185,14 @@ fn main() {
             // The absolute target: the whole SHRM for σ = 0.1 at F = 24, P = 3, S_B = 128.
             let model = Model::new(Brdf::parse("torrance-sparrow:sigma=0.1").expect("spec"), false).expect("model");
             let (secs, _) = best_of(3, || {
-                pipeline::frequency(&model, Lighting::Map(&env), Orders::Fixed { f: 24, p: 3 }, S, S, &NoProgress)
-                    .expect("frequency")
+                pipeline::frequency(
+                    &model,
+                    Lighting::Map(&env),
+                    Orders::Fixed { f: 24, p: 3 },
+                    Some((S, S)),
+                    &NoProgress,
+                )
+                .expect("frequency")
             });
             println!(
                 "{{\"target\": \"shrm sigma=0.1 F=24 P=3 S_B=128\", \"seconds\": {secs:.4}, \"limit_seconds\": 0.1}}"

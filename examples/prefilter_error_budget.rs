@@ -32,8 +32,8 @@ fn main() {
     let a001 =
         pipeline::angular_maps(&model, &env, &views, AngularSettings::paper(0.001), 128, 128, &NoProgress).unwrap();
     for (f, p) in [(23, 2), (23, 3), (40, 3), (40, 6)] {
-        let r =
-            pipeline::frequency(&model, Lighting::Map(&env), Orders::Fixed { f, p }, 128, 128, &NoProgress).unwrap();
+        let r = pipeline::frequency(&model, Lighting::Map(&env), Orders::Fixed { f, p }, Some((128, 128)), &NoProgress)
+            .unwrap();
         let g = shrm::to_global(&r.shrm);
         for (k, v) in views.iter().enumerate() {
             let m = shrm::reflection_map(&g, *v);

@@ -8,9 +8,10 @@ use glam::{DMat3, DVec3};
 use prtkit::brdf::Brdf;
 use prtkit::envmap::EnvMap;
 use prtkit::io::RgbImage;
-use prtkit::prefilter::angular::{self, ConeIntegrator, CutoffTable};
+use prtkit::prefilter::angular::{self, ConeIntegrator};
 use prtkit::prefilter::model::Model;
 use prtkit::prefilter::shrm;
+use prtkit::prefilter::truncation::{self, CutoffTable};
 use prtkit::progress::NoProgress;
 use prtkit::sh::convolve::convolve_zonal;
 use prtkit::sh::project::project;
@@ -32,7 +33,7 @@ fn phong_reflection_maps_match_the_angular_reference() {
         let light = project(&env, coeffs.f, &NoProgress).unwrap();
         let freq = synthesize_latlong(&convolve_zonal(&light, |l| coeffs.radial_kernel(l)[0]), 128, 64).unwrap();
         // The reference keeps 1 − 1e-4 of the lobe: far more accurate than the test needs.
-        let theta_star = angular::radial_cutoff(|x| model.lobe(x)[0], 1e-4);
+        let theta_star = truncation::radial_cutoff(|x| model.lobe(x)[0], 1e-4);
         let reference = angular::radial_map(&cone, |x| model.lobe(x)[0], theta_star, 128, 64, &NoProgress).unwrap();
         let err = rel_rms(&freq, &reference);
         eprintln!("phong s={s}: F_B={} rel RMS {err:.4}", coeffs.f);

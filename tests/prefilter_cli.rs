@@ -152,7 +152,7 @@ fn a_window_on_maps_integrated_in_angle_is_said_to_have_no_effect() {
     assert!(said.contains("--window hann has no effect"), "{said}");
     let d: Document<ShrmBody> = read(&doc);
     let bake = d.body.bake.expect("a bake report");
-    assert_eq!(bake.maps, prtkit::prefilter::hybrid::MapsFrom::Angle);
+    assert_eq!(bake.maps, prtkit::prefilter::ring_free::MapsFrom::Angle);
     assert_eq!(bake.window.kind, prtkit::sh::window::Window::None);
     let quiet = String::from_utf8(run("nonneg")).unwrap();
     assert!(!quiet.contains("no effect"), "the default window is not worth a note: {quiet}");

@@ -15,7 +15,8 @@ use prtkit::prefilter::model::Model;
 use prtkit::prefilter::orders::OrderRule;
 use prtkit::prefilter::pipeline::Lighting;
 use prtkit::prefilter::stage::{self, Config, MapRequest, Method};
-use prtkit::prefilter::verify::{MapVerification, Verifier, EPSILON};
+use prtkit::prefilter::tuning::ANGULAR_EPSILON as EPSILON;
+use prtkit::prefilter::verify::{MapVerification, Verifier};
 use prtkit::progress::NoProgress;
 use prtkit::sh::window::Window;
 

@@ -7,12 +7,13 @@ use super::options::Execution;
 use super::options::{check_json_output, read_sh_document, EnvArgs};
 use super::outputs::{check_output_dir, check_outputs, Holds, Outputs};
 use crate::io::Output;
-use crate::prefilter::hybrid::MapsFrom;
-use crate::prefilter::pipeline::Lighting;
+use crate::prefilter::model::ModelError;
+use crate::prefilter::pipeline::{Lighting, PrefilterError};
+use crate::prefilter::ring_free::MapsFrom;
 use crate::prefilter::stage::{self, Config, MapRequest};
-use crate::prefilter::verify::Verification;
+use crate::prefilter::verify::{Verification, VerifyError, MAX_TEXELS};
 use crate::sh::window::Window;
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Result};
 pub use args::*;
 use std::path::PathBuf;
 
@@ -95,7 +96,7 @@ impl Stage for Args {
             (None, Some(c)) => Lighting::Coefficients(c),
             (None, None) => bail!("give an environment map or --sh FILE"),
         };
-        let out = stage::run(&config, lighting, ctx.progress())?;
+        let out = stage::run(&config, lighting, ctx.progress()).map_err(worded)?;
         let in_angle = out.document.body.bake.as_ref().is_some_and(|b| b.maps == MapsFrom::Angle);
         if in_angle && self.window != Window::Nonneg && self.shrm.is_none() && self.kautz_mccool.is_none() {
             ctx.note(format_args!(
@@ -132,6 +133,35 @@ impl Stage for Args {
         outputs.commit()?;
         Ok(Outcome::Success)
     }
+}
+
+/// The library's errors that come from a flag, worded with the flag (the rest as they are).
+fn worded(error: stage::Error) -> anyhow::Error {
+    use stage::Error as E;
+    let message = match &error {
+        E::Epsilon(e) => format!("--epsilon must be in (0, 1), got {e}"),
+        E::IrradianceNeedsLambert => {
+            "an irradiance map needs --brdf lambert (it is Lambert's reflection map × π/albedo)".into()
+        }
+        E::AngularMapsOnly => "--method angular writes reflection maps only (and the irradiance map)".into(),
+        E::AngularNeedsMap => "--method angular needs the environment map, not SH coefficients".into(),
+        E::AngularTakesNoOrders => {
+            "--method angular takes no --order: it uses no spherical harmonics (ε is its truncation)".into()
+        }
+        E::VerifyNeedsMap => {
+            "--verify needs the environment map, not SH coefficients (the exact values integrate the map)".into()
+        }
+        E::Verify(VerifyError::Texels(n)) => format!("--verify {n}: must be in 1..={MAX_TEXELS}"),
+        E::Verify(VerifyError::ZeroReference(_)) => format!("--verify: {error}"),
+        E::Prefilter { error: PrefilterError::Model(ModelError::Unreachable { .. }), .. } => {
+            format!("{error}; use a larger --epsilon")
+        }
+        E::Prefilter { error: PrefilterError::LightingOrder { need, .. }, .. } => {
+            format!("{error}: re-run sh-project with --order {need} (or give the environment map)")
+        }
+        _ => return error.into(),
+    };
+    anyhow!(message)
 }
 
 /// One line on `--verify`: the map with the largest per-texel error, in the figures a person sees.

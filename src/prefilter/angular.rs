@@ -11,12 +11,12 @@
 //! the texel integrals by the n × n Gauss–Legendre rule of [`TexelRule`]. Nothing else is
 //! approximated: the result is exact for the piecewise-constant map up to the truncation (App. D)
 //! and the texel rule, whose n is chosen by measurement so that it misplaces at most ε/10 of the
-//! lobe's weight ([`reference_rule`], [`ConeIntegrator::rule_for_view`]). So a narrow lobe over
+//! lobe's weight ([`super::truncation::reference_rule`], [`ConeIntegrator::rule_for_view`]). So a narrow lobe over
 //! coarse texels (Phong s = 512 on a 256 × 128 map) is integrated over their extent instead of
 //! being sampled at their centres, which would be wrong by several per cent.
 //!
 //! **θ*.** The cone holds 1 − ε of ∫ ρ̂ dω_i (App. D: cos θ* = ε^{1/(s+1)} for Phong); for 3-D
-//! BRDFs it is tabulated against the view angle θ_o ([`CutoffTable`]).
+//! BRDFs it is tabulated against the view angle θ_o ([`CutoffTable`], `super::truncation`).
 //!
 //! **Two paths.** A radially symmetric lobe on an output grid as wide as the input is a zonal
 //! filter: each (output row, source row) pair is a circular convolution in φ, done by FFT
@@ -31,22 +31,23 @@
 //! order (source rows, columns, sub-samples), so the result is the same for any thread count.
 
 use super::model::Model;
+use super::truncation::CutoffTable;
+use super::tuning::TEXELS_PER_CONE;
 use crate::envmap::zonal::{self, choose_rule, Rows, RuleChoice, SubRow, TexelRule, ZonalError};
-use crate::envmap::{EnvMap, Layout};
+use crate::envmap::{self, EnvMap, Layout};
 use crate::io::RgbImage;
 use crate::progress::Progress;
-use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use crate::sphere::{self, LatLong};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
 /// Errors of the angular reference.
 #[derive(Debug, thiserror::Error)]
 pub enum AngularError {
     /// The environment is not lat-long.
-    #[error("the angular reference integrates lat-long environments; this one is {0} (resample it with `prtkit convert --to latlong`)")]
+    #[error("the angular reference integrates lat-long environments; this one is {0} (resample it to lat-long first)")]
     NotLatLong(&'static str),
     /// The zonal filter refused the request.
     #[error(transparent)]
@@ -141,19 +142,9 @@ impl ConeIntegrator {
         Self::tabulate(self.source.clone(), rule)
     }
 
-    /// The texel rule.
-    pub fn rule(&self) -> &TexelRule {
-        &self.rule
-    }
-
     /// The environment's lat-long grid.
     pub fn grid(&self) -> LatLong {
         self.source.grid
-    }
-
-    /// The environment's lat-long image.
-    pub fn image(&self) -> &RgbImage {
-        &self.source.image
     }
 
     /// The source rows whose texel centres can lie within θ* of a reflection vector at polar
@@ -362,7 +353,7 @@ impl ConeIntegrator {
 
 /// A pyramid of a smooth lat-long map for cone sums: each level halves the last (2 × 2 texels
 /// averaged with their solid angles, so every level keeps the map's integral), and a lobe is
-/// summed on the coarsest level whose texels are at most 1/[`ConePyramid::TEXELS_PER_CONE`] of
+/// summed on the coarsest level whose texels are at most 1/[`TEXELS_PER_CONE`] of
 /// its cone angle θ* ([`ConePyramid::level`]). Midpoint sums of a smooth lobe over box-filtered
 /// texels err by O((Δ/θ*)²), so on a smooth map (the remainder once bright sources are apart)
 /// wide lobes read a fraction of the full-resolution texels at no visible loss; the ring-free
@@ -372,9 +363,6 @@ pub struct ConePyramid {
 }
 
 impl ConePyramid {
-    /// Texels of the level summed per cone angle θ*.
-    pub const TEXELS_PER_CONE: f64 = 24.0;
-
     /// The pyramid of `env` (lat-long) down to rows of at least 8 texels. The levels are maps
     /// only: the view-frame passes read one level's texels, so no level pays for a
     /// [`ConeIntegrator`] it does not use (its tables are most of a pyramid's cost).
@@ -395,9 +383,9 @@ impl ConePyramid {
     }
 
     /// The level a cone of half-angle `theta_star` is summed on: the coarsest whose texels are
-    /// at most θ*/[`Self::TEXELS_PER_CONE`] (the finest when none is).
+    /// at most θ*/[`TEXELS_PER_CONE`] (the finest when none is).
     pub fn level(&self, theta_star: f64) -> &EnvMap {
-        let fits = |m: &&EnvMap| PI / m.image().height as f64 <= theta_star / Self::TEXELS_PER_CONE;
+        let fits = |m: &&EnvMap| PI / m.image().height as f64 <= theta_star / TEXELS_PER_CONE;
         self.levels.iter().rev().find(fits).unwrap_or(&self.levels[0])
     }
 
@@ -410,186 +398,23 @@ impl ConePyramid {
     }
 }
 
-/// A truncation of a lobe: the cone angle θ* and the share of the lobe's weight outside it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Truncation {
-    /// θ* in radians.
-    pub theta_star: f64,
-    /// ∫ outside the cone / ∫ everywhere (≤ ε).
-    pub left_out: f64,
-    /// The lobe's width √(∫u dω / max u) in radians: the side of a square of its effective
-    /// solid angle (√(2π/(s + 1)) for Phong), how many texels it spans.
-    pub width: f64,
+/// The angular passes integrate lat-long maps: other layouts are resampled at a resolution that
+/// keeps their texel count ([`latlong_grid`]).
+pub fn as_latlong(env: &EnvMap) -> Result<EnvMap, envmap::EnvMapError> {
+    if env.layout() == Layout::LatLong {
+        return Ok(env.clone());
+    }
+    let grid = latlong_grid(env);
+    envmap::resample(env, Layout::LatLong, grid.width, grid.height, 3)
 }
 
-/// θ* for a radially symmetric lobe u(cos γ) (grey or luminance): the smallest angle whose cone
-/// holds 1 − ε of ∫ u dω (App. D), with the share it leaves out.
-pub fn radial_truncation(u: impl Fn(f64) -> f64, epsilon: f64) -> Truncation {
-    // Cumulative ∫_0^γ u(cos γ') sin γ' dγ' outwards from the axis, by a 4-point Gauss rule on
-    // each of 512 equal panels in γ (node spacing ~π/2000, as fine near the axis as a 2000-node
-    // rule in cos γ, without solving for its nodes), then the first node where it reaches 1 − ε.
-    // The nodes (γ, cos γ, weight × sin γ) are the same for every lobe: computed once, they
-    // leave 2 048 evaluations of u per lobe.
-    const PANELS: usize = 512;
-    static NODES: OnceLock<Vec<(f64, f64, f64)>> = OnceLock::new();
-    let nodes = NODES.get_or_init(|| {
-        let rule = gauss_legendre(4);
-        let h = PI / PANELS as f64;
-        (0..PANELS)
-            .flat_map(|k| rule.iter().map(move |&(t, w)| (h * (k as f64 + 0.5 + 0.5 * t), 0.5 * h * w)))
-            .map(|(gamma, w)| (gamma, gamma.cos(), w * gamma.sin()))
-            .collect()
-    });
-    let values: Vec<f64> = nodes.iter().map(|&(_, cos, _)| u(cos)).collect();
-    let total: f64 = nodes.iter().zip(&values).map(|(n, v)| n.2 * v).sum();
-    if total <= 0.0 {
-        return Truncation { theta_star: PI, left_out: 0.0, width: 0.0 };
+/// The lat-long grid [`as_latlong`] puts `env` on.
+pub fn latlong_grid(env: &EnvMap) -> LatLong {
+    if env.layout() == Layout::LatLong {
+        return LatLong::new(env.image().width, env.image().height);
     }
-    let peak = values.iter().fold(u(1.0), |a, &b| a.max(b));
-    let width = (TAU * total / peak).sqrt();
-    let mut acc = 0.0;
-    for (&(gamma, _, w), v) in nodes.iter().zip(&values) {
-        acc += w * v;
-        if acc >= (1.0 - epsilon) * total {
-            return Truncation { theta_star: gamma, left_out: (1.0 - acc / total).max(0.0), width };
-        }
-    }
-    Truncation { theta_star: PI, left_out: 0.0, width }
-}
-
-/// θ* of [`radial_truncation`].
-pub fn radial_cutoff(u: impl Fn(f64) -> f64, epsilon: f64) -> f64 {
-    radial_truncation(u, epsilon).theta_star
-}
-
-/// The texel rule the reference uses for a radially symmetric lobe u on a W × H source and
-/// `out_height` output rows: [`zonal::rule_for_kernel`] with tolerance ε/10, so that the texel
-/// integrals misplace at most a tenth of what the truncation leaves out.
-pub fn reference_rule(
-    grid: LatLong,
-    u: &(impl Fn(f64) -> f64 + Sync),
-    theta_star: f64,
-    out_height: usize,
-    epsilon: f64,
-) -> RuleChoice {
-    zonal::rule_for_kernel(grid.width, grid.height, u, theta_star.clamp(1e-9, PI), out_height, epsilon / 10.0)
-}
-
-/// θ*(θ_o) for a 3-D ρ̂ in the reflection frame, tabulated on `bins` values of θ_o ∈ [0, π]: the
-/// cone around R that holds 1 − ε of ∫ ρ̂ dω_i for that view angle; beside it the lobe's width
-/// √(∫ ρ̂ dω_i / max ρ̂), the side of a square of the lobe's effective solid angle (2.5 s for a
-/// Gaussian of deviation s): how fine a grid must be to resolve the lobe, wherever its peak lies.
-pub struct CutoffTable {
-    theta_star: Vec<f64>,
-    width: Vec<f64>,
-    left_out: f64,
-}
-
-impl CutoffTable {
-    /// [`CutoffTable::new`] for `model`'s ρ̂ (luminance), its normal and frame prepared once per
-    /// bin ([`Model::prepare_view`] with R = +Z is the reflection frame itself), a half-angle
-    /// BRDF's read from its table ([`Model::half_angle_lobe`]: within 10⁻⁵ of the peak, far
-    /// below what moves a cone by one of the table's θ_i steps).
-    pub fn of_model(model: &Model, epsilon: f64, bins: usize) -> Self {
-        let half_angle = model.half_angle_lobe();
-        let lobe = |wo: DVec3| {
-            let view = model.prepare_view(DVec3::Z, wo);
-            move |wi: DVec3| {
-                view.as_ref().map_or(0.0, |v| match half_angle {
-                    Some(lobe) => lobe.rho_hat(v, wi),
-                    None => {
-                        let r = model.rho_hat_prepared(v, wi);
-                        (r[0] + r[1] + r[2]) / 3.0
-                    }
-                })
-            }
-        };
-        Self::new(lobe, epsilon, bins)
-    }
-
-    /// Tabulates θ* and the width for ρ̂(ω_i, ω_o) (reflection frame, luminance), given as
-    /// `rho_hat(ω_o)(ω_i)`, which must be even in φ_i (ω_o lies at φ = 0: the mirror y → −y
-    /// leaves an isotropic ρ̂ unchanged), so only φ_i ∈ [0, π] is sampled.
-    pub fn new<L: Fn(DVec3) -> f64>(rho_hat: impl Fn(DVec3) -> L + Sync, epsilon: f64, bins: usize) -> Self {
-        let n_theta = 512;
-        let n_phi = 24;
-        // The sample directions, shared by every bin.
-        let directions: Vec<DVec3> = (0..n_theta)
-            .flat_map(|i| {
-                let theta_i = PI * (i as f64 + 0.5) / n_theta as f64;
-                (0..n_phi).map(move |k| sphere::direction(theta_i, PI * (k as f64 + 0.5) / n_phi as f64))
-            })
-            .collect();
-        let per_bin: Vec<(f64, f64, f64)> = (0..bins)
-            .into_par_iter()
-            .map(|b| {
-                let theta_o = PI * b as f64 / (bins - 1).max(1) as f64;
-                let wo = sphere::direction(theta_o.min(PI - 1e-6), 0.0);
-                let rho_hat = rho_hat(wo);
-                // Mass per θ_i band (midpoint rule in θ_i, uniform φ_i), and the largest sample.
-                let mut peak = 0.0f64;
-                let mass: Vec<f64> = directions
-                    .chunks(n_phi)
-                    .enumerate()
-                    .map(|(i, row)| {
-                        let theta_i = PI * (i as f64 + 0.5) / n_theta as f64;
-                        let s: f64 = row.iter().map(|&wi| rho_hat(wi)).inspect(|&v| peak = peak.max(v)).sum();
-                        s * theta_i.sin()
-                    })
-                    .collect();
-                let total: f64 = mass.iter().sum();
-                if total <= 0.0 {
-                    return (0.0, 0.0, f64::INFINITY);
-                }
-                // ∫ ρ̂ dω_i over the sphere: the half sphere's midpoint sums, twice.
-                let integral = 2.0 * total * (PI / n_theta as f64) * (PI / n_phi as f64);
-                let width = (integral / peak).sqrt();
-                let mut acc = 0.0;
-                for (i, m) in mass.iter().enumerate() {
-                    acc += m;
-                    if acc >= (1.0 - epsilon) * total {
-                        return ((PI * (i + 1) as f64 / n_theta as f64).min(PI), (1.0 - acc / total).max(0.0), width);
-                    }
-                }
-                (PI, 0.0, width)
-            })
-            .collect();
-        CutoffTable {
-            theta_star: per_bin.iter().map(|b| b.0).collect(),
-            width: per_bin.iter().map(|b| b.2).collect(),
-            left_out: per_bin.iter().map(|b| b.1).fold(0.0, f64::max),
-        }
-    }
-
-    /// θ* for view angle θ_o: the larger of the two neighbouring bins (conservative).
-    pub fn at(&self, theta_o: f64) -> f64 {
-        let (i0, i1) = self.bins(theta_o);
-        self.theta_star[i0].max(self.theta_star[i1])
-    }
-
-    /// The lobe's width for view angle θ_o: the smaller of the two neighbouring bins
-    /// (conservative: a grid chosen by it is fine enough for both).
-    pub fn width_at(&self, theta_o: f64) -> f64 {
-        let (i0, i1) = self.bins(theta_o);
-        self.width[i0].min(self.width[i1])
-    }
-
-    /// The two bins on either side of view angle θ_o (the same bin on a bin).
-    fn bins(&self, theta_o: f64) -> (usize, usize) {
-        let n = self.theta_star.len();
-        let t = (theta_o / PI).clamp(0.0, 1.0) * (n - 1) as f64;
-        (t.floor() as usize, (t.ceil() as usize).min(n - 1))
-    }
-
-    /// The widest cone of the table.
-    pub fn max(&self) -> f64 {
-        self.theta_star.iter().cloned().fold(0.0, f64::max)
-    }
-
-    /// The largest share of ∫ ρ̂ dω_i any bin's cone leaves out (≤ ε).
-    pub fn left_out(&self) -> f64 {
-        self.left_out
-    }
+    let s = env.max_order().max(16);
+    LatLong::new(2 * s, s)
 }
 
 /// Angular reflection map of a radially symmetric lobe u(R·ω): B(R) = Σ_{cone} L_t ∫_t u(R·ω) dω,
@@ -688,6 +513,7 @@ mod tests {
     use super::*;
     use crate::brdf::Brdf;
     use crate::prefilter::model::Model;
+    use crate::prefilter::truncation::radial_cutoff;
     use crate::progress::NoProgress;
 
     #[test]
@@ -733,26 +559,9 @@ mod tests {
         }
         // The wide lobe reads a coarser level than the full map.
         let chosen = |theta_star: f64| {
-            pyramid
-                .levels
-                .iter()
-                .rposition(|m| PI / m.image().height as f64 <= theta_star / ConePyramid::TEXELS_PER_CONE)
+            pyramid.levels.iter().rposition(|m| PI / m.image().height as f64 <= theta_star / TEXELS_PER_CONE)
         };
         assert_eq!((chosen(1.5), chosen(3.0), chosen(0.1)), (Some(1), Some(2), None));
-    }
-
-    #[test]
-    fn phong_cutoff_matches_appendix_d_and_its_width_is_the_lobes() {
-        for s in [8.0f64, 64.0, 512.0] {
-            let u = |x: f64| if x > 0.0 { x.powf(s) } else { 0.0 };
-            let got = radial_truncation(u, 0.05);
-            let want = 0.05f64.powf(1.0 / (s + 1.0)).acos();
-            assert!((got.theta_star - want).abs() < 0.01 * want + 2e-3, "s={s}: {got:?} vs {want}");
-            assert!(got.left_out <= 0.05 && got.left_out > 0.04, "{got:?}");
-            // ∫ x^s dω = 2π/(s + 1) over the hemisphere, and the peak is 1.
-            let width = (TAU / (s + 1.0)).sqrt();
-            assert!((got.width - width).abs() < 1e-9 * width, "s={s}: width {} vs {width}", got.width);
-        }
     }
 
     #[test]
@@ -828,28 +637,13 @@ mod tests {
         // forced by asking for the same width through the cone path) agree to rounding.
         let env = ConeIntegrator::new(&sky(32, 16)).unwrap().with_rule(TexelRule::new(2).unwrap());
         let u = |x: f64| if x > 0.0 { 17.0 / TAU * x.powi(16) } else { 0.0 };
-        let zonal = zonal::zonal_filter(&env.source.image, u, 0.8, env.rule(), 16, Rows::All, &NoProgress).unwrap();
+        let zonal = zonal::zonal_filter(&env.source.image, u, 0.8, &env.rule, 16, Rows::All, &NoProgress).unwrap();
         let grid = LatLong::new(32, 16);
         for y in 0..16 {
             for x in 0..32 {
                 let r = grid.texel_direction(x, y);
                 let cone = env.integrate(r, 0.8, |l| [u(r.dot(l)); 3]);
                 assert!(relative(zonal.pixels[y * 32 + x], cone) < 1e-9, "({x}, {y})");
-            }
-        }
-    }
-
-    #[test]
-    fn the_cutoff_table_width_is_the_side_of_the_lobes_effective_solid_angle() {
-        // A normalized Phong lobe about R, whatever the view: ∫ u dω = 1 and max u = (s + 1)/2π,
-        // so the width is √(2π/(s + 1)) exactly.
-        for s in [8, 64, 512] {
-            let u = move |_wo: DVec3| move |wi: DVec3| (s as f64 + 1.0) / TAU * wi.z.max(0.0).powi(s);
-            let table = CutoffTable::new(u, 1e-3, 5);
-            let exact = (TAU / (s as f64 + 1.0)).sqrt();
-            for theta_o in [0.0, 1.0, 2.5] {
-                let w = table.width_at(theta_o);
-                assert!((w / exact - 1.0).abs() < 5e-3, "s = {s}, θ_o = {theta_o}: {w} against {exact}");
             }
         }
     }

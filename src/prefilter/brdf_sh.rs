@@ -59,11 +59,6 @@ impl BrdfSh {
         self.coeffs[self.slot(l, p, q)]
     }
 
-    /// True if only p = 0 is present (a radially symmetric, 1-D BRDF).
-    pub fn is_radial(&self) -> bool {
-        self.p == 0
-    }
-
     /// Σ_{l ≤ F, p ≤ P, |q| ≤ min(l,p)} |ρ̂_{lp|q|}|² over RGB (each q > 0 counted for ±q).
     pub fn energy(&self, f: usize, p: usize) -> f64 {
         let mut e = 0.0;
@@ -142,7 +137,6 @@ pub fn from_isotropic(
     let cos_q: Vec<Vec<f64>> =
         (0..=p).map(|q| (0..=half).map(|k| phi_weight[k] * (q as f64 * k as f64 * dphi).cos()).collect()).collect();
     let table_o = LegendreTable::new(p);
-    let table_i = LegendreTable::new(f);
 
     // Steps 1 and 2 per θ_i node (parallel; each node's result is independent, so the order of
     // the final θ_i sum is fixed and the output deterministic).
@@ -183,10 +177,16 @@ pub fn from_isotropic(
         })
         .collect();
 
-    // Step 3: ρ̂_lpq = ∫ ρ̂_pq(θ_i) P̄_l^q(cos θ_i) sin θ_i dθ_i.
+    step_3(f, p, &nodes_i, &per_theta_i)
+}
+
+/// App. C step 3: ρ̂_lpq = ∫ ρ̂_pq(θ_i) P̄_l^q(cos θ_i) sin θ_i dθ_i from steps 1–2's ρ̂_pq and
+/// energy per θ_i node, summed in the nodes' order.
+fn step_3(f: usize, p: usize, nodes_i: &[(f64, f64)], per_theta_i: &[(Vec<[f64; 3]>, f64)]) -> BrdfSh {
+    let table_i = LegendreTable::new(f);
     let mut out = BrdfSh { f, p, coeffs: vec![[0.0; 3]; (f + 1) * (p + 1) * (p + 1)], total_energy: 0.0 };
     let mut plm = vec![0.0; count(f)];
-    for (&(theta_i, w_i), (rho_pq, energy)) in nodes_i.iter().zip(&per_theta_i) {
+    for (&(theta_i, w_i), (rho_pq, energy)) in nodes_i.iter().zip(per_theta_i) {
         // Only the orders q ≤ P are read: O(F·P) per node, not O(F²).
         table_i.eval_to_m(theta_i.cos(), theta_i.sin(), p, &mut plm);
         out.total_energy += energy;

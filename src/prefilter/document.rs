@@ -58,7 +58,7 @@ pub struct ShrmBody {
     /// How the ring-free bake was made: the order rule and its guarantee, the bright sources
     /// filtered in angle, the window (frequency method).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub bake: Option<super::hybrid::Report>,
+    pub bake: Option<super::ring_free::Report>,
     /// How the angular reference truncated its lobes: ε, the texel rule, the bright sources
     /// summed apart (angular method).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -3,12 +3,16 @@
 
 pub mod angular;
 pub mod brdf_sh;
+pub mod bright_pass;
 pub mod document;
-pub mod hybrid;
+pub mod in_angle;
 pub mod model;
 pub mod orders;
 pub mod pipeline;
+pub mod ring_free;
 pub mod shrm;
 pub mod stage;
+pub mod truncation;
+pub mod tuning;
 pub mod verify;
 pub mod view_axis;

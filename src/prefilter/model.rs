@@ -15,7 +15,8 @@
 //!   paper defines directly as ρ̂ (its microfacet eq. 11).
 
 use super::brdf_sh::{self, BrdfGrid, BrdfSh};
-use crate::brdf::ggx::SplitSumLobe;
+use super::tuning::{HALF_ANGLE_TOLERANCE, MAX_HALF_ANGLE_ENTRIES, RADIAL_NODES};
+use crate::brdf::ggx::{GgxError, SplitSumLobe};
 use crate::brdf::Brdf;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -25,13 +26,16 @@ use std::sync::OnceLock;
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
     /// Anisotropic BRDFs other than the tangent-reparameterized Kajiya–Kay are out of scope.
-    #[error("{0} is anisotropic: the prefilter handles isotropic BRDFs (R&H 2002 §3)")]
-    Anisotropic(String),
-    /// The BRDF's parameters admit no prefilter lobe.
-    #[error("{0}")]
-    Brdf(String),
+    #[error("{brdf} is anisotropic: the prefilter handles isotropic BRDFs (R&H 2002 §3)")]
+    Anisotropic {
+        /// The BRDF spec.
+        brdf: String,
+    },
+    /// GGX's roughness admits no split-sum lobe.
+    #[error(transparent)]
+    Ggx(#[from] GgxError),
     /// No order up to the search limit reaches the tolerance.
-    #[error("no orders up to F = {f}, P = {p} keep 1 - {epsilon} of the energy of {brdf} (they leave {achieved:.3e}); use a larger --epsilon")]
+    #[error("no orders up to F = {f}, P = {p} keep 1 - {epsilon} of the energy of {brdf} (they leave {achieved:.3e})")]
     Unreachable {
         /// The BRDF spec.
         brdf: String,
@@ -85,11 +89,11 @@ impl Model {
         // function, handled like an isotropic BRDF whose central direction is T (§3.1, §7.1).
         let tangent = matches!(brdf, Brdf::KajiyaKay(_));
         if !brdf.is_isotropic() && !tangent {
-            return Err(ModelError::Anisotropic(brdf.spec()));
+            return Err(ModelError::Anisotropic { brdf: brdf.spec() });
         }
         let split_sum = match &brdf {
             // The parser admits roughness in (0, 1] only, the lobe's domain.
-            Brdf::Ggx(m) => Some(SplitSumLobe::new(m.roughness()).map_err(|e| ModelError::Brdf(e.to_string()))?),
+            Brdf::Ggx(m) => Some(SplitSumLobe::new(m.roughness())?),
             _ => None,
         };
         Ok(Model { brdf, cosine, tangent, split_sum, half_angle: OnceLock::new() })
@@ -208,12 +212,6 @@ impl Model {
             .as_ref()
     }
 
-    /// Luminance-like grey value of ρ̂ (mean of RGB), for cut-offs.
-    pub fn rho_hat_grey(&self, wi: DVec3, wo: DVec3) -> f64 {
-        let v = self.rho_hat(wi, wo);
-        (v[0] + v[1] + v[2]) / 3.0
-    }
-
     /// ρ̂_lpq up to (F, P) (p = 0 only for radially symmetric BRDFs).
     pub fn coefficients(&self, f: usize, p: usize) -> BrdfSh {
         if let Some(lobe) = &self.split_sum {
@@ -289,25 +287,6 @@ impl Model {
         }
     }
 }
-
-/// Gauss–Legendre nodes per half of [−1, 1] for a radial lobe that is not a polynomial of low
-/// degree in cos γ: they integrate Phong exponents into the thousands.
-pub const RADIAL_NODES: usize = 1024;
-
-/// Largest interpolation error of a [`HalfAngleLobe`] at any interval's midpoint, as a share of
-/// the curve's peak. A texel's weight then errs by at most this much of the peak, so a cone
-/// sum by at most this share of the peak times the lighting over the cone: about 10⁻⁴ of the
-/// sum for a cone ten times the lobe's effective solid angle, 100 times below the ε = 10⁻³
-/// reference's own truncation.
-const HALF_ANGLE_TOLERANCE: f64 = 1e-5;
-
-/// The most entries a [`HalfAngleLobe`] may take (0.5 MB). Torrance-Sparrow takes 4 097 for
-/// every σ from 0.005 to 0.3 (2 049 at 0.5): its support in cos θ_h, where ρ is above 10⁻¹² of
-/// the peak, is about 14σ², and linear interpolation within the tolerance needs a spacing of
-/// about σ²√(2·10⁻⁵), both σ² while θ_h is small. Curves
-/// with a kink of unbounded curvature, such as Blinn-Phong's cos^s θ_h for s < 1 at θ_h = 90°,
-/// exceed it and are evaluated exactly.
-pub const MAX_HALF_ANGLE_ENTRIES: usize = 1 << 16;
 
 /// ρ̂ of a BRDF that is a function ρ(θ_h) of the half angle alone (Torrance-Sparrow eq. 14,
 /// Blinn-Phong), read from a table of ρ over cos θ_h: cos θ_h = (N·ω_i + N·ω_o)/|ω_i + ω_o|
@@ -455,21 +434,6 @@ pub fn residual_bound(
     } else {
         b_res / (captured_light_field_energy + b_res)
     }
-}
-
-/// Unit normalization check used by tests: ∫ ρ̂ dω_i for a view (should be ≤ 1 for an
-/// energy-conserving BRDF with the cosine folded in).
-pub fn albedo(model: &Model, wo: DVec3, n: usize) -> f64 {
-    let mut sum = 0.0;
-    for i in 0..n {
-        let theta = PI * (i as f64 + 0.5) / n as f64;
-        for k in 0..2 * n {
-            let phi = PI * (k as f64 + 0.5) / n as f64;
-            let wi = crate::sphere::direction(theta, phi);
-            sum += model.rho_hat_grey(wi, wo) * theta.sin();
-        }
-    }
-    sum * (PI / n as f64) * (PI / n as f64)
 }
 
 #[cfg(test)]

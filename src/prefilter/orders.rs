@@ -37,6 +37,7 @@
 
 use super::brdf_sh::BrdfSh;
 use super::model::Model;
+use super::tuning::{FIRST_PROJECTION_SHARE, VIEW_RESIDUAL_FACTOR};
 use crate::metrics::TEXEL_FLOOR;
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use crate::sh::legendre::LegendreTable;
@@ -171,10 +172,6 @@ fn tails(weights: &[[f64; 3]], light: &LightEnergy) -> (Vec<[f64; 3]>, Vec<[f64;
     (tail.collect(), known)
 }
 
-/// The share of ε the bound on the unprojected bands may take at the first projection
-/// ([`first_projection`]).
-const FIRST_PROJECTION_SHARE: f64 = 0.01;
-
 /// The band [`texel_orders`] is given the lighting to first: the smallest L ≤ `l_max` at which
 /// the bound on the bands above it, √(∫ L² dω) · √(Σ_{L < l ≤ l_max} w_l²) with the BRDF's
 /// factors w_l of (1) (every view angle, P = `max_p`), is under [`FIRST_PROJECTION_SHARE`] of
@@ -211,11 +208,6 @@ pub fn first_projection(
     }
     first
 }
-
-/// The view residual r(θ_o) a texel's view angle may have and still be taken from the SHRM,
-/// relative to ε: measured, the 99th-percentile per-texel error of such texels is about twice
-/// r (`docs/prefilter.md`).
-pub const VIEW_RESIDUAL_FACTOR: f64 = 1.0;
 
 /// The texel rule. `brdf` holds ρ̂_lpq to at least (l_max, max_p), l_max being `light`'s;
 /// `mean_reflected` is the mean radiance of the reflection map (per channel) the floor is a

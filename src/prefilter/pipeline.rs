@@ -1,9 +1,11 @@
 //! The whole prefilter, both ways: frequency space (App. C steps 1–3) and the angular reference.
 
-use super::angular::{self, ConeIntegrator, CutoffTable};
+use super::angular::{self, ConeIntegrator};
 use super::brdf_sh::BrdfSh;
 use super::model::{Model, ModelError};
 use super::shrm::{self, Shrm, ShrmError};
+use super::truncation::{self, CutoffTable};
+use super::tuning::REFERENCE_CUTOFF_BINS;
 use crate::envmap::bright::{luminance_bands, mean_luminance, split, BrightReport, BrightRule};
 use crate::envmap::zonal::RuleChoice;
 use crate::envmap::EnvMap;
@@ -62,9 +64,9 @@ pub enum PrefilterError {
     Angular(#[from] angular::AngularError),
     /// Resampling the map to lat-long for the angular passes failed.
     #[error("cannot resample the map to lat-long: {0}")]
-    Resample(String),
+    Resample(crate::envmap::EnvMapError),
     /// Given coefficients are of too low an order.
-    #[error("the SH coefficients have order {have}, but F_B = {need} is needed: re-run sh-project with --order {need} (or give the environment map)")]
+    #[error("the SH coefficients have order {have}, but F_B = {need} is needed")]
     LightingOrder {
         /// Order given.
         have: usize,
@@ -109,13 +111,21 @@ pub fn brdf_coefficients(model: &Model, orders: Orders) -> Result<BrdfSh, Prefil
     })
 }
 
-/// Frequency-space prefiltering into a local SHRM on a `width`×`height` lat-long grid.
+/// The grid size for F_B: 2S × S with S = clamp(10·F_B, 32, 512) (§5.2: S ≈ 10F), at least
+/// F_B + 1.
+pub fn default_size(f_b: usize) -> (usize, usize) {
+    let s = (10 * f_b).clamp(32, 512).max(f_b + 1);
+    (2 * s, s)
+}
+
+/// Frequency-space prefiltering into a local SHRM (R&H 2002 App. C): the BRDF's coefficients to
+/// the orders, the lighting's to F_B, and the SHRM on a `size` lat-long grid ([`default_size`]
+/// when `None`).
 pub fn frequency(
     model: &Model,
     lighting: Lighting<'_>,
     orders: Orders,
-    width: usize,
-    height: usize,
+    size: Option<(usize, usize)>,
     progress: &dyn Progress,
 ) -> Result<Frequency, PrefilterError> {
     let t = Instant::now();
@@ -136,6 +146,7 @@ pub fn frequency(
     let lighting_seconds = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
+    let (width, height) = size.unwrap_or_else(|| default_size(f_b));
     let shrm = shrm::from_lighting(model.centre().is_some(), &light, &brdf, None, width, height, progress)?;
     let shrm_seconds = t.elapsed().as_secs_f64();
     let epsilon_achieved = brdf.residual(brdf.f, brdf.p);
@@ -223,7 +234,7 @@ impl AngularSettings {
 
 /// The lobe's truncation cone: one angle for radially symmetric lobes, θ*(θ_o) otherwise.
 enum Cone {
-    Radial(angular::Truncation),
+    Radial(truncation::Truncation),
     View(CutoffTable),
 }
 
@@ -231,8 +242,8 @@ impl Cone {
     /// The cone of `model`'s lobe that leaves out ε of its weight.
     fn new(model: &Model, epsilon: f64) -> Self {
         match model.centre() {
-            Some(_) => Cone::Radial(angular::radial_truncation(|x| model.lobe(x)[0], epsilon)),
-            None => Cone::View(CutoffTable::of_model(model, epsilon, 65)),
+            Some(_) => Cone::Radial(truncation::radial_truncation(|x| model.lobe(x)[0], epsilon)),
+            None => Cone::View(CutoffTable::of_model(model, epsilon, REFERENCE_CUTOFF_BINS)),
         }
     }
 
@@ -249,7 +260,7 @@ impl Cone {
         let cone = Cone::new(model, epsilon);
         let choice = match &cone {
             Cone::Radial(t) => {
-                angular::reference_rule(env.grid(), &|x: f64| model.lobe(x)[0], t.theta_star, height, epsilon)
+                truncation::reference_rule(env.grid(), &|x: f64| model.lobe(x)[0], t.theta_star, height, epsilon)
             }
             Cone::View(cutoff) => env.rule_for_view(model, cutoff, epsilon / 10.0),
         };
@@ -431,7 +442,7 @@ impl<'m> AngularIntegral<'m> {
         if !sources.is_empty() {
             let mut excess = RgbImage::new(env.image().width, env.image().height);
             sources.add_to_latlong(&mut excess);
-            let excess = EnvMap::latlong(excess).map_err(|e| PrefilterError::Resample(e.to_string()))?;
+            let excess = EnvMap::latlong(excess).map_err(PrefilterError::Resample)?;
             let e_max = sources.texels.iter().map(|t| t.excess.iter().sum::<f64>() / 3.0).fold(0.0, f64::max);
             parts.push(Pass::new(model, &excess, e_max, epsilon_of(e_max), height, false)?.0);
         }

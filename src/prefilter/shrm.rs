@@ -20,6 +20,7 @@
 //! (D^l_{m0} = Λ_l Y_lm), exactly as the paper's App. A redefinition B_lmpq = L_lm ρ̂_lpq does.
 
 use super::brdf_sh::BrdfSh;
+use super::tuning::GLOBAL_FROM_VIEWS;
 use crate::io::RgbImage;
 use crate::progress::Progress;
 use crate::sh::convolve::{convolve_zonal, convolve_zonal_rgb};
@@ -151,10 +152,8 @@ pub fn local_shrm(
     if width < 2 * f + 2 {
         return Err(ShrmError::TooSmall { width, f_b: f, need: 2 * f + 2 });
     }
-    let rows = RowSynth::new(width);
-    let nlayers = count(p);
+    let synthesis = RowPairs { light, brdf, width, height, rows: RowSynth::new(width), plan: YRotationPlan::new(f, p) };
     progress.start("SHRM", height as u64);
-    let plan = YRotationPlan::new(f, p);
     // Rows in mirrored pairs, α and π − α (rows y and H − 1 − y): the elements of
     // D^l(R_y(α − π)) are those of D^l(R_y(−α)) times (−1)^{l+q+m} ε_q, ε_q = −1 for q < 0
     // (`sh::wigner`'s `the_mirrored_angle_flips_signs_only`). So each sum over l, split by the
@@ -164,98 +163,16 @@ pub fn local_shrm(
         .map(|y| (y, Some(height - 1 - y)))
         .chain((height % 2 == 1).then_some((height / 2, None)))
         .collect();
-    let parity = |k: isize| if k.rem_euclid(2) == 0 { 1.0 } else { -1.0 };
-    // A row's index and its layers' texels, layer-major.
-    type Row = (usize, Vec<[f32; 3]>);
     let row_data: Vec<(Row, Option<Row>)> = pairs
         .into_par_iter()
         .map(|(y, mirror)| {
-            let alpha = PI * (y as f64 + 0.5) / height as f64;
-            // Only the rows |q| ≤ P_B of D^l(R_y(−α)) are read: Wigner-d rows, O(P_B·F_B²).
-            let d = plan.rows(-alpha);
-            let mut out = vec![[0.0f32; 3]; nlayers * width];
-            let mut out_mirror = mirror.map(|_| vec![[0.0f32; 3]; nlayers * width]);
-            let mut buffers = rows.buffers();
-            let (mut a, mut b) = (vec![0.0; f + 1], vec![0.0; f + 1]);
-            // [even l, odd l] partial sums of a and b.
-            let mut a_parts = [vec![0.0; f + 1], vec![0.0; f + 1]];
-            let mut b_parts = [vec![0.0; f + 1], vec![0.0; f + 1]];
-            // Per q and channel, the products D^l_{q,±m} L_{l,±m} that every p ≥ |q| sums with
-            // its own ρ̂_lpq: triangular in (l, m ≤ l), so each (p, l) term is one contiguous
-            // multiply-add over m.
-            let tri = |l: usize| l * (l + 1) / 2;
-            let mut dl = [(); 3].map(|_| (vec![0.0; tri(f + 1)], vec![0.0; tri(f + 1)]));
-            for q in -(p as isize)..=(p as isize) {
-                for l in q.unsigned_abs()..=f {
-                    let li = l as isize;
-                    for (ch, (da, db)) in dl.iter_mut().enumerate() {
-                        let (da, db) = (&mut da[tri(l)..=tri(l) + l], &mut db[tri(l)..=tri(l) + l]);
-                        let light_at = |m: isize| light.rgb[index(l, m)][ch];
-                        if q >= 0 {
-                            da[0] = d.element(l, q, 0) * light_at(0);
-                            db[0] = 0.0;
-                            for m in 1..=li {
-                                let dq = d.element(l, q, m);
-                                da[m as usize] = dq * light_at(m);
-                                db[m as usize] = dq * light_at(-m);
-                            }
-                        } else {
-                            da[0] = 0.0;
-                            db[0] = 0.0;
-                            for m in 1..=li {
-                                let dq = d.element(l, q, -m);
-                                da[m as usize] = dq * light_at(-m);
-                                db[m as usize] = -dq * light_at(m);
-                            }
-                        }
-                    }
-                }
-                let mirror_sign = parity(q) * if q < 0 { -1.0 } else { 1.0 };
-                for pp in q.unsigned_abs()..=p {
-                    let layer = index(pp, q);
-                    for (ch, (da, db)) in dl.iter().enumerate() {
-                        a_parts.iter_mut().chain(b_parts.iter_mut()).for_each(|v| v.fill(0.0));
-                        for l in q.unsigned_abs()..=f {
-                            let r = brdf.get(l, pp, q)[ch];
-                            if r == 0.0 {
-                                continue;
-                            }
-                            let span = tri(l)..=tri(l) + l;
-                            let (a_l, b_l) = (&mut a_parts[l % 2], &mut b_parts[l % 2]);
-                            for ((av, bv), (x, y)) in
-                                a_l.iter_mut().zip(b_l.iter_mut()).zip(da[span.clone()].iter().zip(&db[span]))
-                            {
-                                *av += r * x;
-                                *bv += r * y;
-                            }
-                        }
-                        let [a_even, a_odd] = &a_parts;
-                        let [b_even, b_odd] = &b_parts;
-                        for m in 0..=f {
-                            (a[m], b[m]) = (a_even[m] + a_odd[m], b_even[m] + b_odd[m]);
-                        }
-                        rows.synth(&a, &b, &mut buffers);
-                        for (x, v) in buffers.1.iter().enumerate() {
-                            out[layer * width + x][ch] = *v as f32;
-                        }
-                        if let Some(out_mirror) = &mut out_mirror {
-                            for m in 0..=f {
-                                let sign = mirror_sign * parity(m as isize);
-                                (a[m], b[m]) = (sign * (a_even[m] - a_odd[m]), sign * (b_even[m] - b_odd[m]));
-                            }
-                            rows.synth(&a, &b, &mut buffers);
-                            for (x, v) in buffers.1.iter().enumerate() {
-                                out_mirror[layer * width + x][ch] = *v as f32;
-                            }
-                        }
-                    }
-                }
-            }
+            let pair = synthesis.pair(y, mirror);
             progress.advance(1 + mirror.is_some() as u64);
-            ((y, out), mirror.zip(out_mirror))
+            pair
         })
         .collect();
     progress.finish();
+    let nlayers = count(p);
     let mut layers: Vec<RgbImage> = (0..nlayers).map(|_| RgbImage::new(width, height)).collect();
     for (top, bottom) in &row_data {
         for (y, data) in std::iter::once(top).chain(bottom) {
@@ -265,6 +182,171 @@ pub fn local_shrm(
         }
     }
     Ok(Shrm { f_b: f, p_b: p, global: false, layers })
+}
+
+/// A row's index and its layers' texels, layer-major.
+type Row = (usize, Vec<[f32; 3]>);
+
+/// The per-row synthesis of [`local_shrm`] (App. C step 3).
+struct RowPairs<'a> {
+    light: &'a ShCoeffs,
+    brdf: &'a BrdfSh,
+    width: usize,
+    height: usize,
+    rows: RowSynth,
+    plan: YRotationPlan,
+}
+
+/// Per q and channel, the products D^l_{q,±m} L_{l,±m} that every p ≥ |q| sums with its own
+/// ρ̂_lpq: triangular in (l, m ≤ l), so each (p, l) term is one contiguous multiply-add over m.
+type Products = [(Vec<f64>, Vec<f64>); 3];
+
+/// Index of (l, 0) in the triangular layout of [`Products`].
+fn tri(l: usize) -> usize {
+    l * (l + 1) / 2
+}
+
+/// (−1)^k.
+fn parity(k: isize) -> f64 {
+    if k.rem_euclid(2) == 0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+impl RowPairs<'_> {
+    /// Row `y` (α) and, when given, its `mirror` (π − α).
+    fn pair(&self, y: usize, mirror: Option<usize>) -> (Row, Option<Row>) {
+        let (f, p, width) = (self.brdf.f, self.brdf.p, self.width);
+        let nlayers = count(p);
+        let alpha = PI * (y as f64 + 0.5) / self.height as f64;
+        // Only the rows |q| ≤ P_B of D^l(R_y(−α)) are read: Wigner-d rows, O(P_B·F_B²).
+        let d = self.plan.rows(-alpha);
+        let mut out = vec![[0.0f32; 3]; nlayers * width];
+        let mut out_mirror = mirror.map(|_| vec![[0.0f32; 3]; nlayers * width]);
+        let mut dl: Products = [(); 3].map(|_| (vec![0.0; tri(f + 1)], vec![0.0; tri(f + 1)]));
+        let mut synth = Synth::new(&self.rows, f);
+        for q in -(p as isize)..=(p as isize) {
+            self.products(&d, q, &mut dl);
+            let mirror_sign = parity(q) * if q < 0 { -1.0 } else { 1.0 };
+            for pp in q.unsigned_abs()..=p {
+                let layer = index(pp, q);
+                for (ch, (da, db)) in dl.iter().enumerate() {
+                    synth.sums(self.brdf, pp, q, ch, da, db);
+                    synth.row(1.0, false, &mut out[layer * width..(layer + 1) * width], ch);
+                    if let Some(out_mirror) = &mut out_mirror {
+                        let dest = &mut out_mirror[layer * width..(layer + 1) * width];
+                        synth.row(mirror_sign, true, dest, ch);
+                    }
+                }
+            }
+        }
+        ((y, out), mirror.zip(out_mirror))
+    }
+
+    /// The [`Products`] of order `q` for the rotation rows `d`.
+    fn products(&self, d: &crate::sh::wigner::YRotationRows, q: isize, dl: &mut Products) {
+        for l in q.unsigned_abs()..=self.brdf.f {
+            let li = l as isize;
+            for (ch, (da, db)) in dl.iter_mut().enumerate() {
+                let (da, db) = (&mut da[tri(l)..=tri(l) + l], &mut db[tri(l)..=tri(l) + l]);
+                let light_at = |m: isize| self.light.rgb[index(l, m)][ch];
+                if q >= 0 {
+                    da[0] = d.element(l, q, 0) * light_at(0);
+                    db[0] = 0.0;
+                    for m in 1..=li {
+                        let dq = d.element(l, q, m);
+                        da[m as usize] = dq * light_at(m);
+                        db[m as usize] = dq * light_at(-m);
+                    }
+                } else {
+                    da[0] = 0.0;
+                    db[0] = 0.0;
+                    for m in 1..=li {
+                        let dq = d.element(l, q, -m);
+                        da[m as usize] = dq * light_at(-m);
+                        db[m as usize] = -dq * light_at(m);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// One layer row's sums over l, split by the parity of l, and their β-synthesis.
+struct Synth<'r> {
+    rows: &'r RowSynth,
+    f: usize,
+    buffers: (Vec<realfft::num_complex::Complex<f64>>, Vec<f64>, Vec<realfft::num_complex::Complex<f64>>),
+    a: Vec<f64>,
+    b: Vec<f64>,
+    /// [even l, odd l] partial sums of a and b.
+    a_parts: [Vec<f64>; 2],
+    b_parts: [Vec<f64>; 2],
+}
+
+impl<'r> Synth<'r> {
+    fn new(rows: &'r RowSynth, f: usize) -> Self {
+        let zero = || vec![0.0; f + 1];
+        Synth {
+            rows,
+            f,
+            buffers: rows.buffers(),
+            a: zero(),
+            b: zero(),
+            a_parts: [zero(), zero()],
+            b_parts: [zero(), zero()],
+        }
+    }
+
+    /// a_{pq,m} and b_{pq,m} of channel `ch` split by the parity of l: Σ_l ρ̂_lpq × the
+    /// products `da`, `db`.
+    fn sums(&mut self, brdf: &BrdfSh, pp: usize, q: isize, ch: usize, da: &[f64], db: &[f64]) {
+        self.a_parts.iter_mut().chain(self.b_parts.iter_mut()).for_each(|v| v.fill(0.0));
+        for l in q.unsigned_abs()..=self.f {
+            let r = brdf.get(l, pp, q)[ch];
+            if r == 0.0 {
+                continue;
+            }
+            let span = tri(l)..=tri(l) + l;
+            let (a_l, b_l) = (&mut self.a_parts[l % 2], &mut self.b_parts[l % 2]);
+            for ((av, bv), (x, y)) in a_l.iter_mut().zip(b_l.iter_mut()).zip(da[span.clone()].iter().zip(&db[span])) {
+                *av += r * x;
+                *bv += r * y;
+            }
+        }
+    }
+
+    /// Synthesizes the row into channel `ch` of `dest`: at α a = A_even + A_odd, at π − α
+    /// (`mirrored`) a = (−1)^m `sign` (A_even − A_odd), b alike.
+    fn row(&mut self, sign: f64, mirrored: bool, dest: &mut [[f32; 3]], ch: usize) {
+        let [a_even, a_odd] = &self.a_parts;
+        let [b_even, b_odd] = &self.b_parts;
+        for m in 0..=self.f {
+            (self.a[m], self.b[m]) = if mirrored {
+                let sign = sign * parity(m as isize);
+                (sign * (a_even[m] - a_odd[m]), sign * (b_even[m] - b_odd[m]))
+            } else {
+                (a_even[m] + a_odd[m], b_even[m] + b_odd[m])
+            };
+        }
+        self.rows.synth(&self.a, &self.b, &mut self.buffers);
+        for (x, v) in self.buffers.1.iter().enumerate() {
+            dest[x][ch] = *v as f32;
+        }
+    }
+}
+
+/// Reflection maps of a local SHRM for `views`: per view from the local layers for a few views,
+/// through the global SHRM (eq. 7–8), whose rotation per texel pays off over many views, from
+/// [`GLOBAL_FROM_VIEWS`] on.
+pub fn maps_of_local(local: &Shrm, views: &[DVec3]) -> Vec<RgbImage> {
+    if views.len() < GLOBAL_FROM_VIEWS {
+        reflection_maps(local, views)
+    } else {
+        reflection_maps(&to_global(local), views)
+    }
 }
 
 /// Applies the rotation of texel (x, y)'s frame to the view coefficients of every band:

@@ -1,6 +1,6 @@
 //! `prefilter --verify N`: every bake says how good it is without a full reference. N texels of
 //! each map are checked against the angular integral `--method angular` computes (at
-//! ε = [`EPSILON`], the same truncation and texel rule), and the figures of [`crate::metrics`]
+//! ε = [`ANGULAR_EPSILON`], the same truncation and texel rule), and the figures of [`crate::metrics`]
 //! (its definitions and floor) are taken over them.
 //!
 //! **Which texels.** The texels where a frequency-space bake goes wrong first, chosen from the
@@ -29,6 +29,7 @@
 
 use super::model::Model;
 use super::pipeline::{AngularIntegral, AngularSettings, PrefilterError};
+use super::tuning::ANGULAR_EPSILON;
 use crate::envmap::bright::{luminance, MEAN_MULTIPLE};
 use crate::envmap::EnvMap;
 use crate::io::RgbImage;
@@ -39,9 +40,6 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-/// Truncation ε of the angular integral the checked texels are computed with (its texel rule
-/// misplaces at most ε/10 of the lobe's weight): far below any bake's error.
-pub const EPSILON: f64 = 1e-5;
 /// The most texels `--verify` checks per map.
 pub const MAX_TEXELS: usize = 100_000;
 /// The most bright sources whose surroundings are checked.
@@ -51,20 +49,20 @@ pub const MAX_SOURCES: usize = 4;
 #[derive(Debug, thiserror::Error)]
 pub enum VerifyError {
     /// N is 0 or above [`MAX_TEXELS`].
-    #[error("--verify {0}: must be in 1..={MAX_TEXELS}")]
+    #[error("{0} texels to check per map: must be in 1..={MAX_TEXELS}")]
     Texels(usize),
     /// The angular integral cannot be set up.
     #[error(transparent)]
     Angular(#[from] PrefilterError),
     /// Every exact value is zero: no relative error.
-    #[error("--verify: the exact value of every checked texel of {0} is zero: relative error undefined")]
+    #[error("the exact value of every checked texel of {0} is zero: relative error undefined")]
     ZeroReference(String),
 }
 
 /// What `--verify` found, for the document and `--json`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Verification {
-    /// Truncation ε of the angular integral ([`EPSILON`]).
+    /// Truncation ε of the angular integral ([`ANGULAR_EPSILON`]).
     pub epsilon: f64,
     /// Sub-samples per texel axis of its texel integrals.
     pub subsamples: usize,
@@ -148,14 +146,9 @@ impl<'m> Verifier<'m> {
     /// angular` chooses for that height) of `model` under the lat-long `env`.
     pub fn new(model: &'m Model, env: &EnvMap, height: usize, texels: usize) -> Result<Self, VerifyError> {
         check_texels(texels)?;
-        let integral = AngularIntegral::new(model, env, AngularSettings::new(EPSILON), height)?;
+        let integral = AngularIntegral::new(model, env, AngularSettings::new(ANGULAR_EPSILON), height)?;
         let sources = brightest_sources(env, integral.cone_angle());
         Ok(Verifier { integral, radial: model.centre().is_some(), sources, texels })
-    }
-
-    /// The brightest sources' directions.
-    pub fn sources(&self) -> &[DVec3] {
-        &self.sources
     }
 
     /// The texels to check in `map` (row-major indices, in the order of the module docs) and
@@ -249,7 +242,12 @@ impl<'m> Verifier<'m> {
             progress.advance(1);
         }
         progress.finish();
-        Ok(Verification { epsilon: EPSILON, subsamples: self.integral.subsamples(), requested: self.texels, maps: out })
+        Ok(Verification {
+            epsilon: ANGULAR_EPSILON,
+            subsamples: self.integral.subsamples(),
+            requested: self.texels,
+            maps: out,
+        })
     }
 }
 
@@ -361,8 +359,8 @@ mod tests {
         let env = sun_sky(64, 32, sun);
         let model = Model::new(Brdf::parse("phong:s=16").unwrap(), true).unwrap();
         let verifier = Verifier::new(&model, &env, 16, 40).unwrap();
-        assert_eq!(verifier.sources().len(), 1, "one sun: {:?}", verifier.sources());
-        assert!(verifier.sources()[0].dot(sun) > 0.99);
+        assert_eq!(verifier.sources.len(), 1, "one sun: {:?}", verifier.sources);
+        assert!(verifier.sources[0].dot(sun) > 0.99);
         // A map with two negative texels.
         let mut map = RgbImage::from_fn(32, 16, |x, y| [1.0 + (x + y) as f32; 3]);
         map.pixels[100] = [-0.5, 1.0, 1.0];
@@ -398,7 +396,7 @@ mod tests {
                 &model,
                 &env,
                 &[view],
-                AngularSettings::new(EPSILON),
+                AngularSettings::new(ANGULAR_EPSILON),
                 32,
                 16,
                 &crate::progress::NoProgress,

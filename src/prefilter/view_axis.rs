@@ -14,8 +14,9 @@
 //! **What is computed.** The source is the lighting rotated into the view's frame (each texel the
 //! mean of point lookups of the piecewise-constant map over its footprint), on the
 //! [`ConePyramid`] level a cone half the range's narrowest would be summed on (within the zonal
-//! filter's size bound), [`REFINE`] times finer when the lobe is narrower than
-//! [`TEXELS_PER_WIDTH`] of its texels; output rows are computed from the first row at or before `min_theta_o` to the pole −V, and
+//! filter's size bound), [`REFINE`] times finer when the lobe is narrow against its texels
+//! ([`tuning::NARROW_LOBE_TEXELS`]); output rows are computed from the first row at or before
+//! `min_theta_o` to the pole −V, and
 //! the reflection map's texels beyond `min_theta_o` are bilinear in that grid. The sum per output
 //! row is that of [`super::angular::ConeIntegrator`]: the source texels whose centres lie in the
 //! cone, each taken at its z-midpoint with its solid angle.
@@ -29,9 +30,11 @@
 //!
 //! **Determinism.** Each output row is one thread's fixed-order sum over its source rows.
 
-use super::angular::{ConePyramid, CutoffTable};
-use super::model::Model;
-use crate::envmap::bright::BrightSources;
+use super::angular::ConePyramid;
+use super::bright_pass::BrightPass;
+use super::model::{Model, PreparedView};
+use super::truncation::CutoffTable;
+use super::tuning::{self, CONE_SAMPLES, REFINE, SUPERSAMPLE};
 use crate::envmap::zonal::{inverse_row, row_spectra, EvenSpectrum, SubRow, TexelRule, MAX_TEXELS};
 use crate::io::RgbImage;
 use crate::sphere::latlong::bilinear_taps;
@@ -41,41 +44,20 @@ use rayon::prelude::*;
 use realfft::RealFftPlanner;
 use std::f64::consts::{PI, TAU};
 
-/// θ_o sampled when looking for the narrowest cone and the thinnest lobe of the range.
-const CONE_SAMPLES: usize = 256;
-
-/// Point lookups per axis and per texel of the lighting (not of the frame grid, which may be
-/// finer) of the box filter that rotates the lighting into the view's frame. Grace, σ = 0.1,
-/// grazing view (a grid twice as fine), p99 against the ε = 10⁻³ reference: 1.58 % with 4 (2 per
-/// axis of the grid's texels), 1.25 % with 6, 1.22 % with 8.
-const SUPERSAMPLE: usize = 6;
-
-/// The view frame's grid is this many times finer per axis than the pyramid level when the lobe
-/// is narrower than [`TEXELS_PER_WIDTH`] of the level's texels: the rotated map resolves the
-/// level's texel edges to half a texel, and the output is read back bilinearly from a finer grid
-/// (Grace, Torrance-Sparrow σ = 0.1, grazing view: p99 against the ε = 10⁻⁵ reference 2.26 % on
-/// the level's own grid, 1.20 % on this one; `docs/prefilter.md`).
-const REFINE: usize = 2;
-
-/// The lobe's width ([`CutoffTable::width_at`]) in texels of the level above which the level's
-/// own grid is fine enough. Grace at 256×128, grazing view, p99 against the ε = 10⁻³ reference:
-/// σ = 0.2 (width 10 texels) 1.32 % refined, 1.33 % not; σ = 0.3 (17) 1.78 % either way, at a
-/// quarter of the cost; σ = 0.1 (4.3) stays refined (2.19 % on the level's grid, 1.25 % refined).
-const TEXELS_PER_WIDTH: f64 = 8.0;
-
 /// The angular integral B(R) = Σ_t L_t ΔΩ_t ρ̂(ω_t; R, V) over the texels in the cone θ*(θ_o)
 /// of R, for every texel of `out` whose view angle θ_o = ∠(R, V) is at least `min_theta_o`
-/// (0: the whole map): (row-major index, value). R = −V has no normal and gets zero. `bright`,
-/// the bright texels split off the `source` grid the pyramid was built from, is added to the
-/// lighting in the view's frame by [`splat`].
-pub fn beyond(
+/// (0: the whole map, as maps in angle ask; the SHRM's valid view angle for its fallback):
+/// (row-major index, value). R = −V has no normal and gets zero. `bright`, the bright texels
+/// split off the map the pyramid was built from, is added to the lighting in the view's frame
+/// ([`BrightPass::splat`]).
+pub fn integrate_in_view_frame(
     pyramid: &ConePyramid,
     model: &Model,
     cutoff: &CutoffTable,
     view: DVec3,
     min_theta_o: f64,
     out: LatLong,
-    bright: Option<(&BrightSources, LatLong)>,
+    bright: Option<&BrightPass>,
 ) -> Vec<(usize, [f32; 3])> {
     // Over the range of view angles: the narrowest cone and the thinnest lobe.
     let (narrowest, thinnest) = (0..=CONE_SAMPLES)
@@ -83,13 +65,13 @@ pub fn beyond(
         .fold((PI, f64::INFINITY), |(cone, width), t| (cone.min(cutoff.at(t)), width.min(cutoff.width_at(t))));
     // The frame's grid within the zonal filter's bound: its spectra take 24 bytes a texel.
     let level = pyramid.level_within(narrowest / 2.0, MAX_TEXELS / (REFINE * REFINE)).image();
-    let refine = if PI / level.height as f64 <= thinnest / TEXELS_PER_WIDTH { 1 } else { REFINE };
+    let refine = if tuning::is_narrow(thinnest, level.height) { REFINE } else { 1 };
     let grid = LatLong::new(level.width * refine, level.height * refine);
     let to_world = DQuat::from_rotation_arc(DVec3::Z, view.normalize());
     let to_frame = to_world.inverse();
     let mut source = rotated(level, to_world, grid);
-    if let Some((bright, on)) = bright {
-        splat(&mut source, grid, bright, on, to_frame);
+    if let Some(bright) = bright {
+        bright.splat(&mut source, grid, to_frame);
     }
     // Output rows from the last one at or before min_theta_o: every texel beyond it is bilinear
     // between computed rows.
@@ -254,146 +236,151 @@ impl TexelLocator {
     }
 }
 
-/// Adds the bright texels' excess to `frame`, the lighting on `grid` in the frame `to_frame`
-/// takes world directions to, as energy. Each texel of the `source` grid it was split on is cut
-/// into k × k parts of equal solid angle (uniform in φ and in z), k keeping two parts per texel
-/// of `grid`; each part, rotated into the frame, is spread over the four texel centres around
-/// it with bilinear weights. That keeps both its energy and its centre, so moving it onto the
-/// grid errs only at second order in the grid's spacing against the lobe's width; a point
-/// lookup (as [`rotated`] does for the smooth remainder) would catch a sun smaller than its
-/// sample spacing by chance.
-fn splat(frame: &mut RgbImage, grid: LatLong, bright: &BrightSources, source: LatLong, to_frame: DQuat) {
-    let k = (2 * grid.height).div_ceil(source.height).max(1);
-    let parts = (k * k) as f64;
-    let row_solid_angle: Vec<f64> = (0..grid.height).map(|y| grid.row_solid_angle(y)).collect();
-    for t in &bright.texels {
-        let (x, y) = source.texel_of(t.dir);
-        let (z0, z1) =
-            ((PI * y as f64 / source.height as f64).cos(), (PI * (y + 1) as f64 / source.height as f64).cos());
-        for j in 0..k {
-            let z = z0 + (z1 - z0) * (j as f64 + 0.5) / k as f64;
-            let s = (1.0 - z * z).max(0.0).sqrt();
-            for i in 0..k {
-                let phi = TAU * (x as f64 + (i as f64 + 0.5) / k as f64) / source.width as f64;
-                let d = to_frame * DVec3::new(s * phi.cos(), s * phi.sin(), z);
-                let (px, py) = grid.position(d);
-                for (texel, w) in bilinear_taps(grid.width, grid.height, px - 0.5, py - 0.5, true) {
-                    let per_area = w * t.solid_angle / parts / row_solid_angle[texel / grid.width];
-                    let p = &mut frame.pixels[texel];
-                    for c in 0..3 {
-                        p[c] += (t.excess[c] * per_area) as f32;
+/// Rows `first..H` of the angular integral on `source`'s grid, the view at its pole.
+fn filter_rows(source: &RgbImage, model: &Model, cutoff: &CutoffTable, first: usize) -> Vec<[f64; 3]> {
+    let mut planner = RealFftPlanner::<f64>::new();
+    let rows = RowFilter::new(source, model, cutoff, &mut planner);
+    let even = EvenSpectrum::new(&mut planner, source.width);
+    (first..source.height)
+        .into_par_iter()
+        .map_init(|| even.clone(), |even, y| rows.row(even, y))
+        .flatten_iter()
+        .collect()
+}
+
+/// What every output row of [`filter_rows`] reads: the source rows' spectra and geometry.
+struct RowFilter<'a> {
+    model: &'a Model,
+    cutoff: &'a CutoffTable,
+    grid: LatLong,
+    /// W/2 + 1.
+    bins: usize,
+    /// Analytic models are grey: one kernel and one transform per pair of rows.
+    channels: usize,
+    inverse: std::sync::Arc<dyn realfft::ComplexToReal<f64>>,
+    /// Every source row's spectra, [y][channel][m].
+    spectra: Vec<realfft::num_complex::Complex<f64>>,
+    /// Each source row's node: the midpoint rule of the cone sums (z-midpoint, exact solid angle).
+    nodes: Vec<SubRow>,
+    /// Each source row's centre θ with its sine and cosine (the cone test), and its texels'
+    /// solid angle.
+    centres: Vec<(f64, f64, f64, f64)>,
+    /// sin and cos of the column offsets d·2π/W.
+    sin_d: Vec<f64>,
+    cos_d: Vec<f64>,
+}
+
+impl<'a> RowFilter<'a> {
+    fn new(source: &RgbImage, model: &'a Model, cutoff: &'a CutoffTable, planner: &mut RealFftPlanner<f64>) -> Self {
+        let (width, height) = (source.width, source.height);
+        let grid = LatLong::new(width, height);
+        let forward = planner.plan_fft_forward(width);
+        let (sin_d, cos_d): (Vec<f64>, Vec<f64>) =
+            (0..width).map(|d| (d as f64 * TAU / width as f64).sin_cos()).unzip();
+        let centres = (0..height)
+            .map(|y| {
+                let theta = grid.row_theta(y);
+                let (s, c) = theta.sin_cos();
+                (theta, s, c, grid.row_solid_angle(y))
+            })
+            .collect();
+        RowFilter {
+            model,
+            cutoff,
+            grid,
+            bins: width / 2 + 1,
+            channels: if model.brdf().is_rgb() { 3 } else { 1 },
+            inverse: planner.plan_fft_inverse(width),
+            spectra: row_spectra(source, &*forward, |_| true),
+            nodes: (0..height).map(|y| TexelRule::midpoint().sub_rows(grid, y)[0]).collect(),
+            centres,
+            sin_d,
+            cos_d,
+        }
+    }
+
+    /// Output row `y_out`: per source row in the cone, the spectrum of its kernel times the
+    /// row's spectrum, summed, and one inverse transform per channel.
+    fn row(&self, even: &mut EvenSpectrum, y_out: usize) -> Vec<[f64; 3]> {
+        let (width, bins, channels) = (self.grid.width, self.bins, self.channels);
+        let theta_r = self.grid.row_theta(y_out);
+        let (s_r, z_r) = theta_r.sin_cos();
+        let mut row = vec![[0.0; 3]; width];
+        // R = −V has no normal: its row stays zero.
+        let Some(prepared) = self.model.prepare_view(DVec3::new(s_r, 0.0, z_r), DVec3::Z) else {
+            return row;
+        };
+        let theta_star = self.cutoff.at(theta_r);
+        let cos_star = if theta_star >= PI { f64::NEG_INFINITY } else { theta_star.cos() };
+        let mut kernel = vec![vec![0.0; bins]; channels];
+        let mut spectrum = vec![vec![0.0; bins]; channels];
+        let mut acc = [(); 3].map(|_| self.inverse.make_input_vec());
+        for ((&(theta, st, ct, solid_angle), node), src) in
+            self.centres.iter().zip(&self.nodes).zip(self.spectra.chunks_exact(3 * bins))
+        {
+            if (theta - theta_r).abs() > theta_star {
+                continue;
+            }
+            // The cone test on the texel's centre, as the cone sums do. cos d falls with d: the
+            // row's texels in the cone are d < end.
+            let end = self.cos_d[..bins].iter().position(|&c| ct * z_r + st * s_r * c < cos_star).unwrap_or(bins);
+            if end == 0 {
+                continue;
+            }
+            self.kernel(&prepared, node, solid_angle, end, &mut kernel);
+            for (k, out) in kernel.iter().zip(spectrum.iter_mut()) {
+                even.transform(k, out);
+            }
+            for (c, acc) in acc.iter_mut().enumerate() {
+                let k = &spectrum[c.min(channels - 1)];
+                // Σ_x L(x) k(x − x_o) is the inverse transform of L̂·conj(k̂), k̂ real.
+                for ((a, l), k) in acc.iter_mut().zip(&src[c * bins..(c + 1) * bins]).zip(k) {
+                    *a += l * k;
+                }
+            }
+        }
+        let mut out = self.inverse.make_output_vec();
+        let mut scratch = self.inverse.make_scratch_vec();
+        for (c, acc) in acc.iter_mut().enumerate() {
+            inverse_row(&*self.inverse, acc, &mut out, &mut scratch);
+            for (p, v) in row.iter_mut().zip(&out) {
+                p[c] = *v;
+            }
+        }
+        row
+    }
+
+    /// The kernel between an output row (`prepared`) and the source row of `node`, over the
+    /// offsets d < `end` in its cone, into `kernel` (per channel). R and V lie in the xz-plane,
+    /// and ρ̂ is even under the mirror y → −y (isotropy with bilateral symmetry; Kajiya–Kay
+    /// through T·ω and T·V), so the kernel is even in d: its half d = 0..=W/2 is evaluated (zero
+    /// past the cone), and its spectrum is real.
+    fn kernel(&self, prepared: &PreparedView, node: &SubRow, solid_angle: f64, end: usize, kernel: &mut [Vec<f64>]) {
+        let (cos_d, sin_d) = (&self.cos_d, &self.sin_d);
+        kernel.iter_mut().for_each(|k| k.fill(0.0));
+        match self.model.half_angle_lobe() {
+            Some(lobe) => {
+                // Grey: one channel computed, copied to any other.
+                let rho_hat = lobe.on_view_circle(prepared, node.z, node.sin_theta);
+                let (first, rest) = kernel.split_at_mut(1);
+                for ((k, &c), &s) in first[0][..end].iter_mut().zip(cos_d).zip(sin_d) {
+                    *k = solid_angle * rho_hat(c, s);
+                }
+                for k in rest {
+                    k[..end].copy_from_slice(&first[0][..end]);
+                }
+            }
+            None => {
+                for d in 0..end {
+                    let l = DVec3::new(node.sin_theta * cos_d[d], node.sin_theta * sin_d[d], node.z);
+                    let v = self.model.rho_hat_prepared(prepared, l);
+                    for (k, v) in kernel.iter_mut().zip(v) {
+                        k[d] = solid_angle * v;
                     }
                 }
             }
         }
     }
-}
-
-/// Rows `first..H` of the angular integral on `source`'s grid, the view at its pole.
-fn filter_rows(source: &RgbImage, model: &Model, cutoff: &CutoffTable, first: usize) -> Vec<[f64; 3]> {
-    let (width, height) = (source.width, source.height);
-    let grid = LatLong::new(width, height);
-    let bins = width / 2 + 1;
-    let mut planner = RealFftPlanner::<f64>::new();
-    let forward = planner.plan_fft_forward(width);
-    let inverse = planner.plan_fft_inverse(width);
-    let spectra = row_spectra(source, &*forward, |_| true);
-    // Each source row's node: the midpoint rule of the cone sums (z-midpoint, exact solid angle).
-    let nodes: Vec<SubRow> = (0..height).map(|y| TexelRule::midpoint().sub_rows(grid, y)[0]).collect();
-    let half_angle = model.half_angle_lobe();
-    // Analytic models are grey: one kernel and one transform per pair of rows.
-    let channels = if model.brdf().is_rgb() { 3 } else { 1 };
-    let (sin_d, cos_d): (Vec<f64>, Vec<f64>) = (0..width).map(|d| (d as f64 * TAU / width as f64).sin_cos()).unzip();
-    let even = EvenSpectrum::new(&mut planner, width);
-    // Each source row's centre θ with its sine and cosine (the cone test), and its texels' solid
-    // angle.
-    let centres: Vec<(f64, f64, f64, f64)> = (0..height)
-        .map(|y| {
-            let theta = grid.row_theta(y);
-            let (s, c) = theta.sin_cos();
-            (theta, s, c, grid.row_solid_angle(y))
-        })
-        .collect();
-    (first..height)
-        .into_par_iter()
-        .map_init(
-            || even.clone(),
-            |even, y_out| {
-                let theta_r = grid.row_theta(y_out);
-                let (s_r, z_r) = theta_r.sin_cos();
-                let mut row = vec![[0.0; 3]; width];
-                // R = −V has no normal: its row stays zero.
-                let Some(prepared) = model.prepare_view(DVec3::new(s_r, 0.0, z_r), DVec3::Z) else {
-                    return row;
-                };
-                let theta_star = cutoff.at(theta_r);
-                let cos_star = if theta_star >= PI { f64::NEG_INFINITY } else { theta_star.cos() };
-                let mut kernel = vec![vec![0.0; bins]; channels];
-                let mut spectrum = vec![vec![0.0; bins]; channels];
-                let mut acc = [(); 3].map(|_| inverse.make_input_vec());
-                for ((&(theta, st, ct, solid_angle), node), src) in
-                    centres.iter().zip(&nodes).zip(spectra.chunks_exact(3 * bins))
-                {
-                    if (theta - theta_r).abs() > theta_star {
-                        continue;
-                    }
-                    // The cone test on the texel's centre, as the cone sums do. cos d falls with
-                    // d: the row's texels in the cone are d < end.
-                    let end = cos_d[..bins].iter().position(|&c| ct * z_r + st * s_r * c < cos_star).unwrap_or(bins);
-                    if end == 0 {
-                        continue;
-                    }
-                    // R and V lie in the xz-plane, and ρ̂ is even under the mirror y → −y
-                    // (isotropy with bilateral symmetry; Kajiya–Kay through T·ω and T·V), so the
-                    // kernel is even in d: its half d = 0..=W/2 is evaluated (zero past the
-                    // cone), and its spectrum is real.
-                    kernel.iter_mut().for_each(|k| k.fill(0.0));
-                    match half_angle {
-                        Some(lobe) => {
-                            // Grey: one channel computed, copied to any other.
-                            let rho_hat = lobe.on_view_circle(&prepared, node.z, node.sin_theta);
-                            let (first, rest) = kernel.split_at_mut(1);
-                            for ((k, &c), &s) in first[0][..end].iter_mut().zip(&cos_d).zip(&sin_d) {
-                                *k = solid_angle * rho_hat(c, s);
-                            }
-                            for k in rest {
-                                k[..end].copy_from_slice(&first[0][..end]);
-                            }
-                        }
-                        None => {
-                            for d in 0..end {
-                                let l = DVec3::new(node.sin_theta * cos_d[d], node.sin_theta * sin_d[d], node.z);
-                                let v = model.rho_hat_prepared(&prepared, l);
-                                for (k, v) in kernel.iter_mut().zip(v) {
-                                    k[d] = solid_angle * v;
-                                }
-                            }
-                        }
-                    }
-                    for (k, out) in kernel.iter().zip(spectrum.iter_mut()) {
-                        even.transform(k, out);
-                    }
-                    for (c, acc) in acc.iter_mut().enumerate() {
-                        let k = &spectrum[c.min(channels - 1)];
-                        // Σ_x L(x) k(x − x_o) is the inverse transform of L̂·conj(k̂), k̂ real.
-                        for ((a, l), k) in acc.iter_mut().zip(&src[c * bins..(c + 1) * bins]).zip(k) {
-                            *a += l * k;
-                        }
-                    }
-                }
-                let mut out = inverse.make_output_vec();
-                let mut scratch = inverse.make_scratch_vec();
-                for (c, acc) in acc.iter_mut().enumerate() {
-                    inverse_row(&*inverse, acc, &mut out, &mut scratch);
-                    for (p, v) in row.iter_mut().zip(&out) {
-                        p[c] = *v;
-                    }
-                }
-                row
-            },
-        )
-        .flatten_iter()
-        .collect()
 }
 
 #[cfg(test)]
@@ -497,7 +484,7 @@ mod tests {
         let pyramid = ConePyramid::new(&env).unwrap();
         let out = LatLong::new(64, 32);
         let min_theta_o = 1.2;
-        let fast = beyond(&pyramid, &model, &cutoff, DVec3::Z, min_theta_o, out, None);
+        let fast = integrate_in_view_frame(&pyramid, &model, &cutoff, DVec3::Z, min_theta_o, out, None);
         // The map with each texel split 2 × 2, made here rather than by `rotated`, whose copy of
         // it is under test too.
         let fine = EnvMap::latlong(RgbImage::from_fn(out.width, out.height, |x, y| {
@@ -528,7 +515,7 @@ mod tests {
         let out = LatLong::new(48, 24);
         let view = DVec3::new(0.5, -0.3, 0.4).normalize();
         let min_theta_o = 1.5;
-        let fast = beyond(&pyramid, &model, &cutoff, view, min_theta_o, out, None);
+        let fast = integrate_in_view_frame(&pyramid, &model, &cutoff, view, min_theta_o, out, None);
         let direct = texel_by_texel(&env, TexelRule::new(4).unwrap(), &model, &cutoff, view, out);
         let expected = (0..out.width * out.height)
             .filter(|&i| out.texel_direction(i % out.width, i / out.width).dot(view).acos() >= min_theta_o)
