@@ -144,6 +144,19 @@ pub const MAX_IBL_MEASURED_TEXELS: usize = 4096;
 pub const MAX_TEXTURE_SIDE: usize = 1 << 16;
 
 // ---------------------------------------------------------------------------------------------
+// Filters and checks
+// ---------------------------------------------------------------------------------------------
+
+/// Largest lat-long grid (source or output) the zonal filter (`envmap::zonal`) convolves, in
+/// texels: 2²³. Its source spectra take 24 bytes per texel (3 channels × W/2 + 1 complex f64 per
+/// row), 200 MB at this bound.
+pub const MAX_ZONAL_TEXELS: usize = 1 << 23;
+
+/// Most texels `prefilter --verify` checks per map against the angular reference: 100 000, each
+/// a cone sum over the map.
+pub const MAX_VERIFY_TEXELS: usize = 100_000;
+
+// ---------------------------------------------------------------------------------------------
 // Documents
 // ---------------------------------------------------------------------------------------------
 
@@ -271,6 +284,10 @@ pub fn human_bytes(b: u128) -> String {
 /// a vertex takes 24 bytes of position and normal plus 64 f32 of transfer (280 bytes): 2²⁴
 /// vertices are 4.7 GB, already beyond it; the check of the `.glb`'s length comes on top.
 pub const MAX_TRANSFER_VERTICES: usize = 1 << 24;
+
+/// Longest list a PLY face may hold: 1024 vertices. A polygon of more is a garbled count, and a
+/// count read as garbage must not make the reader allocate or loop.
+pub const MAX_PLY_LIST_LEN: usize = 1024;
 
 /// Most triangles `transfer` casts rays against: 2²⁶ (67 M, about 4 GiB of BVH and triangles).
 pub const MAX_TRANSFER_TRIANGLES: usize = 1 << 26;

@@ -7,11 +7,12 @@ use super::options::Execution;
 use super::options::{check_json_output, read_sh_document, EnvArgs};
 use super::outputs::{check_output_dir, check_outputs, Holds, Outputs};
 use crate::io::Output;
+use crate::limits::MAX_VERIFY_TEXELS;
 use crate::prefilter::model::ModelError;
 use crate::prefilter::pipeline::{Lighting, PrefilterError};
 use crate::prefilter::ring_free::MapsFrom;
 use crate::prefilter::stage::{self, Config, MapRequest};
-use crate::prefilter::verify::{Verification, VerifyError, MAX_TEXELS};
+use crate::prefilter::verify::{Verification, VerifyError};
 use crate::sh::window::Window;
 use anyhow::{anyhow, bail, Result};
 pub use args::*;
@@ -151,7 +152,7 @@ fn worded(error: stage::Error) -> anyhow::Error {
         E::VerifyNeedsMap => {
             "--verify needs the environment map, not SH coefficients (the exact values integrate the map)".into()
         }
-        E::Verify(VerifyError::Texels(n)) => format!("--verify {n}: must be in 1..={MAX_TEXELS}"),
+        E::Verify(VerifyError::Texels(n)) => format!("--verify {n}: must be in 1..={MAX_VERIFY_TEXELS}"),
         E::Verify(VerifyError::ZeroReference(_)) => format!("--verify: {error}"),
         E::Prefilter { error: PrefilterError::Model(ModelError::Unreachable { .. }), .. } => {
             format!("{error}; use a larger --epsilon")

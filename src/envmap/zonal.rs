@@ -37,6 +37,7 @@
 //! to it at 1e-9.
 
 use crate::io::RgbImage;
+use crate::limits::MAX_ZONAL_TEXELS;
 use crate::progress::Progress;
 use crate::quadrature::gauss_legendre_cached;
 use crate::sphere::{self, LatLong};
@@ -45,10 +46,6 @@ use realfft::num_complex::Complex;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
-
-/// The largest map (source or output) the filter accepts, in texels: the source spectra take
-/// 24 bytes per texel (3 channels × W/2 + 1 complex f64 per row), 200 MB at this bound.
-pub const MAX_TEXELS: usize = 1 << 23;
 
 /// Errors of the zonal filter.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -63,7 +60,7 @@ pub enum ZonalError {
         /// Output rows.
         out_height: usize,
     },
-    /// Beyond [`MAX_TEXELS`].
+    /// Beyond [`MAX_ZONAL_TEXELS`].
     #[error("a {width}x{height} map is beyond the zonal filter's bound of {max} texels")]
     TooLarge {
         /// Width.
@@ -244,8 +241,8 @@ fn check(latlong: &RgbImage, cone: f64, out_height: usize) -> Result<(), ZonalEr
         return Err(ZonalError::Empty { width, height, out_height });
     }
     for (w, h) in [(width, height), (width, out_height)] {
-        if w.checked_mul(h).is_none_or(|n| n > MAX_TEXELS) {
-            return Err(ZonalError::TooLarge { width: w, height: h, max: MAX_TEXELS });
+        if w.checked_mul(h).is_none_or(|n| n > MAX_ZONAL_TEXELS) {
+            return Err(ZonalError::TooLarge { width: w, height: h, max: MAX_ZONAL_TEXELS });
         }
     }
     if cone.is_nan() || cone <= 0.0 || cone > PI {
@@ -854,7 +851,7 @@ mod tests {
         );
         assert!(zonal_filter(&map, phong(8.0), f64::NAN, &rule, 4, Rows::All, &NoProgress).is_err());
         assert!(matches!(
-            zonal_filter(&map, phong(8.0), 1.0, &rule, MAX_TEXELS, Rows::All, &NoProgress),
+            zonal_filter(&map, phong(8.0), 1.0, &rule, MAX_ZONAL_TEXELS, Rows::All, &NoProgress),
             Err(ZonalError::TooLarge { .. })
         ));
         assert_eq!(TexelRule::new(0).unwrap_err(), ZonalError::Subsamples { n: 0, max: 16 });

@@ -14,6 +14,7 @@
 //! anything is allocated.
 
 use super::IoError;
+use crate::limits::MAX_PLY_LIST_LEN;
 use glam::DVec3;
 use std::ops::Range;
 use std::path::Path;
@@ -170,9 +171,6 @@ struct Item {
     lists: Vec<Vec<f64>>,
 }
 
-/// The longest face list read: a polygon of more vertices is a garbled count.
-const MAX_LIST_LEN: usize = 1024;
-
 /// Reads the items of the elements before and at `last`, in file order, handing each to `visit`
 /// with its element's index and its number. The element counts are checked against the body's
 /// size first: every item takes at least one byte (binary) or two characters (ASCII), so a
@@ -201,7 +199,7 @@ fn walk(
                     Property::Scalar(_, t) => item.scalars[k] = body.value(*t).map_err(within)?,
                     Property::List(_, count, t) => {
                         let (n, place) = body.value(*count).map_err(within)?;
-                        if !(0.0..=MAX_LIST_LEN as f64).contains(&n) || n.fract() != 0.0 {
+                        if !(0.0..=MAX_PLY_LIST_LEN as f64).contains(&n) || n.fract() != 0.0 {
                             return Err(within(format!("a list of {n} items")));
                         }
                         item.scalars[k] = (f64::NAN, place);

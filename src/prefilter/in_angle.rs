@@ -22,9 +22,10 @@ use super::truncation::{radial_cutoff, radial_truncation, CutoffTable};
 use super::tuning::{self, ANGULAR_EPSILON, CUTOFF_BINS, RULE_TOLERANCE};
 use super::view_axis;
 use crate::envmap::bright::{BrightReport, BrightRule};
-use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows, MAX_TEXELS};
+use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows};
 use crate::envmap::EnvMap;
 use crate::io::RgbImage;
+use crate::limits::MAX_ZONAL_TEXELS;
 use crate::progress::Progress;
 use crate::sh::window::{Window, WindowReport};
 use crate::sphere::LatLong;
@@ -57,7 +58,8 @@ pub fn fits(model: &Model, map: &EnvMap, size: Option<(usize, usize)>) -> bool {
     }
     let grid = latlong_grid(map);
     let (width, height) = size.unwrap_or((grid.width, grid.height));
-    width == grid.width && [grid.height, height].iter().all(|h| width.checked_mul(*h).is_some_and(|n| n <= MAX_TEXELS))
+    width == grid.width
+        && [grid.height, height].iter().all(|h| width.checked_mul(*h).is_some_and(|n| n <= MAX_ZONAL_TEXELS))
 }
 
 /// Reflection maps integrated in angle, with what the document reports of them.

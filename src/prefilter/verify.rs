@@ -40,16 +40,15 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-/// The most texels `--verify` checks per map.
-pub const MAX_TEXELS: usize = 100_000;
+use crate::limits::MAX_VERIFY_TEXELS;
 /// The most bright sources whose surroundings are checked.
 pub const MAX_SOURCES: usize = 4;
 
 /// Errors of the verification.
 #[derive(Debug, thiserror::Error)]
 pub enum VerifyError {
-    /// N is 0 or above [`MAX_TEXELS`].
-    #[error("{0} texels to check per map: must be in 1..={MAX_TEXELS}")]
+    /// N is 0 or above [`MAX_VERIFY_TEXELS`].
+    #[error("{0} texels to check per map: must be in 1..={MAX_VERIFY_TEXELS}")]
     Texels(usize),
     /// The angular integral cannot be set up.
     #[error(transparent)]
@@ -251,10 +250,10 @@ impl<'m> Verifier<'m> {
     }
 }
 
-/// Refuses N outside 1..=[`MAX_TEXELS`] (before any work).
+/// Refuses N outside 1..=[`MAX_VERIFY_TEXELS`] (before any work).
 pub fn check_texels(n: usize) -> Result<(), VerifyError> {
     match n {
-        1..=MAX_TEXELS => Ok(()),
+        1..=MAX_VERIFY_TEXELS => Ok(()),
         _ => Err(VerifyError::Texels(n)),
     }
 }

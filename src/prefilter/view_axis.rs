@@ -35,8 +35,9 @@ use super::bright_pass::BrightPass;
 use super::model::{Model, PreparedView};
 use super::truncation::CutoffTable;
 use super::tuning::{self, CONE_SAMPLES, REFINE, SUPERSAMPLE};
-use crate::envmap::zonal::{inverse_row, row_spectra, EvenSpectrum, SubRow, TexelRule, MAX_TEXELS};
+use crate::envmap::zonal::{inverse_row, row_spectra, EvenSpectrum, SubRow, TexelRule};
 use crate::io::RgbImage;
+use crate::limits::MAX_ZONAL_TEXELS;
 use crate::sphere::latlong::bilinear_taps;
 use crate::sphere::LatLong;
 use glam::{DMat3, DQuat, DVec3, Vec3};
@@ -64,7 +65,7 @@ pub fn integrate_in_view_frame(
         .map(|i| min_theta_o + (PI - min_theta_o) * i as f64 / CONE_SAMPLES as f64)
         .fold((PI, f64::INFINITY), |(cone, width), t| (cone.min(cutoff.at(t)), width.min(cutoff.width_at(t))));
     // The frame's grid within the zonal filter's bound: its spectra take 24 bytes a texel.
-    let level = pyramid.level_within(narrowest / 2.0, MAX_TEXELS / (REFINE * REFINE)).image();
+    let level = pyramid.level_within(narrowest / 2.0, MAX_ZONAL_TEXELS / (REFINE * REFINE)).image();
     let refine = if tuning::is_narrow(thinnest, level.height) { REFINE } else { 1 };
     let grid = LatLong::new(level.width * refine, level.height * refine);
     let to_world = DQuat::from_rotation_arc(DVec3::Z, view.normalize());

@@ -169,7 +169,7 @@ pub struct Args {
     /// error, relative RMS, the worst texel) into the document and --json: texels beside the
     /// brightest sources, the darkest, the poles, and the rest spread evenly (docs/prefilter.md,
     /// "Verifying a bake"). Costs one cone sum per texel: for 3-D BRDFs N/(W·H) of an angular run.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=crate::prefilter::verify::MAX_TEXELS as u64))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=crate::limits::MAX_VERIFY_TEXELS as u64))]
     pub verify: Option<u64>,
 
     /// frequency (default) or angular (the reference; reflection maps only).
