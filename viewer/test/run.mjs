@@ -545,7 +545,87 @@ async function cpcaPrtTests() {
   figures.prt_cpca = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
+// ---- Every ibl --format and --container (the loader's decoders) ------------------------------
+// The same bake written as each format and container, drawn by the page in the grid and one-sphere
+// views (three frame), against the page's own rgba16f KTX2 drawing of it: what may differ is the
+// format's rounding of the texels alone (b10g11r11: 6 and 5 mantissa bits, 2^−7 and 2^−6 relative;
+// e5b9g9r9: 9 bits under the largest channel's exponent, 2^−9 of it), since the decoders are exact
+// (an 11/10-bit float or a shared-exponent texel is a half). rgba16f DDS holds the KTX2's bytes:
+// it must draw the same frame, pixel for pixel. The bar, 50 dB (an RMS difference of 0.8 codes), is
+// what that rounding allows: 2^−6 relative in linear radiance (10-bit blue; 2^−7 for 11 bits) moves
+// an 8-bit sRGB value by at most 1.7 codes (the curve's slope divides a relative change by about
+// 2.4 above its linear toe), so every pixel stays within a code or two. Negative controls: the packed KTX2s rewritten with
+// two channels swapped in every texel (the frame a decoder that reads the fields in the wrong
+// order would draw) must fail the bar.
+
+// A copy of a KTX2 file whose every 4-byte texel has `fields` (bit ranges [from, to, width]) swapped.
+function swapFieldsKtx2(from, to, [a, b, width]) {
+  const buf = Buffer.from(readFileSync(from));
+  const levels = buf.readUInt32LE(40);
+  const mask = (1 << width) - 1;
+  for (let p = 0; p < Math.max(1, levels); p++) {
+    const at = 80 + 24 * p, offset = Number(buf.readBigUInt64LE(at)), length = Number(buf.readBigUInt64LE(at + 8));
+    for (let i = offset; i < offset + length; i += 4) {
+      const w = buf.readUInt32LE(i), x = (w >>> a) & mask, y = (w >>> b) & mask;
+      buf.writeUInt32LE(((w & ~((mask << a) | (mask << b))) | (x << b) | (y << a)) >>> 0, i);
+    }
+  }
+  writeFileSync(to, buf);
+}
+async function formatTests() {
+  const dir = join(out, 'formats');
+  rmSync(dir, { recursive: true, force: true });
+  mkdirSync(dir, { recursive: true });
+  const bakes = [
+    { name: 'rgba16f-ktx2', args: [] },
+    { name: 'rgba16f-dds', args: ['--container', 'dds'], exact: true },
+    { name: 'rgba32f-ktx2', args: ['--format', 'rgba32f'], bar: 50 },
+    { name: 'rgba32f-dds', args: ['--format', 'rgba32f', '--container', 'dds'], bar: 50 },
+    { name: 'b10g11r11-ktx2', args: ['--format', 'b10g11r11'], bar: 50 },
+    { name: 'b10g11r11-dds', args: ['--format', 'b10g11r11', '--container', 'dds'], bar: 50 },
+    { name: 'e5b9g9r9-ktx2', args: ['--format', 'e5b9g9r9'], bar: 50 },
+    { name: 'e5b9g9r9-dds', args: ['--format', 'e5b9g9r9', '--container', 'dds'], bar: 50 },
+  ];
+  for (const b of bakes) run('ibl', [map, '-o', join(dir, b.name), '--size', '128', '--samples', '0', '-q', ...b.args]);
+  // Negative controls: R and B swapped (e5b9g9r9: bits 0–8 and 18–26), R and G (b10g11r11: 0–10
+  // and 11–21), in the specular and irradiance cubes.
+  const swaps = [
+    { name: 'e5b9g9r9-ktx2-rb-swapped', from: 'e5b9g9r9-ktx2', fields: [0, 18, 9], bar: 50 },
+    { name: 'b10g11r11-ktx2-rg-swapped', from: 'b10g11r11-ktx2', fields: [0, 11, 11], bar: 50 },
+  ];
+  for (const w of swaps) {
+    const to = join(dir, w.name);
+    mkdirSync(to);
+    for (const f of ['ibl.json', 'dfg.ktx2', 'sh.json']) writeFileSync(join(to, f), readFileSync(join(dir, w.from, f)));
+    for (const f of ['specular.ktx2', 'irradiance.ktx2']) swapFieldsKtx2(join(dir, w.from, f), join(to, f), w.fields);
+  }
+  const views = [
+    { name: 'grid', params: { mode: 'grid', res: '320x160', exposure: '0' } },
+    { name: 'sphere', params: { mode: 'sphere', m: '1', r: '0.3', eye: toPage([0, -4, 0.6], 'three'), target: '0,0,0', fov: String(FOV), res: RES, exposure: '0' } },
+  ];
+  const fig = {};
+  for (const v of views) {
+    const ref = (await view({ ...v.params, ibl: url(join(dir, 'rgba16f-ktx2')) + '/' })).image;
+    writePng(join(out, `formats-${v.name}-rgba16f-ktx2.png`), ref);
+    for (const b of [...bakes.slice(1), ...swaps]) {
+      const img = (await view({ ...v.params, ibl: url(join(dir, b.name)) + '/' })).image;
+      writePng(join(out, `formats-${v.name}-${b.name}.png`), img);
+      writePng(join(out, `formats-${v.name}-${b.name}-diff-x8.png`), diffImage(img, ref));
+      const c = compare(img, ref);
+      let max = 0;
+      for (let i = 0; i < img.rgba.length; i++) if (i % 4 !== 3) max = Math.max(max, Math.abs(img.rgba[i] - ref.rgba[i]));
+      fig[`${v.name}_${b.name}`] = { psnr: c.psnr, mean: c.mean, max };
+      const what = `${v.name} view, ${b.name} bake vs the rgba16f KTX2 bake`;
+      const detail = `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} pixels, mean |Δ| ${c.mean.toFixed(3)} codes, max ${max}`;
+      if (b.exact) check(what, max === 0, `${detail} (must be 0: the same texels)`);
+      else if (b.from) check(`${what} (control: two channels swapped in every texel) fails`, c.psnr < b.bar, `${detail} (must stay under ${b.bar})`);
+      else check(what, c.psnr >= b.bar, `${detail} (≥ ${b.bar})`);
+    }
+  }
+  figures.formats = fig;
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|formats|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
   if (!only || only === 'ibl') {
@@ -644,6 +724,7 @@ try {
   }
   figures.frame_ms_640x360 = times;
   }
+  if (!only || only === 'formats') await formatTests();
   if (!only || only === 'sh') await shTests();
   if (!only || only === 'prt') await prtTests();
   if (!only || only === 'prt' || only === 'glossy') await glossyPrtTests();
