@@ -163,7 +163,7 @@ async function view(params, { bench = 0, evaluate = null } = {}) {
   const all = [...logs, ...errors];
   if (all.length) pageErrors.push({ query, errors: all });
   if (!ok) throw new Error(`page failed: ${query}\n${all.join('\n')}`);
-  return { image: fromPage(pixels), ms, value };
+  return { image: fromPage(pixels), ms, value, errors: all };
 }
 
 // Cameras are given in prtkit's frame (+Z up), as to `render`; the page gets them in three.js's
@@ -625,7 +625,57 @@ async function formatTests() {
   figures.formats = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|formats|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
+// ---- Models (mode=model) lit by the split sum ------------------------------------------------
+// testdata/meshes/sphere.obj (a UV sphere, 16 rings × 32 segments, exact vertex normals) at the
+// origin, with the panel's r and m, against the page's own ray-cast sphere (mode=sphere) of the
+// same material and camera, over the sphere less a rim (the polygon's silhouette differs); a
+// tetrahedra.gltf page whose shading must not follow the panel's r and m (its glTF material is
+// kept: the glTF default, white, metalness 1, roughness 1), and no WebGL error in either page.
+async function modelTests() {
+  const obj = url(join(repo, 'testdata/meshes/sphere.obj'));
+  const [w, h] = RES.split('x').map(Number);
+  const fig = {};
+  for (const v of [{ name: 'gold-r0.3', m: 1, r: 0.3, eye: [0, -4, 0.6] }, { name: 'plastic-r0.5', m: 0, r: 0.5, eye: [3, -2.5, 1.2], base: [0.8, 0.2, 0.15] }]) {
+    const base = (v.base ?? [1, 0.78, 0.34]).join(',');
+    const params = { ibl: url(bake) + '/', m: String(v.m), r: String(v.r), base, eye: toPage(v.eye, 'three'), target: '0,0,0', fov: String(FOV), res: RES, exposure: '0' };
+    const ref = (await view({ ...params, mode: 'sphere' })).image;
+    const got = await view({ ...params, mode: 'model', model: obj });
+    writePng(join(out, `model-sphere-obj-${v.name}.png`), got.image);
+    writePng(join(out, `model-sphere-obj-${v.name}-diff-x8.png`), diffImage(got.image, ref));
+    const mask = sphereMask(v.eye, [0, 0, 0], FOV, w, h);
+    const c = compare(got.image, ref, mask);
+    fig[`sphere_obj_${v.name}`] = c.psnr;
+    check(`model sphere.obj ${v.name} (mode=model) vs the ray-cast sphere (mode=sphere)`, c.psnr >= 35,
+      `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} sphere pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+    check(`model sphere.obj ${v.name}: the page logged no WebGL, shader or page error`, got.errors.length === 0,
+      got.errors.length ? got.errors.join('; ').slice(0, 500) : 'none');
+    if (v.m === 0) {
+      // Control: the panel's roughness ignored (the OBJ drawn at r = 0.05 instead) must fail.
+      const wrong = (await view({ ...params, mode: 'model', model: obj, r: '0.05' })).image;
+      const cw = compare(wrong, ref, mask);
+      fig[`sphere_obj_${v.name}_r0.05`] = cw.psnr;
+      check(`model sphere.obj at r = 0.05 vs the r = ${v.r} sphere (control) fails`, cw.psnr < 35, `PSNR ${cw.psnr.toFixed(2)} dB (< 35)`);
+    }
+  }
+  // glTF: the file's material (glTF's default: white, metalness 1, roughness 1) whatever the panel says.
+  const gltf = url(join(repo, 'testdata/meshes/tetrahedra.gltf'));
+  const cam = { ibl: url(bake) + '/', eye: '3,2.5,6', target: '0.5,0.5,-1', fov: '40', res: '200x160', exposure: '0', base: '0.2,0.9,0.2' };
+  const a = await view({ ...cam, mode: 'model', model: gltf, r: '0.1', m: '0' });
+  const b = await view({ ...cam, mode: 'model', model: gltf, r: '0.9', m: '1' });
+  const sky = (await view({ ...cam, mode: 'sky' })).image;
+  writePng(join(out, 'model-tetrahedra-gltf.png'), a.image);
+  const same = compare(a.image, b.image), drawn = compare(a.image, sky);
+  let covered = 0;
+  for (let i = 0; i < a.image.rgba.length; i += 4) if ([0, 1, 2].some((c) => a.image.rgba[i + c] !== sky.rgba[i + c])) covered++;
+  fig.tetrahedra_gltf = { covered_pixels: covered, panel_change_mean: same.mean };
+  check('model tetrahedra.gltf: drawn (pixels differ from the sky alone) and its glTF material kept (the panel\'s r, m, base change nothing)',
+    covered > 500 && same.mean === 0, `${covered} pixels covered (> 500), mean |Δ| ${same.mean.toFixed(3)} codes between panel r/m/base settings (must be 0); vs sky ${drawn.mean.toFixed(2)} codes`);
+  check('model tetrahedra.gltf: the page logged no WebGL, shader or page error', a.errors.length + b.errors.length === 0,
+    [...a.errors, ...b.errors].join('; ').slice(0, 500) || 'none');
+  figures.model = fig;
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|formats|model|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
   if (!only || only === 'ibl') {
@@ -725,6 +775,7 @@ try {
   figures.frame_ms_640x360 = times;
   }
   if (!only || only === 'formats') await formatTests();
+  if (!only || only === 'model') await modelTests();
   if (!only || only === 'sh') await shTests();
   if (!only || only === 'prt') await prtTests();
   if (!only || only === 'prt' || only === 'glossy') await glossyPrtTests();
