@@ -26,6 +26,7 @@
 //   (these four: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
 //    rotate=DEG turns the lighting about the up axis: SH coefficients rotated every frame)
 //   test=1            no UI, no animation loop: the test script drives window.prtkit
+// Files dropped on the page open as their URLs would (object URLs; see openFiles).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
@@ -264,7 +265,7 @@ async function buildModel() {
   const url = q.get('model');
   if (!url) throw new Error('mode=model needs model=URL (.gltf, .glb or .obj)');
   if (model.key !== url) {
-    Object.assign(model, await loadModel(url), { key: url });
+    Object.assign(model, await loadModel(url, q.get('type') ?? undefined, dropped.manager()), { key: url });
     const up = q.get('up') ?? (model.fromObj ? 'z' : 'y');
     if (up === 'z') { // prtkit's +Z-up axes into three's +Y-up world: (x, y, z) → (x, z, −y)
       model.object.matrixAutoUpdate = false;
@@ -606,8 +607,11 @@ async function setup() {
   }
   if (!ibl || ibl.frame !== state.frame) {
     const url = q.get('ibl');
-    if (!url) throw new Error('give the bake folder: ?ibl=/path/to/ibl/ (scripts/view.sh DIR does it)');
-    ibl = await loadPrtkitIbl(url, { frame: state.frame });
+    if (!url) { // nothing to show yet: say how to give it
+      document.getElementById('source').textContent = 'drop a bake (ibl.json and its files) here, or give ?ibl=DIR/';
+      return;
+    }
+    ibl = await loadPrtkitIbl(url, { frame: state.frame, urlOf: dropped.bake ? dropped.urlOf : undefined });
     document.getElementById('source').textContent = ibl.manifest.source.split('/').pop();
   }
   if (state.mode === 'model') await buildModel();
@@ -621,6 +625,84 @@ async function setup() {
   scene.add(spheres);
   updateUniforms();
 }
+
+// --- files dropped on the page ---------------------------------------------------------------
+// Each dropped file gets an object URL; the page then opens them as it opens URLs, in the mode
+// they call for:
+//   ibl.json (a prtkit.ibl manifest) and the files it names → the bake (mode grid, or the current
+//     mode if it already shows a bake: sphere, sky, model);
+//   a prtkit.sh document (sh-project) → mode irradiance (with a transfer .glb: its lighting);
+//   a .glb whose mesh holds prtkit.transfer extras → mode prt (with the dropped .sh.json and, for a
+//     glossy bake, the dropped .glsl snippet);
+//   any other .gltf/.glb or an .obj → mode model, lit by the bake dropped with it or already open
+//     (a .gltf's .bin and textures dropped with it are found by name).
+const IBL_MODES = ['grid', 'sphere', 'sky', 'model'];
+const dropped = {
+  urls: new Map(), // file name → object URL
+  bake: false,
+  urlOf: (name) => dropped.urls.get(name) ?? name,
+  // glTF resources (buffers, images) by the name the .gltf gives them.
+  manager: () => {
+    if (!dropped.urls.size) return undefined;
+    const manager = new THREE.LoadingManager();
+    manager.setURLModifier((u) => dropped.urls.get(decodeURIComponent(u.split(/[?#]/)[0].split('/').pop())) ?? u);
+    return manager;
+  },
+};
+async function openFiles(files) {
+  for (const u of dropped.urls.values()) URL.revokeObjectURL(u);
+  dropped.urls = new Map(files.map((f) => [f.name, URL.createObjectURL(f)]));
+  const ext = (f) => f.name.toLowerCase().split('.').pop();
+  const jsonFormat = async (f) => { try { return JSON.parse(await f.text()).format; } catch { return null; } };
+  const formats = new Map();
+  for (const f of files) if (ext(f) === 'json') formats.set(f.name, await jsonFormat(f));
+  const manifest = files.find((f) => formats.get(f.name) === 'prtkit.ibl');
+  const sh = files.find((f) => formats.get(f.name) === 'prtkit.sh');
+  const glsl = files.find((f) => ext(f) === 'glsl');
+  let prt = null, modelFile = null;
+  for (const f of files.filter((f) => ['glb', 'gltf', 'obj'].includes(ext(f)))) {
+    let isPrt = false;
+    if (ext(f) === 'glb') {
+      const gltf = await new GLTFLoader().loadAsync(dropped.urls.get(f.name)).catch(() => null);
+      gltf?.scene.traverse((o) => { if (o.isMesh && o.userData['prtkit.transfer']) isPrt = true; });
+    }
+    if (isPrt) prt = f; else modelFile ??= f;
+  }
+  if (!manifest && !sh && !prt && !modelFile) throw new Error(`dropped ${files.map((f) => f.name).join(', ')}: no ibl.json, prtkit.sh document, .glb, .gltf or .obj among them`);
+  for (const k of ['sh', 'glb', 'glsl', 'model', 'type']) q.delete(k);
+  for (const k of Object.keys(docs)) delete docs[k];
+  model.key = '';
+  if (manifest) {
+    dropped.urls.set('ibl.json', dropped.urls.get(manifest.name)); // the loader asks for ibl.json
+    dropped.bake = true;
+    ibl = null;
+    q.set('ibl', 'dropped/');
+  }
+  if (sh) q.set('sh', dropped.urls.get(sh.name));
+  if (prt) {
+    state.mode = 'prt';
+    q.set('glb', dropped.urls.get(prt.name));
+    if (glsl) q.set('glsl', dropped.urls.get(glsl.name));
+  } else if (modelFile) {
+    state.mode = 'model';
+    q.set('model', dropped.urls.get(modelFile.name));
+    q.set('type', ext(modelFile));
+  } else if (manifest) {
+    if (!IBL_MODES.includes(state.mode) || state.mode === 'model') state.mode = 'grid';
+  } else if (sh) state.mode = 'irradiance';
+  if (!q.has('eye')) placeCamera();
+  if (!test) document.getElementById('mode').value = state.mode;
+  await setup();
+  draw();
+  return true;
+}
+addEventListener('dragover', (e) => e.preventDefault());
+addEventListener('drop', (e) => {
+  e.preventDefault();
+  const files = [...(e.dataTransfer?.files ?? [])];
+  if (!files.length) return;
+  window.prtkit.ready = openFiles(files).catch((err) => { report(err.stack ?? err); return false; });
+});
 
 function draw() {
   camera.updateMatrixWorld();
@@ -660,6 +742,7 @@ window.prtkit = {
   decodedNormals,
   rotateShZ,
   sh: () => docs.sh?.coefficients,
+  state: () => ({ ...state, ibl: q.get('ibl'), sh: q.get('sh'), model: q.get('model'), glb: q.get('glb'), dropped: [...dropped.urls.keys()] }),
   // ms per call of the per-cluster half of compressed relighting (the CPU's share of a frame).
   cpcaProjectMs: (calls = 20) => {
     const t0 = performance.now();

@@ -296,22 +296,24 @@ export function envFromWorld(manifest, frame = 'three', rotateY = 0) {
 /**
  * Reads DIR/ibl.json and the files it names.
  * @param {string} dir URL of the folder (trailing slash optional)
- * @param {{frame?: 'three'|'gl', ktx2Loader?: object}} options
+ * @param {{frame?: 'three'|'gl', ktx2Loader?: object, urlOf?: (name: string) => string}} options
  * @returns {Promise<{manifest, specular, background, irradiance, dfg, sh, envFromWorld, lodOfRoughness}>}
  *   specular: the whole chain (for your split-sum shader); background: level 0 alone, for
  *   scene.background
  */
 export async function loadPrtkitIbl(dir, options = {}) {
   const base = dir.endsWith('/') ? dir : dir + '/';
-  const manifest = await (await fetch(base + 'ibl.json')).json();
+  // Where each file is: DIR/NAME, or options.urlOf(NAME) (e.g. object URLs of dropped files).
+  const at = options.urlOf ?? ((name) => base + name);
+  const manifest = await (await fetch(at('ibl.json'))).json();
   if (manifest.format !== 'prtkit.ibl' || manifest.version !== 1) {
     throw new Error(`${base}ibl.json: not a prtkit.ibl version 1 manifest`);
   }
   const container = manifest.specular.container; // 'ktx2' or 'dds', the same for every file
   const [spec, irr, shDoc] = await Promise.all([
-    fetchBytes(base + manifest.specular.file),
-    fetchBytes(base + manifest.irradiance.file),
-    fetch(base + manifest.sh.file).then((r) => r.json()),
+    fetchBytes(at(manifest.specular.file)),
+    fetchBytes(at(manifest.irradiance.file)),
+    fetch(at(manifest.sh.file)).then((r) => r.json()),
   ]);
   const specular = cubeFromImage(readTexture(container, spec, manifest.specular.file), manifest.specular.file);
   if (specular.userData.fileFormat !== manifest.specular.format) {
@@ -334,9 +336,9 @@ export async function loadPrtkitIbl(dir, options = {}) {
   let dfg;
   if (options.ktx2Loader && container === 'ktx2') {
     // three's own loader handles this one (a 2-D RG16F table); only the filters need changing.
-    dfg = finishTable(await options.ktx2Loader.loadAsync(base + manifest.dfg.file));
+    dfg = finishTable(await options.ktx2Loader.loadAsync(at(manifest.dfg.file)));
   } else {
-    dfg = tableFromImage(readTexture(container, await fetchBytes(base + manifest.dfg.file), manifest.dfg.file), manifest.dfg.file);
+    dfg = tableFromImage(readTexture(container, await fetchBytes(at(manifest.dfg.file)), manifest.dfg.file), manifest.dfg.file);
   }
   // (A, B) in .rg: 'multiscatter' stores (B, A + B); the shader below wants (A, B).
   const dfgSwizzle = manifest.dfg.variant === 'multiscatter' ? 1 : 0;

@@ -675,7 +675,73 @@ async function modelTests() {
   figures.model = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|formats|model|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
+// ---- Files dropped on the page ----------------------------------------------------------------
+// The page opened with a camera and material but no files; the test fetches the files in the
+// page, makes File objects, puts them in a DataTransfer and dispatches a synthetic 'drop' on the
+// page. The page must switch to the right mode and draw the same frame as the same files opened
+// by URL (max difference 0), with no error.
+async function dropView(params, files) {
+  const page = await browser.newPage();
+  const logs = [];
+  page.on('console', (m) => { if (m.type() === 'error') logs.push(m.text()); });
+  page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
+  const [w, h] = params.res.split('x').map(Number);
+  await page.setViewport({ width: w, height: h, deviceScaleFactor: 1 });
+  await page.goto(`${origin}/viewer/?${new URLSearchParams({ test: '1', ...params })}`, { waitUntil: 'load' });
+  await page.evaluate(() => window.prtkit.ready);
+  const before = await page.evaluate(() => window.prtkit.state().mode);
+  const ok = await page.evaluate(async (paths) => {
+    const dt = new DataTransfer();
+    for (const p of paths) dt.items.add(new File([await (await fetch(p)).blob()], p.split('/').pop()));
+    document.body.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    return window.prtkit.ready;
+  }, files);
+  const state = await page.evaluate(() => window.prtkit.state());
+  const pixels = ok ? await page.evaluate(() => window.prtkit.pixels()) : null;
+  const errors = [...logs, ...(await page.evaluate(() => window.prtkit.errors.slice()))];
+  await page.close();
+  if (errors.length) pageErrors.push({ query: `drop ${files.join(', ')}`, errors });
+  return { before, state, image: pixels ? fromPage(pixels) : null, errors };
+}
+async function dropTests() {
+  const b = (f) => url(join(bake, f));
+  const bakeFiles = ['ibl.json', 'specular.ktx2', 'irradiance.ktx2', 'dfg.ktx2', 'sh.json'].map(b);
+  const cam = { eye: toPage([3, -2.5, 1.2], 'three'), target: '0,0,0', fov: String(FOV), res: RES, exposure: '0' };
+  const { dir, sky } = skyIn('drop');
+  run('sh-project', [sky, '-F', '2', '-o', join(dir, 'sky.sh.json'), '-q']);
+  run('transfer', ['testdata/meshes/torus-knot.obj', '-n', '3', '--rays', '64', '--glb', join(dir, 'knot3.glb'), '-o', join(dir, 'knot3.json'), '-q']);
+  const cases = [
+    { name: 'a bake (ibl.json and its files), page in mode=sphere', start: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15' },
+      files: bakeFiles, mode: 'sphere', byUrl: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15', ibl: url(bake) + '/' } },
+    { name: 'a bake on an empty page', start: {}, files: bakeFiles, mode: 'grid', byUrl: { ibl: url(bake) + '/' } },
+    { name: 'a .sh.json (sh-project)', start: { exposure: '-3' }, files: [url(join(dir, 'sky.sh.json'))], mode: 'irradiance',
+      byUrl: { mode: 'irradiance', sh: url(join(dir, 'sky.sh.json')), exposure: '-3' } },
+    { name: 'a bake with sphere.obj', start: { m: '1', r: '0.3' }, files: [...bakeFiles, url(join(repo, 'testdata/meshes/sphere.obj'))], mode: 'model',
+      byUrl: { mode: 'model', m: '1', r: '0.3', ibl: url(bake) + '/', model: url(join(repo, 'testdata/meshes/sphere.obj')) } },
+    { name: 'a bake with tetrahedra-bin.gltf and its .bin', start: {}, mode: 'model',
+      files: [...bakeFiles, url(join(repo, 'testdata/meshes/tetrahedra-bin.gltf')), url(join(repo, 'testdata/meshes/tetrahedra.bin'))],
+      byUrl: { mode: 'model', ibl: url(bake) + '/', model: url(join(repo, 'testdata/meshes/tetrahedra-bin.gltf')) }, cam: { eye: '3,2.5,6', target: '0.5,0.5,-1' } },
+    { name: 'a transfer .glb with a .sh.json', start: { exposure: '-2' }, mode: 'prt',
+      files: [url(join(dir, 'knot3.glb')), url(join(dir, 'sky.sh.json'))],
+      byUrl: { mode: 'prt', glb: url(join(dir, 'knot3.glb')), sh: url(join(dir, 'sky.sh.json')), exposure: '-2' } },
+  ];
+  const fig = {};
+  for (const c of cases) {
+    const camera = { ...cam, ...(c.cam ?? {}) };
+    const d = await dropView({ ...camera, ...c.start }, c.files);
+    const ref = (await view({ ...camera, ...c.byUrl })).image;
+    let max = -1;
+    if (d.image) { max = 0; for (let i = 0; i < ref.rgba.length; i++) if (i % 4 !== 3) max = Math.max(max, Math.abs(d.image.rgba[i] - ref.rgba[i])); }
+    const slug = c.name.replace(/[^a-z0-9]+/gi, '-');
+    if (d.image) writePng(join(out, `drop-${slug}.png`), d.image);
+    fig[slug] = { mode: d.state.mode, max };
+    check(`drop ${c.name}: mode ${c.mode}, the same frame as by URL, no error`, d.state.mode === c.mode && max === 0 && d.errors.length === 0,
+      `mode ${d.before} → ${d.state.mode} (want ${c.mode}), max |Δ| ${max} codes against the URL-opened page (must be 0), errors: ${d.errors.join('; ').slice(0, 300) || 'none'}`);
+  }
+  figures.drop = fig;
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
   if (!only || only === 'ibl') {
@@ -776,6 +842,7 @@ try {
   }
   if (!only || only === 'formats') await formatTests();
   if (!only || only === 'model') await modelTests();
+  if (!only || only === 'drop') await dropTests();
   if (!only || only === 'sh') await shTests();
   if (!only || only === 'prt') await prtTests();
   if (!only || only === 'prt' || only === 'glossy') await glossyPrtTests();
