@@ -2,6 +2,10 @@
 // URL parameters (all optional but ibl):
 //   ibl=URL/          folder holding ibl.json (served by viewer/serve.mjs)
 //   mode=grid|sphere|sky|equirect   equirect: three's own view of src= (a lat-long .hdr/.exr)
+//   mode=model        model=URL (.gltf/.glb by GLTFLoader, .obj by OBJLoader) lit by the split sum:
+//                     glTF materials keep their base colour/metalness/roughness (factors and
+//                     textures), an OBJ takes r, m, base; up=y|z the model's up axis (glTF: y;
+//                     OBJ default z, prtkit's meshes)
 //   src=URL           the source map, for mode=equirect
 //   sky=custom|builtin   skybox by our shader (textureLod level 0) or three's scene.background
 //   frame=three|gl    three: agree with three.js's cube convention (x negated); gl: raw direction
@@ -22,11 +26,13 @@
 //   (these four: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
 //    rotate=DEG turns the lighting about the up axis: SH coefficients rotated every frame)
 //   test=1            no UI, no animation loop: the test script drives window.prtkit
+// Files dropped on the page open as their URLs would (object URLs; see openFiles).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
 import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
 import { loadPrtkitIbl, PRTKIT_IBL_GLSL, prtkitUniforms } from './prtkit-loader.js';
 import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, loadPrtkitShrm, SHRM_GLSL, loadNormalCodes,
   prtAttribute, transferLightingUniform, prtVertexShader, PRT_FRAGMENT,
@@ -175,6 +181,121 @@ function addSphere(center, r, m) {
   mesh.position.set(...center);
   spheres.add(mesh);
 }
+// --- models (mode=model): a glTF/GLB or OBJ lit by the same split sum as the spheres ---------
+// The vertex normal (world space, through the inverse transpose) replaces the ray-cast one; the
+// shading is the spheres' prtkitSplitSum. glTF metal/rough materials keep their own base colour,
+// metalness and roughness, factors times textures (baseColorTexture in .rgb, sRGB, decoded by
+// three; metallicRoughnessTexture's .g roughness, .b metalness, glTF 2.0 §3.9.2); normal,
+// occlusion and emissive textures are not applied. An OBJ gets the panel's r, m and base.
+const modelVertex = /* glsl */ `
+  varying vec3 vWorld;
+  varying vec3 vNormal;
+  varying vec2 vUv;
+  void main() {
+    vec4 w = modelMatrix * vec4(position, 1.0);
+    vWorld = w.xyz;
+    vNormal = transpose(inverse(mat3(modelMatrix))) * normal;
+    vUv = uv;
+    gl_Position = projectionMatrix * viewMatrix * w;
+  }`;
+const modelFragment = /* glsl */ `
+  ${PRTKIT_IBL_GLSL}
+  uniform vec3 baseColor;
+  uniform float metalness;
+  uniform float roughness;
+  uniform float exposureScale;
+  uniform sampler2D baseColorMap;
+  uniform sampler2D metalRoughMap;
+  varying vec3 vWorld;
+  varying vec3 vNormal;
+  varying vec2 vUv;
+  void main() {
+    vec3 n = normalize(vNormal);
+    if (!gl_FrontFacing) n = -n; // a double-sided glTF material, or an OBJ wound inwards
+    vec3 v = normalize(cameraPosition - vWorld);
+    vec3 base = baseColor;
+    float m = metalness, r = roughness;
+  #ifdef USE_BASE_MAP
+    base *= texture(baseColorMap, vUv).rgb;
+  #endif
+  #ifdef USE_MR_MAP
+    vec4 mr = texture(metalRoughMap, vUv);
+    r *= mr.g;
+    m *= mr.b;
+  #endif
+    vec3 c = prtkitSplitSum(n, v, base, clamp(m, 0.0, 1.0), clamp(r, 0.0, 1.0)) * exposureScale;
+    gl_FragColor = linearToOutputTexel(vec4(c, 1.0));
+  }`;
+const model = { object: null, materials: [], fromObj: false, key: '' };
+// The model's file type: by the URL's extension, or `type=` (object URLs of dropped files have none).
+const modelKind = (url, type) => (type ?? url.split(/[?#]/)[0].split('.').pop()).toLowerCase();
+async function loadModel(url, type = q.get('type') ?? undefined, manager = undefined) {
+  const kind = modelKind(url, type);
+  if (kind === 'obj') return { object: await new OBJLoader(manager).loadAsync(url), fromObj: true };
+  if (kind === 'gltf' || kind === 'glb') return { object: (await new GLTFLoader(manager).loadAsync(url)).scene, fromObj: false };
+  throw new Error(`model=${url}: .gltf, .glb or .obj (or give type=gltf|glb|obj)`);
+}
+function modelMaterial(source, fromObj) {
+  const defines = {};
+  const uniforms = {
+    ...prtkitUniforms(ibl, rotation()),
+    baseColor: { value: new THREE.Color().setRGB(...state.base, THREE.LinearSRGBColorSpace) },
+    metalness: { value: state.m },
+    roughness: { value: state.r },
+    exposureScale: { value: exposureScale() },
+    baseColorMap: { value: null },
+    metalRoughMap: { value: null },
+  };
+  if (!fromObj && source?.isMeshStandardMaterial) {
+    uniforms.baseColor.value.copy(source.color); // linear: glTF's baseColorFactor is, and three keeps it so
+    uniforms.metalness.value = source.metalness;
+    uniforms.roughness.value = source.roughness;
+    if (source.map) { uniforms.baseColorMap.value = source.map; defines.USE_BASE_MAP = ''; }
+    if (source.roughnessMap || source.metalnessMap) {
+      uniforms.metalRoughMap.value = source.roughnessMap ?? source.metalnessMap;
+      defines.USE_MR_MAP = '';
+    }
+  }
+  const material = new THREE.ShaderMaterial({ uniforms, defines, vertexShader: modelVertex, fragmentShader: modelFragment,
+    side: fromObj ? THREE.DoubleSide : (source?.side ?? THREE.FrontSide) });
+  material.userData.fromObj = fromObj;
+  return material;
+}
+async function buildModel() {
+  const url = q.get('model');
+  if (!url) throw new Error('mode=model needs model=URL (.gltf, .glb or .obj)');
+  if (model.key !== url) {
+    Object.assign(model, await loadModel(url, q.get('type') ?? undefined, dropped.manager()), { key: url });
+    const up = q.get('up') ?? (model.fromObj ? 'z' : 'y');
+    if (up === 'z') { // prtkit's +Z-up axes into three's +Y-up world: (x, y, z) → (x, z, −y)
+      model.object.matrixAutoUpdate = false;
+      model.object.matrix.set(1, 0, 0, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 1);
+    } else if (up !== 'y') throw new Error(`up=${up}: y or z`);
+    model.object.traverse((o) => {
+      if (!o.isMesh) return;
+      if (!o.geometry.attributes.normal) o.geometry.computeVertexNormals();
+    });
+  }
+  model.materials = [];
+  model.object.traverse((o) => {
+    if (!o.isMesh) return;
+    o.userData.source ??= o.material;
+    const make = (m) => { const mm = modelMaterial(m, model.fromObj); model.materials.push(mm); return mm; };
+    o.material = Array.isArray(o.userData.source) ? o.userData.source.map(make) : make(o.userData.source);
+  });
+  spheres.clear();
+  spheres.add(model.object);
+  if (!q.has('eye')) { // frame the model: its bounding sphere fills the view
+    model.object.updateMatrixWorld(true);
+    const s = new THREE.Box3().setFromObject(model.object).getBoundingSphere(new THREE.Sphere());
+    const d = s.radius / Math.sin(THREE.MathUtils.degToRad(camera.fov) / 2) * 1.1;
+    camera.position.copy(s.center).add(new THREE.Vector3(0, 0, d));
+    camera.lookAt(s.center);
+    window.prtkitControls?.target.copy(s.center);
+  }
+  document.getElementById('source').textContent = `${ibl.manifest.source.split('/').pop()}, ${url.split('/').pop()}`;
+}
+
 const GRID_R = [0, 0.25, 0.5, 0.75, 1];
 const GRID_M = [0, 1];
 function buildSpheres() {
@@ -438,7 +559,8 @@ function decodedNormals() {
 function updateUniforms() {
   if (SH_MODES.includes(state.mode)) { updateShUniforms(); return; }
   const common = prtkitUniforms(ibl, rotation());
-  for (const material of [skyMaterial, ...spheres.children.map((s) => s.material)]) {
+  const materials = state.mode === 'model' ? model.materials : spheres.children.map((s) => s.material);
+  for (const material of [skyMaterial, ...materials]) {
     for (const [k, v] of Object.entries(common)) {
       if (material.uniforms[k]) material.uniforms[k].value = v.value;
       else material.uniforms[k] = v;
@@ -451,6 +573,11 @@ function updateUniforms() {
       s.material.uniforms.roughness.value = state.r;
       s.material.uniforms.metalness.value = state.m;
     }
+  }
+  for (const material of model.materials) {
+    if (!material.userData.fromObj) continue; // glTF materials keep their own
+    material.uniforms.roughness.value = state.r;
+    material.uniforms.metalness.value = state.m;
   }
   scene.backgroundIntensity = exposureScale();
   scene.backgroundRotation.set(0, rotation(), 0);
@@ -480,11 +607,15 @@ async function setup() {
   }
   if (!ibl || ibl.frame !== state.frame) {
     const url = q.get('ibl');
-    if (!url) throw new Error('give the bake folder: ?ibl=/path/to/ibl/ (scripts/view.sh DIR does it)');
-    ibl = await loadPrtkitIbl(url, { frame: state.frame });
+    if (!url) { // nothing to show yet: say how to give it
+      document.getElementById('source').textContent = 'drop a bake (ibl.json and its files) here, or give ?ibl=DIR/';
+      return;
+    }
+    ibl = await loadPrtkitIbl(url, { frame: state.frame, urlOf: dropped.bake ? dropped.urlOf : undefined });
     document.getElementById('source').textContent = ibl.manifest.source.split('/').pop();
   }
-  buildSpheres();
+  if (state.mode === 'model') await buildModel();
+  else buildSpheres();
   if (state.sky === 'builtin') {
     // three's own skybox path with the loader's cube: it negates x itself (frame=three only).
     scene.background = ibl.background;
@@ -494,6 +625,84 @@ async function setup() {
   scene.add(spheres);
   updateUniforms();
 }
+
+// --- files dropped on the page ---------------------------------------------------------------
+// Each dropped file gets an object URL; the page then opens them as it opens URLs, in the mode
+// they call for:
+//   ibl.json (a prtkit.ibl manifest) and the files it names → the bake (mode grid, or the current
+//     mode if it already shows a bake: sphere, sky, model);
+//   a prtkit.sh document (sh-project) → mode irradiance (with a transfer .glb: its lighting);
+//   a .glb whose mesh holds prtkit.transfer extras → mode prt (with the dropped .sh.json and, for a
+//     glossy bake, the dropped .glsl snippet);
+//   any other .gltf/.glb or an .obj → mode model, lit by the bake dropped with it or already open
+//     (a .gltf's .bin and textures dropped with it are found by name).
+const IBL_MODES = ['grid', 'sphere', 'sky', 'model'];
+const dropped = {
+  urls: new Map(), // file name → object URL
+  bake: false,
+  urlOf: (name) => dropped.urls.get(name) ?? name,
+  // glTF resources (buffers, images) by the name the .gltf gives them.
+  manager: () => {
+    if (!dropped.urls.size) return undefined;
+    const manager = new THREE.LoadingManager();
+    manager.setURLModifier((u) => dropped.urls.get(decodeURIComponent(u.split(/[?#]/)[0].split('/').pop())) ?? u);
+    return manager;
+  },
+};
+async function openFiles(files) {
+  for (const u of dropped.urls.values()) URL.revokeObjectURL(u);
+  dropped.urls = new Map(files.map((f) => [f.name, URL.createObjectURL(f)]));
+  const ext = (f) => f.name.toLowerCase().split('.').pop();
+  const jsonFormat = async (f) => { try { return JSON.parse(await f.text()).format; } catch { return null; } };
+  const formats = new Map();
+  for (const f of files) if (ext(f) === 'json') formats.set(f.name, await jsonFormat(f));
+  const manifest = files.find((f) => formats.get(f.name) === 'prtkit.ibl');
+  const sh = files.find((f) => formats.get(f.name) === 'prtkit.sh');
+  const glsl = files.find((f) => ext(f) === 'glsl');
+  let prt = null, modelFile = null;
+  for (const f of files.filter((f) => ['glb', 'gltf', 'obj'].includes(ext(f)))) {
+    let isPrt = false;
+    if (ext(f) === 'glb') {
+      const gltf = await new GLTFLoader().loadAsync(dropped.urls.get(f.name)).catch(() => null);
+      gltf?.scene.traverse((o) => { if (o.isMesh && o.userData['prtkit.transfer']) isPrt = true; });
+    }
+    if (isPrt) prt = f; else modelFile ??= f;
+  }
+  if (!manifest && !sh && !prt && !modelFile) throw new Error(`dropped ${files.map((f) => f.name).join(', ')}: no ibl.json, prtkit.sh document, .glb, .gltf or .obj among them`);
+  for (const k of ['sh', 'glb', 'glsl', 'model', 'type']) q.delete(k);
+  for (const k of Object.keys(docs)) delete docs[k];
+  model.key = '';
+  if (manifest) {
+    dropped.urls.set('ibl.json', dropped.urls.get(manifest.name)); // the loader asks for ibl.json
+    dropped.bake = true;
+    ibl = null;
+    q.set('ibl', 'dropped/');
+  }
+  if (sh) q.set('sh', dropped.urls.get(sh.name));
+  if (prt) {
+    state.mode = 'prt';
+    q.set('glb', dropped.urls.get(prt.name));
+    if (glsl) q.set('glsl', dropped.urls.get(glsl.name));
+  } else if (modelFile) {
+    state.mode = 'model';
+    q.set('model', dropped.urls.get(modelFile.name));
+    q.set('type', ext(modelFile));
+  } else if (manifest) {
+    if (!IBL_MODES.includes(state.mode) || state.mode === 'model') state.mode = 'grid';
+  } else if (sh) state.mode = 'irradiance';
+  if (!q.has('eye')) placeCamera();
+  if (!test) document.getElementById('mode').value = state.mode;
+  await setup();
+  draw();
+  return true;
+}
+addEventListener('dragover', (e) => e.preventDefault());
+addEventListener('drop', (e) => {
+  e.preventDefault();
+  const files = [...(e.dataTransfer?.files ?? [])];
+  if (!files.length) return;
+  window.prtkit.ready = openFiles(files).catch((err) => { report(err.stack ?? err); return false; });
+});
 
 function draw() {
   camera.updateMatrixWorld();
@@ -533,6 +742,7 @@ window.prtkit = {
   decodedNormals,
   rotateShZ,
   sh: () => docs.sh?.coefficients,
+  state: () => ({ ...state, ibl: q.get('ibl'), sh: q.get('sh'), model: q.get('model'), glb: q.get('glb'), dropped: [...dropped.urls.keys()] }),
   // ms per call of the per-cluster half of compressed relighting (the CPU's share of a frame).
   cpcaProjectMs: (calls = 20) => {
     const t0 = performance.now();

@@ -9,20 +9,38 @@
 //
 // What three.js can and cannot do with these files (three r187, checked in viewer/test/run.mjs):
 //
-// - specular.ktx2 and irradiance.ktx2 are RGBA16F (or RGBA32F) cube maps with a full mip chain.
-//   three's KTX2Loader does NOT return a cube for them: for uncompressed formats it builds a 2-D
-//   DataTexture of level 0's first face (createRawTexture ignores faceCount), which samples black
-//   as a samplerCube. So this module parses the container with ktx-parse and builds a
-//   THREE.CompressedCubeTexture by hand: six faces, every mip level, in the file's face order
-//   +X, −X, +Y, −Y, +Z, −Z, uploaded as stored (flipY false). three uploads a CompressedTexture
-//   whose format is RGBAFormat with texStorage2D + texSubImage2D, so half floats go to the GPU
-//   unchanged and RGBA16F is linearly filterable in WebGL 2 (RGBA32F needs
-//   OES_texture_float_linear). The packed formats (ibl --format b10g11r11 / e5b9g9r9) are not
-//   supported here: bake with the default rgba16f.
+// - specular.ktx2 and irradiance.ktx2 are cube maps with a full mip chain. three's KTX2Loader
+//   does NOT return a cube for them: for uncompressed formats it builds a 2-D DataTexture of
+//   level 0's first face (createRawTexture ignores faceCount), which samples black as a
+//   samplerCube. So this module parses the container itself (ktx-parse for KTX2, `readDds` below
+//   for DDS) and builds a THREE.CompressedCubeTexture by hand: six faces, every mip level, in the
+//   file's face order +X, −X, +Y, −Y, +Z, −Z, uploaded as stored (flipY false). three uploads a
+//   CompressedTexture whose format is RGBAFormat with texStorage2D + texSubImage2D, so half
+//   floats go to the GPU unchanged and RGBA16F is linearly filterable in WebGL 2 (RGBA32F needs
+//   OES_texture_float_linear).
+// - Every `ibl --format` is read. rgba16f and rgba32f are uploaded as they are. The packed
+//   formats, b10g11r11 (VK_FORMAT_B10G11R11_UFLOAT_PACK32 / DXGI R11G11B10_FLOAT) and e5b9g9r9
+//   (VK_FORMAT_E5B9G9R9_UFLOAT_PACK32 / DXGI R9G9B9E5_SHAREDEXP), are decoded on the CPU into
+//   RGBA16F. Why not upload them packed (WebGL 2 has R11F_G11F_B10F and RGB9_E5 with
+//   UNSIGNED_INT_10F_11F_11F_REV / UNSIGNED_INT_5_9_9_9_REV, and three r187 maps
+//   UnsignedInt101111Type / UnsignedInt5999Type to them)? three sends every CompressedTexture
+//   whose format is not RGBAFormat through compressedTexSubImage2D (WebGLTextures.js), so a
+//   packed RGBFormat mip chain would need a CubeTexture of six mipmapped DataTextures, a second
+//   upload path for one format family. Decoding is the simpler route and it loses nothing: an
+//   11- or 10-bit unsigned float has half's 5-bit exponent with its bias 15 and 6 or 5 mantissa
+//   bits, so it becomes a half by a shift (denormals, infinity and NaN included); a shared-exponent
+//   texel is m·2^(e − 24) with a 9-bit m and e ≤ 31, exactly a half too (2^−24 is half's
+//   smallest denormal, 511·2^7 ≤ 65504). The GPU filters the decoded halves as it would filter
+//   the packed texels it decodes itself; the cost is 8 bytes a texel in GPU memory instead of 4.
+// - DDS (`ibl --container dds`): the DX10 extended header, one cube (miscFlag TEXTURECUBE),
+//   stored face by face, each face with all its mips (KTX2 stores level by level, each level
+//   with its six faces); `readDds` reorders it into KTX2's layout.
 // - dfg.ktx2 is a plain 2-D RG16F texture: three's KTX2Loader reads it correctly (a DataTexture);
 //   only its filters must be set to linear (the loader defaults uncompressed data to nearest).
 //   `loadPrtkitIbl` uses KTX2Loader for it when you pass `{ ktx2Loader }`, and ktx-parse otherwise
-//   (same bytes either way).
+//   (same bytes either way). three's DDSLoader reads neither prtkit's DDS cubes nor its table (it
+//   knows the DX10 header only for a few compressed and 8-bit formats), so dfg.dds goes through
+//   `readDds` too.
 //
 // Frames — which way the x axis goes:
 //
@@ -49,18 +67,63 @@
 import * as THREE from 'three';
 import { read } from 'ktx-parse';
 
-// VkFormat values prtkit writes.
-const VK_R16G16_SFLOAT = 83;
-const VK_R16G16B16A16_SFLOAT = 97;
-const VK_R32G32_SFLOAT = 103;
-const VK_R32G32B32A32_SFLOAT = 109;
+// The texel formats prtkit writes, by their VkFormat (KTX2) and DXGI_FORMAT (DDS) numbers.
+// `packed`: 4-byte texels decoded into RGBA16F on the CPU (see the header).
+const RGBA16F = { name: 'rgba16f', format: THREE.RGBAFormat, type: THREE.HalfFloatType, array: Uint16Array };
+const RGBA32F = { name: 'rgba32f', format: THREE.RGBAFormat, type: THREE.FloatType, array: Float32Array };
+const RG16F = { name: 'rg16f', format: THREE.RGFormat, type: THREE.HalfFloatType, array: Uint16Array };
+const RG32F = { name: 'rg32f', format: THREE.RGFormat, type: THREE.FloatType, array: Float32Array };
+const B10G11R11 = { name: 'b10g11r11', packed: decodeB10G11R11 };
+const E5B9G9R9 = { name: 'e5b9g9r9', packed: decodeE5B9G9R9 };
+const VK_FORMATS = { 97: RGBA16F, 109: RGBA32F, 83: RG16F, 103: RG32F, 122: B10G11R11, 123: E5B9G9R9 };
+const DXGI_FORMATS = { 10: RGBA16F, 2: RGBA32F, 34: RG16F, 16: RG32F, 26: B10G11R11, 67: E5B9G9R9 };
 
-const FORMATS = {
-  [VK_R16G16B16A16_SFLOAT]: { format: THREE.RGBAFormat, type: THREE.HalfFloatType, array: Uint16Array },
-  [VK_R32G32B32A32_SFLOAT]: { format: THREE.RGBAFormat, type: THREE.FloatType, array: Float32Array },
-  [VK_R16G16_SFLOAT]: { format: THREE.RGFormat, type: THREE.HalfFloatType, array: Uint16Array },
-  [VK_R32G32_SFLOAT]: { format: THREE.RGFormat, type: THREE.FloatType, array: Float32Array },
-};
+// An unsigned float of 5 exponent bits (bias 15, as half's) and `mbits` mantissa bits, as the
+// bits of the equal half: the same exponent field, the mantissa moved to half's 10 bits. Exact
+// for every value, denormals (exponent 0), infinity and NaN (exponent 31) included.
+const ufloatToHalf = (bits, mbits) => bits << (10 - mbits);
+
+/**
+ * B10G11R11_UFLOAT_PACK32 (= DXGI R11G11B10_FLOAT) texels to RGBA16F bits, alpha 1:
+ * R in bits 0–10 and G in 11–21 (6-bit mantissa), B in 22–31 (5-bit mantissa).
+ */
+export function decodeB10G11R11(words) {
+  const out = new Uint16Array(words.length * 4);
+  for (let i = 0; i < words.length; i++) {
+    const w = words[i];
+    out[4 * i] = ufloatToHalf(w & 0x7ff, 6);
+    out[4 * i + 1] = ufloatToHalf((w >>> 11) & 0x7ff, 6);
+    out[4 * i + 2] = ufloatToHalf(w >>> 22, 5);
+    out[4 * i + 3] = 0x3c00; // 1.0
+  }
+  return out;
+}
+
+/**
+ * E5B9G9R9_UFLOAT_PACK32 (= DXGI R9G9B9E5_SHAREDEXP) texels to RGBA16F bits, alpha 1: R, G, B
+ * the 9-bit mantissas in bits 0–8, 9–17, 18–26 (no implicit 1), e in bits 27–31, each channel
+ * m·2^(e − 15 − 9) (the KHR data format spec's RGB9E5). Every such value is a half: written as
+ * one directly (a normal half when m's leading 1 leaves an exponent ≥ 1, else a denormal).
+ */
+export function decodeE5B9G9R9(words) {
+  const out = new Uint16Array(words.length * 4);
+  const half = (m, e) => {
+    if (m === 0) return 0;
+    // m·2^(e − 24) = 1.f · 2^(e − 24 + k), k = the index of m's leading bit.
+    const k = 31 - Math.clz32(m);
+    const exponent = e - 24 + k + 15; // half's biased exponent
+    if (exponent >= 1) return (exponent << 10) | ((m << (10 - k)) & 0x3ff); // ≤ 30: e ≤ 31, k ≤ 8
+    return m << e; // a denormal half d·2^−24 with d = m·2^e < 2^(k + 1 + e) ≤ 2^10
+  };
+  for (let i = 0; i < words.length; i++) {
+    const w = words[i], e = w >>> 27;
+    out[4 * i] = half(w & 0x1ff, e);
+    out[4 * i + 1] = half((w >>> 9) & 0x1ff, e);
+    out[4 * i + 2] = half((w >>> 18) & 0x1ff, e);
+    out[4 * i + 3] = 0x3c00;
+  }
+  return out;
+}
 
 /** diag(−1, 1, 1): three.js's cube convention relative to GL/Vulkan's (see the header). */
 export const THREE_FROM_GL = new THREE.Matrix3().set(-1, 0, 0, 0, 1, 0, 0, 0, 1);
@@ -74,52 +137,117 @@ async function fetchBytes(url) {
   return new Uint8Array(await response.arrayBuffer());
 }
 
+// The texels of one mip level (all its faces) as the typed array three uploads: the format's own
+// array for float formats, RGBA16F bits for the packed ones.
 function typedLevel(kind, levelData) {
   const bytes = levelData.slice(); // own, aligned copy
+  if (kind.packed) return kind.packed(new Uint32Array(bytes.buffer, 0, bytes.byteLength / 4));
   return new kind.array(bytes.buffer, 0, bytes.byteLength / kind.array.BYTES_PER_ELEMENT);
+}
+// What three is given for a kind: packed formats arrive as RGBA16F.
+const uploaded = (kind) => (kind.packed ? RGBA16F : kind);
+
+/**
+ * A KTX2 file as { kind, width, height, faceCount, levels: [Uint8Array] }, each level its faces
+ * one after the other (KTX2's own layout).
+ * @param {Uint8Array} bytes the .ktx2 file
+ */
+export function readKtx2(bytes, name = 'ktx2') {
+  const ktx = read(bytes);
+  const kind = VK_FORMATS[ktx.vkFormat];
+  if (!kind) throw new Error(`${name}: vkFormat ${ktx.vkFormat} is not one prtkit writes (rgba16f, rgba32f, b10g11r11, e5b9g9r9, rg16f, rg32f)`);
+  if (ktx.supercompressionScheme !== 0) throw new Error(`${name}: supercompressed KTX2 not supported`);
+  if (ktx.layerCount > 1 || ktx.pixelDepth > 1) throw new Error(`${name}: arrays and 3-D textures not supported`);
+  return { kind, width: ktx.pixelWidth, height: ktx.pixelHeight, faceCount: ktx.faceCount, levels: ktx.levels.map((l) => l.levelData) };
 }
 
 /**
- * A prtkit KTX2 cube map (every mip level) as a THREE.CompressedCubeTexture, faces as stored.
- * @param {Uint8Array} bytes the .ktx2 file
+ * A DDS file with the DX10 header (what `ibl --container dds` writes) as readKtx2 returns it.
+ * DDS stores a cube face by face, each face with all its mips; this reorders it level by level.
+ * Layout (Microsoft's "DDS_HEADER" and "DDS_HEADER_DXT10"): "DDS " magic, a 124-byte header
+ * (height at byte 12, width at 16, mip count at 28, pixel format FourCC at 84), then, FourCC
+ * "DX10", 20 bytes: dxgiFormat at 128, resourceDimension at 132 (3: 2-D), miscFlag at 136
+ * (4: TEXTURECUBE), arraySize at 140; texels from byte 148.
+ * @param {Uint8Array} bytes the .dds file
  */
-export function cubeFromKtx2(bytes, name = 'cube') {
-  const ktx = read(bytes);
-  const kind = FORMATS[ktx.vkFormat];
-  if (ktx.faceCount !== 6) throw new Error(`${name}: ${ktx.faceCount} face(s), not a cube map`);
-  if (!kind || kind.format !== THREE.RGBAFormat) {
-    throw new Error(`${name}: vkFormat ${ktx.vkFormat} not supported by this loader (bake with --format rgba16f or rgba32f)`);
+export function readDds(bytes, name = 'dds') {
+  const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+  const u32 = (at) => view.getUint32(at, true);
+  const fourCC = (at) => String.fromCharCode(bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]);
+  if (bytes.byteLength < 148 || fourCC(0) !== 'DDS ' || u32(4) !== 124) throw new Error(`${name}: not a DDS file`);
+  if (fourCC(84) !== 'DX10') throw new Error(`${name}: a DDS without the DX10 header (prtkit writes DX10 only)`);
+  const kind = DXGI_FORMATS[u32(128)];
+  if (!kind) throw new Error(`${name}: DXGI_FORMAT ${u32(128)} is not one prtkit writes`);
+  if (u32(132) !== 3 || u32(140) !== 1) throw new Error(`${name}: not a single 2-D texture or cube (dimension ${u32(132)}, array size ${u32(140)})`);
+  const height = u32(12), width = u32(16), levelCount = Math.max(1, u32(28));
+  const faceCount = u32(136) & 4 ? 6 : 1;
+  const texel = kind.packed ? 4 : kind.array.BYTES_PER_ELEMENT * (kind.format === THREE.RGBAFormat ? 4 : 2);
+  const faceBytes = (p) => Math.max(1, width >> p) * Math.max(1, height >> p) * texel;
+  const levels = [];
+  for (let p = 0; p < levelCount; p++) levels.push(new Uint8Array(faceBytes(p) * faceCount));
+  let at = 148;
+  for (let f = 0; f < faceCount; f++) {
+    for (let p = 0; p < levelCount; p++) {
+      const n = faceBytes(p);
+      if (at + n > bytes.byteLength) throw new Error(`${name}: truncated (face ${f}, level ${p})`);
+      levels[p].set(bytes.subarray(at, at + n), f * n);
+      at += n;
+    }
   }
-  if (ktx.supercompressionScheme !== 0) throw new Error(`${name}: supercompressed KTX2 not supported`);
-  const faces = [0, 1, 2, 3, 4, 5].map(() => ({ mipmaps: [], width: ktx.pixelWidth, height: ktx.pixelHeight }));
-  ktx.levels.forEach((level, p) => {
-    const size = Math.max(1, ktx.pixelWidth >> p);
-    const data = typedLevel(kind, level.levelData);
-    const faceLength = data.length / 6; // KTX2 stores each level's faces one after the other
+  return { kind, width, height, faceCount, levels };
+}
+
+// A file's texels by its container: 'ktx2' or 'dds' (the manifest's `container`).
+function readTexture(container, bytes, name) {
+  if (container === 'ktx2') return readKtx2(bytes, name);
+  if (container === 'dds') return readDds(bytes, name);
+  throw new Error(`${name}: container ${container} (ktx2 or dds)`);
+}
+
+/**
+ * A prtkit cube map (every mip level) as a THREE.CompressedCubeTexture, faces as stored.
+ * @param {{kind, width, height, faceCount, levels}} image from readKtx2 or readDds
+ */
+export function cubeFromImage(image, name = 'cube') {
+  if (image.faceCount !== 6) throw new Error(`${name}: ${image.faceCount} face(s), not a cube map`);
+  const kind = uploaded(image.kind);
+  if (kind.format !== THREE.RGBAFormat) throw new Error(`${name}: a ${image.kind.name} cube (prtkit's cubes are RGBA or packed RGB)`);
+  const faces = [0, 1, 2, 3, 4, 5].map(() => ({ mipmaps: [], width: image.width, height: image.height }));
+  image.levels.forEach((levelData, p) => {
+    const size = Math.max(1, image.width >> p);
+    const data = typedLevel(image.kind, levelData);
+    const faceLength = data.length / 6; // each level's faces one after the other
     for (let f = 0; f < 6; f++) {
       faces[f].mipmaps.push({ data: data.subarray(f * faceLength, (f + 1) * faceLength), width: size, height: size });
     }
   });
   const texture = new THREE.CompressedCubeTexture(faces, kind.format, kind.type);
-  texture.minFilter = ktx.levels.length > 1 ? THREE.LinearMipmapLinearFilter : THREE.LinearFilter;
+  texture.minFilter = image.levels.length > 1 ? THREE.LinearMipmapLinearFilter : THREE.LinearFilter;
   texture.magFilter = THREE.LinearFilter;
   texture.generateMipmaps = false;
   texture.colorSpace = THREE.LinearSRGBColorSpace; // linear radiance
   texture.flipY = false;
   texture.needsUpdate = true;
-  texture.userData.levels = ktx.levels.length;
-  texture.userData.size = ktx.pixelWidth;
+  texture.userData.levels = image.levels.length;
+  texture.userData.size = image.width;
+  texture.userData.fileFormat = image.kind.name;
   return texture;
 }
 
-/** A prtkit 2-D KTX2 table (the DFG) as a linearly filtered THREE.DataTexture, row 0 at v = 0. */
-export function tableFromKtx2(bytes, name = 'table') {
-  const ktx = read(bytes);
-  const kind = FORMATS[ktx.vkFormat];
-  if (ktx.faceCount !== 1 || !kind) throw new Error(`${name}: not a 2-D RG/RGBA float table`);
-  const texture = new THREE.DataTexture(typedLevel(kind, ktx.levels[0].levelData), ktx.pixelWidth, ktx.pixelHeight, kind.format, kind.type);
+/** A prtkit KTX2 cube map (every mip level, any `ibl --format`) as a THREE.CompressedCubeTexture. */
+export const cubeFromKtx2 = (bytes, name = 'cube') => cubeFromImage(readKtx2(bytes, name), name);
+/** A prtkit DDS cube map (DX10 header, any `ibl --format`) as a THREE.CompressedCubeTexture. */
+export const cubeFromDds = (bytes, name = 'cube') => cubeFromImage(readDds(bytes, name), name);
+
+/** A prtkit 2-D table (the DFG) as a linearly filtered THREE.DataTexture, row 0 at v = 0. */
+export function tableFromImage(image, name = 'table') {
+  if (image.faceCount !== 1) throw new Error(`${name}: not a 2-D table`);
+  const kind = uploaded(image.kind);
+  const texture = new THREE.DataTexture(typedLevel(image.kind, image.levels[0]), image.width, image.height, kind.format, kind.type);
   return finishTable(texture);
 }
+export const tableFromKtx2 = (bytes, name = 'table') => tableFromImage(readKtx2(bytes, name), name);
+export const tableFromDds = (bytes, name = 'table') => tableFromImage(readDds(bytes, name), name);
 
 function finishTable(texture) {
   texture.minFilter = THREE.LinearFilter;
@@ -168,24 +296,29 @@ export function envFromWorld(manifest, frame = 'three', rotateY = 0) {
 /**
  * Reads DIR/ibl.json and the files it names.
  * @param {string} dir URL of the folder (trailing slash optional)
- * @param {{frame?: 'three'|'gl', ktx2Loader?: object}} options
+ * @param {{frame?: 'three'|'gl', ktx2Loader?: object, urlOf?: (name: string) => string}} options
  * @returns {Promise<{manifest, specular, background, irradiance, dfg, sh, envFromWorld, lodOfRoughness}>}
  *   specular: the whole chain (for your split-sum shader); background: level 0 alone, for
  *   scene.background
  */
 export async function loadPrtkitIbl(dir, options = {}) {
   const base = dir.endsWith('/') ? dir : dir + '/';
-  const manifest = await (await fetch(base + 'ibl.json')).json();
+  // Where each file is: DIR/NAME, or options.urlOf(NAME) (e.g. object URLs of dropped files).
+  const at = options.urlOf ?? ((name) => base + name);
+  const manifest = await (await fetch(at('ibl.json'))).json();
   if (manifest.format !== 'prtkit.ibl' || manifest.version !== 1) {
     throw new Error(`${base}ibl.json: not a prtkit.ibl version 1 manifest`);
   }
-  if (manifest.specular.container !== 'ktx2') throw new Error('this loader reads KTX2 bakes (ibl --container ktx2)');
+  const container = manifest.specular.container; // 'ktx2' or 'dds', the same for every file
   const [spec, irr, shDoc] = await Promise.all([
-    fetchBytes(base + manifest.specular.file),
-    fetchBytes(base + manifest.irradiance.file),
-    fetch(base + manifest.sh.file).then((r) => r.json()),
+    fetchBytes(at(manifest.specular.file)),
+    fetchBytes(at(manifest.irradiance.file)),
+    fetch(at(manifest.sh.file)).then((r) => r.json()),
   ]);
-  const specular = cubeFromKtx2(spec, manifest.specular.file);
+  const specular = cubeFromImage(readTexture(container, spec, manifest.specular.file), manifest.specular.file);
+  if (specular.userData.fileFormat !== manifest.specular.format) {
+    throw new Error(`${manifest.specular.file}: ${specular.userData.fileFormat} texels, the manifest says ${manifest.specular.format}`);
+  }
   if (specular.userData.levels !== manifest.specular.levels.length) {
     throw new Error(`${manifest.specular.file}: ${specular.userData.levels} levels, the manifest lists ${manifest.specular.levels.length}`);
   }
@@ -199,13 +332,13 @@ export async function loadPrtkitIbl(dir, options = {}) {
   background.generateMipmaps = false;
   background.colorSpace = THREE.LinearSRGBColorSpace;
   background.needsUpdate = true;
-  const irradiance = cubeFromKtx2(irr, manifest.irradiance.file);
+  const irradiance = cubeFromImage(readTexture(container, irr, manifest.irradiance.file), manifest.irradiance.file);
   let dfg;
-  if (options.ktx2Loader) {
+  if (options.ktx2Loader && container === 'ktx2') {
     // three's own loader handles this one (a 2-D RG16F table); only the filters need changing.
-    dfg = finishTable(await options.ktx2Loader.loadAsync(base + manifest.dfg.file));
+    dfg = finishTable(await options.ktx2Loader.loadAsync(at(manifest.dfg.file)));
   } else {
-    dfg = tableFromKtx2(await fetchBytes(base + manifest.dfg.file), manifest.dfg.file);
+    dfg = tableFromImage(readTexture(container, await fetchBytes(at(manifest.dfg.file)), manifest.dfg.file), manifest.dfg.file);
   }
   // (A, B) in .rg: 'multiscatter' stores (B, A + B); the shader below wants (A, B).
   const dfgSwizzle = manifest.dfg.variant === 'multiscatter' ? 1 : 0;

@@ -163,7 +163,7 @@ async function view(params, { bench = 0, evaluate = null } = {}) {
   const all = [...logs, ...errors];
   if (all.length) pageErrors.push({ query, errors: all });
   if (!ok) throw new Error(`page failed: ${query}\n${all.join('\n')}`);
-  return { image: fromPage(pixels), ms, value };
+  return { image: fromPage(pixels), ms, value, errors: all };
 }
 
 // Cameras are given in prtkit's frame (+Z up), as to `render`; the page gets them in three.js's
@@ -545,7 +545,203 @@ async function cpcaPrtTests() {
   figures.prt_cpca = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
+// ---- Every ibl --format and --container (the loader's decoders) ------------------------------
+// The same bake written as each format and container, drawn by the page in the grid and one-sphere
+// views (three frame), against the page's own rgba16f KTX2 drawing of it: what may differ is the
+// format's rounding of the texels alone (b10g11r11: 6 and 5 mantissa bits, 2^−7 and 2^−6 relative;
+// e5b9g9r9: 9 bits under the largest channel's exponent, 2^−9 of it), since the decoders are exact
+// (an 11/10-bit float or a shared-exponent texel is a half). rgba16f DDS holds the KTX2's bytes:
+// it must draw the same frame, pixel for pixel. The bar, 50 dB (an RMS difference of 0.8 codes), is
+// what that rounding allows: 2^−6 relative in linear radiance (10-bit blue; 2^−7 for 11 bits) moves
+// an 8-bit sRGB value by at most 1.7 codes (the curve's slope divides a relative change by about
+// 2.4 above its linear toe), so every pixel stays within a code or two. Negative controls: the packed KTX2s rewritten with
+// two channels swapped in every texel (the frame a decoder that reads the fields in the wrong
+// order would draw) must fail the bar.
+
+// A copy of a KTX2 file whose every 4-byte texel has `fields` (bit ranges [from, to, width]) swapped.
+function swapFieldsKtx2(from, to, [a, b, width]) {
+  const buf = Buffer.from(readFileSync(from));
+  const levels = buf.readUInt32LE(40);
+  const mask = (1 << width) - 1;
+  for (let p = 0; p < Math.max(1, levels); p++) {
+    const at = 80 + 24 * p, offset = Number(buf.readBigUInt64LE(at)), length = Number(buf.readBigUInt64LE(at + 8));
+    for (let i = offset; i < offset + length; i += 4) {
+      const w = buf.readUInt32LE(i), x = (w >>> a) & mask, y = (w >>> b) & mask;
+      buf.writeUInt32LE(((w & ~((mask << a) | (mask << b))) | (x << b) | (y << a)) >>> 0, i);
+    }
+  }
+  writeFileSync(to, buf);
+}
+async function formatTests() {
+  const dir = join(out, 'formats');
+  rmSync(dir, { recursive: true, force: true });
+  mkdirSync(dir, { recursive: true });
+  const bakes = [
+    { name: 'rgba16f-ktx2', args: [] },
+    { name: 'rgba16f-dds', args: ['--container', 'dds'], exact: true },
+    { name: 'rgba32f-ktx2', args: ['--format', 'rgba32f'], bar: 50 },
+    { name: 'rgba32f-dds', args: ['--format', 'rgba32f', '--container', 'dds'], bar: 50 },
+    { name: 'b10g11r11-ktx2', args: ['--format', 'b10g11r11'], bar: 50 },
+    { name: 'b10g11r11-dds', args: ['--format', 'b10g11r11', '--container', 'dds'], bar: 50 },
+    { name: 'e5b9g9r9-ktx2', args: ['--format', 'e5b9g9r9'], bar: 50 },
+    { name: 'e5b9g9r9-dds', args: ['--format', 'e5b9g9r9', '--container', 'dds'], bar: 50 },
+  ];
+  for (const b of bakes) run('ibl', [map, '-o', join(dir, b.name), '--size', '128', '--samples', '0', '-q', ...b.args]);
+  // Negative controls: R and B swapped (e5b9g9r9: bits 0–8 and 18–26), R and G (b10g11r11: 0–10
+  // and 11–21), in the specular and irradiance cubes.
+  const swaps = [
+    { name: 'e5b9g9r9-ktx2-rb-swapped', from: 'e5b9g9r9-ktx2', fields: [0, 18, 9], bar: 50 },
+    { name: 'b10g11r11-ktx2-rg-swapped', from: 'b10g11r11-ktx2', fields: [0, 11, 11], bar: 50 },
+  ];
+  for (const w of swaps) {
+    const to = join(dir, w.name);
+    mkdirSync(to);
+    for (const f of ['ibl.json', 'dfg.ktx2', 'sh.json']) writeFileSync(join(to, f), readFileSync(join(dir, w.from, f)));
+    for (const f of ['specular.ktx2', 'irradiance.ktx2']) swapFieldsKtx2(join(dir, w.from, f), join(to, f), w.fields);
+  }
+  const views = [
+    { name: 'grid', params: { mode: 'grid', res: '320x160', exposure: '0' } },
+    { name: 'sphere', params: { mode: 'sphere', m: '1', r: '0.3', eye: toPage([0, -4, 0.6], 'three'), target: '0,0,0', fov: String(FOV), res: RES, exposure: '0' } },
+  ];
+  const fig = {};
+  for (const v of views) {
+    const ref = (await view({ ...v.params, ibl: url(join(dir, 'rgba16f-ktx2')) + '/' })).image;
+    writePng(join(out, `formats-${v.name}-rgba16f-ktx2.png`), ref);
+    for (const b of [...bakes.slice(1), ...swaps]) {
+      const img = (await view({ ...v.params, ibl: url(join(dir, b.name)) + '/' })).image;
+      writePng(join(out, `formats-${v.name}-${b.name}.png`), img);
+      writePng(join(out, `formats-${v.name}-${b.name}-diff-x8.png`), diffImage(img, ref));
+      const c = compare(img, ref);
+      let max = 0;
+      for (let i = 0; i < img.rgba.length; i++) if (i % 4 !== 3) max = Math.max(max, Math.abs(img.rgba[i] - ref.rgba[i]));
+      fig[`${v.name}_${b.name}`] = { psnr: c.psnr, mean: c.mean, max };
+      const what = `${v.name} view, ${b.name} bake vs the rgba16f KTX2 bake`;
+      const detail = `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} pixels, mean |Δ| ${c.mean.toFixed(3)} codes, max ${max}`;
+      if (b.exact) check(what, max === 0, `${detail} (must be 0: the same texels)`);
+      else if (b.from) check(`${what} (control: two channels swapped in every texel) fails`, c.psnr < b.bar, `${detail} (must stay under ${b.bar})`);
+      else check(what, c.psnr >= b.bar, `${detail} (≥ ${b.bar})`);
+    }
+  }
+  figures.formats = fig;
+}
+
+// ---- Models (mode=model) lit by the split sum ------------------------------------------------
+// testdata/meshes/sphere.obj (a UV sphere, 16 rings × 32 segments, exact vertex normals) at the
+// origin, with the panel's r and m, against the page's own ray-cast sphere (mode=sphere) of the
+// same material and camera, over the sphere less a rim (the polygon's silhouette differs); a
+// tetrahedra.gltf page whose shading must not follow the panel's r and m (its glTF material is
+// kept: the glTF default, white, metalness 1, roughness 1), and no WebGL error in either page.
+async function modelTests() {
+  const obj = url(join(repo, 'testdata/meshes/sphere.obj'));
+  const [w, h] = RES.split('x').map(Number);
+  const fig = {};
+  for (const v of [{ name: 'gold-r0.3', m: 1, r: 0.3, eye: [0, -4, 0.6] }, { name: 'plastic-r0.5', m: 0, r: 0.5, eye: [3, -2.5, 1.2], base: [0.8, 0.2, 0.15] }]) {
+    const base = (v.base ?? [1, 0.78, 0.34]).join(',');
+    const params = { ibl: url(bake) + '/', m: String(v.m), r: String(v.r), base, eye: toPage(v.eye, 'three'), target: '0,0,0', fov: String(FOV), res: RES, exposure: '0' };
+    const ref = (await view({ ...params, mode: 'sphere' })).image;
+    const got = await view({ ...params, mode: 'model', model: obj });
+    writePng(join(out, `model-sphere-obj-${v.name}.png`), got.image);
+    writePng(join(out, `model-sphere-obj-${v.name}-diff-x8.png`), diffImage(got.image, ref));
+    const mask = sphereMask(v.eye, [0, 0, 0], FOV, w, h);
+    const c = compare(got.image, ref, mask);
+    fig[`sphere_obj_${v.name}`] = c.psnr;
+    check(`model sphere.obj ${v.name} (mode=model) vs the ray-cast sphere (mode=sphere)`, c.psnr >= 35,
+      `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} sphere pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+    check(`model sphere.obj ${v.name}: the page logged no WebGL, shader or page error`, got.errors.length === 0,
+      got.errors.length ? got.errors.join('; ').slice(0, 500) : 'none');
+    if (v.m === 0) {
+      // Control: the panel's roughness ignored (the OBJ drawn at r = 0.05 instead) must fail.
+      const wrong = (await view({ ...params, mode: 'model', model: obj, r: '0.05' })).image;
+      const cw = compare(wrong, ref, mask);
+      fig[`sphere_obj_${v.name}_r0.05`] = cw.psnr;
+      check(`model sphere.obj at r = 0.05 vs the r = ${v.r} sphere (control) fails`, cw.psnr < 35, `PSNR ${cw.psnr.toFixed(2)} dB (< 35)`);
+    }
+  }
+  // glTF: the file's material (glTF's default: white, metalness 1, roughness 1) whatever the panel says.
+  const gltf = url(join(repo, 'testdata/meshes/tetrahedra.gltf'));
+  const cam = { ibl: url(bake) + '/', eye: '3,2.5,6', target: '0.5,0.5,-1', fov: '40', res: '200x160', exposure: '0', base: '0.2,0.9,0.2' };
+  const a = await view({ ...cam, mode: 'model', model: gltf, r: '0.1', m: '0' });
+  const b = await view({ ...cam, mode: 'model', model: gltf, r: '0.9', m: '1' });
+  const sky = (await view({ ...cam, mode: 'sky' })).image;
+  writePng(join(out, 'model-tetrahedra-gltf.png'), a.image);
+  const same = compare(a.image, b.image), drawn = compare(a.image, sky);
+  let covered = 0;
+  for (let i = 0; i < a.image.rgba.length; i += 4) if ([0, 1, 2].some((c) => a.image.rgba[i + c] !== sky.rgba[i + c])) covered++;
+  fig.tetrahedra_gltf = { covered_pixels: covered, panel_change_mean: same.mean };
+  check('model tetrahedra.gltf: drawn (pixels differ from the sky alone) and its glTF material kept (the panel\'s r, m, base change nothing)',
+    covered > 500 && same.mean === 0, `${covered} pixels covered (> 500), mean |Δ| ${same.mean.toFixed(3)} codes between panel r/m/base settings (must be 0); vs sky ${drawn.mean.toFixed(2)} codes`);
+  check('model tetrahedra.gltf: the page logged no WebGL, shader or page error', a.errors.length + b.errors.length === 0,
+    [...a.errors, ...b.errors].join('; ').slice(0, 500) || 'none');
+  figures.model = fig;
+}
+
+// ---- Files dropped on the page ----------------------------------------------------------------
+// The page opened with a camera and material but no files; the test fetches the files in the
+// page, makes File objects, puts them in a DataTransfer and dispatches a synthetic 'drop' on the
+// page. The page must switch to the right mode and draw the same frame as the same files opened
+// by URL (max difference 0), with no error.
+async function dropView(params, files) {
+  const page = await browser.newPage();
+  const logs = [];
+  page.on('console', (m) => { if (m.type() === 'error') logs.push(m.text()); });
+  page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
+  const [w, h] = params.res.split('x').map(Number);
+  await page.setViewport({ width: w, height: h, deviceScaleFactor: 1 });
+  await page.goto(`${origin}/viewer/?${new URLSearchParams({ test: '1', ...params })}`, { waitUntil: 'load' });
+  await page.evaluate(() => window.prtkit.ready);
+  const before = await page.evaluate(() => window.prtkit.state().mode);
+  const ok = await page.evaluate(async (paths) => {
+    const dt = new DataTransfer();
+    for (const p of paths) dt.items.add(new File([await (await fetch(p)).blob()], p.split('/').pop()));
+    document.body.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    return window.prtkit.ready;
+  }, files);
+  const state = await page.evaluate(() => window.prtkit.state());
+  const pixels = ok ? await page.evaluate(() => window.prtkit.pixels()) : null;
+  const errors = [...logs, ...(await page.evaluate(() => window.prtkit.errors.slice()))];
+  await page.close();
+  if (errors.length) pageErrors.push({ query: `drop ${files.join(', ')}`, errors });
+  return { before, state, image: pixels ? fromPage(pixels) : null, errors };
+}
+async function dropTests() {
+  const b = (f) => url(join(bake, f));
+  const bakeFiles = ['ibl.json', 'specular.ktx2', 'irradiance.ktx2', 'dfg.ktx2', 'sh.json'].map(b);
+  const cam = { eye: toPage([3, -2.5, 1.2], 'three'), target: '0,0,0', fov: String(FOV), res: RES, exposure: '0' };
+  const { dir, sky } = skyIn('drop');
+  run('sh-project', [sky, '-F', '2', '-o', join(dir, 'sky.sh.json'), '-q']);
+  run('transfer', ['testdata/meshes/torus-knot.obj', '-n', '3', '--rays', '64', '--glb', join(dir, 'knot3.glb'), '-o', join(dir, 'knot3.json'), '-q']);
+  const cases = [
+    { name: 'a bake (ibl.json and its files), page in mode=sphere', start: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15' },
+      files: bakeFiles, mode: 'sphere', byUrl: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15', ibl: url(bake) + '/' } },
+    { name: 'a bake on an empty page', start: {}, files: bakeFiles, mode: 'grid', byUrl: { ibl: url(bake) + '/' } },
+    { name: 'a .sh.json (sh-project)', start: { exposure: '-3' }, files: [url(join(dir, 'sky.sh.json'))], mode: 'irradiance',
+      byUrl: { mode: 'irradiance', sh: url(join(dir, 'sky.sh.json')), exposure: '-3' } },
+    { name: 'a bake with sphere.obj', start: { m: '1', r: '0.3' }, files: [...bakeFiles, url(join(repo, 'testdata/meshes/sphere.obj'))], mode: 'model',
+      byUrl: { mode: 'model', m: '1', r: '0.3', ibl: url(bake) + '/', model: url(join(repo, 'testdata/meshes/sphere.obj')) } },
+    { name: 'a bake with tetrahedra-bin.gltf and its .bin', start: {}, mode: 'model',
+      files: [...bakeFiles, url(join(repo, 'testdata/meshes/tetrahedra-bin.gltf')), url(join(repo, 'testdata/meshes/tetrahedra.bin'))],
+      byUrl: { mode: 'model', ibl: url(bake) + '/', model: url(join(repo, 'testdata/meshes/tetrahedra-bin.gltf')) }, cam: { eye: '3,2.5,6', target: '0.5,0.5,-1' } },
+    { name: 'a transfer .glb with a .sh.json', start: { exposure: '-2' }, mode: 'prt',
+      files: [url(join(dir, 'knot3.glb')), url(join(dir, 'sky.sh.json'))],
+      byUrl: { mode: 'prt', glb: url(join(dir, 'knot3.glb')), sh: url(join(dir, 'sky.sh.json')), exposure: '-2' } },
+  ];
+  const fig = {};
+  for (const c of cases) {
+    const camera = { ...cam, ...(c.cam ?? {}) };
+    const d = await dropView({ ...camera, ...c.start }, c.files);
+    const ref = (await view({ ...camera, ...c.byUrl })).image;
+    let max = -1;
+    if (d.image) { max = 0; for (let i = 0; i < ref.rgba.length; i++) if (i % 4 !== 3) max = Math.max(max, Math.abs(d.image.rgba[i] - ref.rgba[i])); }
+    const slug = c.name.replace(/[^a-z0-9]+/gi, '-');
+    if (d.image) writePng(join(out, `drop-${slug}.png`), d.image);
+    fig[slug] = { mode: d.state.mode, max };
+    check(`drop ${c.name}: mode ${c.mode}, the same frame as by URL, no error`, d.state.mode === c.mode && max === 0 && d.errors.length === 0,
+      `mode ${d.before} → ${d.state.mode} (want ${c.mode}), max |Δ| ${max} codes against the URL-opened page (must be 0), errors: ${d.errors.join('; ').slice(0, 300) || 'none'}`);
+  }
+  figures.drop = fig;
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
   if (!only || only === 'ibl') {
@@ -644,6 +840,9 @@ try {
   }
   figures.frame_ms_640x360 = times;
   }
+  if (!only || only === 'formats') await formatTests();
+  if (!only || only === 'model') await modelTests();
+  if (!only || only === 'drop') await dropTests();
   if (!only || only === 'sh') await shTests();
   if (!only || only === 'prt') await prtTests();
   if (!only || only === 'prt' || only === 'glossy') await glossyPrtTests();
