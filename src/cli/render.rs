@@ -8,11 +8,13 @@ use super::options::{read_sh_document, Execution};
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::{self, Output};
 use crate::mesh::Mesh;
-use crate::render::grid::MaterialGrid;
+use crate::metrics::CompareError;
+use crate::render::grid::{GridError, MaterialGrid};
 use crate::render::ibl::IblBake;
 use crate::render::stage::{self, Config, PanelItem, Shading, StoredFactors};
+use crate::render::transfer::OtherMesh;
 use crate::render::{Camera, Scene};
-use anyhow::{bail, Context as _, Result};
+use anyhow::{anyhow, bail, Context as _, Result};
 pub use args::*;
 
 use std::path::Path;
@@ -53,7 +55,7 @@ impl Args {
                     metalness: self.grid_metalness.clone(),
                 });
                 if let Some(g) = &grid {
-                    g.check().map_err(anyhow::Error::msg)?; // before reading the bake
+                    g.check().map_err(grid_error)?; // before reading the bake
                 }
                 Shading::Ibl { bake: Box::new(IblBake::load(&doc)?), grid }
             }
@@ -89,6 +91,76 @@ impl Args {
         Ok(Some(Box::new(StoredFactors { name, factorization, cosine: body.cosine, brdf: body.brdf })))
     }
 
+    /// The library's errors that come from a flag, worded with the flag and its value (as
+    /// ripgrep's `HiArgs` words its own); the others as they are.
+    fn flag_error(&self, error: stage::Error) -> anyhow::Error {
+        use stage::Error as E;
+        let file = |path: &Option<std::path::PathBuf>| path.as_ref().map_or(String::new(), |p| p.display().to_string());
+        let message = match error {
+            E::Compare { reference, error: CompareError::Size { rw, rh, w, h } } => {
+                format!("{reference}: the reference is {rw}x{rh}, the render is {w}x{h} (--res)")
+            }
+            E::EnvRotation(degrees) => format!("--env-rotation {degrees} is outside -360..=360 degrees"),
+            E::EnvRotationShading { .. } => "--env-rotation is for --shading transfer and reference".into(),
+            E::NotLambert { shading, brdf } => {
+                format!("--shading {shading} shades Lambertian surfaces; --brdf {brdf} is not lambert")
+            }
+            E::ShOrder { available, wanted } => {
+                format!("{}: the coefficients have order {available}, --order asks for {wanted}", file(&self.sh))
+            }
+            E::ShrmBrdf { shrm, brdf } => {
+                format!("{}: the SHRM was computed for {shrm}, --brdf says {brdf}", file(&self.shrm))
+            }
+            E::NoTerms => "--terms must be at least 1".into(),
+            E::CellSamples(n) => format!("--cell-samples {n} must be in 1..=8"),
+            E::FactorsBrdf { factors, factored, brdf } => {
+                format!("{factors}: the factorization is of {factored}, --brdf says {brdf}")
+            }
+            E::FactorsResolution { factors, stored, asked } => format!(
+                "{factors}: a factorization of another resolution: n = {stored}, --factor-resolution asks for {asked}"
+            ),
+            E::FactorsTerms { factors, stored, asked } => format!(
+                "{factors}: the factor file holds {stored} terms, --terms asks for {asked} (factor-brdf --terms {asked})"
+            ),
+            E::FactorResolution(n) => format!("--factor-resolution {n} must be in 2..=256"),
+            E::TermsAboveRank { terms, resolution } => format!(
+                "--terms {terms} is more than the {} a factorization at --factor-resolution {resolution} has",
+                resolution * resolution
+            ),
+            E::NotGltf { brdf } => format!(
+                "--shading ibl shades glTF metallic-roughness materials; --brdf {brdf} is not gltf:base=R/G/B,metalness=M,roughness=R"
+            ),
+            E::GridReferences => "--grid renders its own references: no --compare or --panel-item".into(),
+            E::TransferOfSphere => {
+                "--shading transfer relights a mesh: --scene FILE.obj, the mesh the bake is of".into()
+            }
+            E::OtherMesh(OtherMesh::Size { bake, bake_vertices, bake_triangles, vertices, triangles }) => format!(
+                "{bake}: the transfer is of a mesh of {bake_vertices} vertices and {bake_triangles} triangles, \
+                 the --scene mesh {} has {vertices} and {triangles}",
+                self.scene
+            ),
+            E::OtherMesh(OtherMesh::Vertex { bake, vertex }) => format!(
+                "{bake}: vertex {vertex} is not where the --scene mesh {} has it: the transfer is of another mesh",
+                self.scene
+            ),
+            E::TransferBrdf { bake, baked, brdf } => format!("{bake}: the transfer holds {baked}, --brdf says {brdf}"),
+            E::FactorsForDiffuse { bake } => format!("{bake}: a diffuse transfer; --factors is for glossy bakes"),
+            E::DiffuseTransferNotLambert { bake, brdf } => {
+                format!("{bake}: a diffuse transfer relights a lambert BRDF; --brdf {brdf} is not lambert")
+            }
+            E::TransferAlbedo { bake, albedo, brdf } => {
+                format!("{bake}: the transfer was baked with albedo {albedo}, --brdf says {brdf}")
+            }
+            E::NoLightmapUvs { lightmap } => format!(
+                "{lightmap}: the --scene mesh {} has no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt) to look the lightmap up with",
+                self.scene
+            ),
+            E::Grid(grid) => return grid_error(grid),
+            other => return other.into(),
+        };
+        anyhow!(message)
+    }
+
     /// The panel items: `LABEL=FILE.exr` read, `LABEL=-` for this render.
     fn panel_items(&self) -> Result<Option<Vec<PanelItem>>> {
         if self.panel.is_none() {
@@ -106,6 +178,23 @@ impl Args {
             bail!("--panel-item LABEL=- (this render) may be given once");
         }
         Ok(Some(items))
+    }
+}
+
+/// A material grid's faults worded with the flags that set it.
+fn grid_error(error: GridError) -> anyhow::Error {
+    match error {
+        GridError::Empty => anyhow!("--grid needs at least one --grid-roughness and one --grid-metalness"),
+        GridError::TooManyCells { columns, rows } => anyhow!(
+            "--grid-roughness × --grid-metalness: {columns} × {rows} cells is more than the {} a grid renders \
+             (each twice, the reference at full cost)",
+            crate::render::grid::MAX_CELLS
+        ),
+        GridError::Roughness(r) => {
+            anyhow!("--grid-roughness {r} must be in (0, 1] (r = 0, the mirror, has no GGX lobe)")
+        }
+        GridError::Metalness(m) => anyhow!("--grid-metalness {m} must be in [0, 1]"),
+        other => other.into(),
     }
 }
 
@@ -174,7 +263,7 @@ impl Stage for Args {
             args: std::env::args().collect(),
         };
         let env = self.input.load(ctx)?;
-        let out = stage::run(&config, &env, &scene, ctx.progress())?;
+        let out = stage::run(&config, &env, &scene, ctx.progress()).map_err(|e| self.flag_error(e))?;
 
         let mut outputs = Outputs::new();
         let stops = self.exposure.stops;

@@ -88,22 +88,28 @@ impl GlossyBake {
         crate::factor::Grid { n: self.resolution, domain: self.domain }
     }
 
-    /// Whether `f` (read from `factors_name`) is the factorization this bake was made with: the
-    /// same grid and the same leading singular values.
+    /// Whether `f` (read from `factors_name`) is the factorization the bake `bake` was made with:
+    /// the same grid and the same leading singular values.
     pub fn check_factors(
         &self,
         bake: &str,
         f: &crate::factor::Factorization,
         factors_name: &str,
-    ) -> Result<(), String> {
+    ) -> Result<(), OtherFactors> {
+        let (bake, factors) = (bake.to_string(), factors_name.to_string());
         if f.grid.n != self.resolution || f.grid.domain != self.domain {
-            return Err(format!(
-                "{bake} was baked on a {} grid of {} bins ({}); {factors_name} is a {} grid of {}",
-                self.domain, self.resolution, self.factors, f.grid.domain, f.grid.n
-            ));
+            return Err(OtherFactors::Grid {
+                bake,
+                domain: self.domain,
+                resolution: self.resolution,
+                baked_from: self.factors.clone(),
+                factors,
+                other_domain: f.grid.domain,
+                other_resolution: f.grid.n,
+            });
         }
         if f.h.len() < self.terms {
-            return Err(format!("{bake} has {} terms; {factors_name} holds {}", self.terms, f.h.len()));
+            return Err(OtherFactors::Terms { bake, terms: self.terms, factors, held: f.h.len() });
         }
         let same = self
             .singular_values
@@ -111,15 +117,92 @@ impl GlossyBake {
             .zip(&f.singular_values)
             .all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(1e-300));
         if !same {
-            return Err(format!(
-                "{bake} was baked from {} (σ_0 = {:.6e}); {factors_name} is another factorization (σ_0 = {:.6e})",
-                self.factors,
-                self.singular_values.first().copied().unwrap_or(0.0),
-                f.singular_values.first().copied().unwrap_or(0.0)
-            ));
+            return Err(OtherFactors::SingularValues {
+                bake,
+                baked_from: self.factors.clone(),
+                baked_sigma: self.singular_values.first().copied().unwrap_or(0.0),
+                factors,
+                sigma: f.singular_values.first().copied().unwrap_or(0.0),
+            });
         }
         Ok(())
     }
+}
+
+/// A factorization that is not the one a glossy bake was made with.
+#[derive(Debug, thiserror::Error)]
+pub enum OtherFactors {
+    /// Another grid.
+    #[error("{bake} was baked on a {domain} grid of {resolution} bins ({baked_from}); {factors} is a {other_domain} grid of {other_resolution}")]
+    Grid {
+        /// The bake's file.
+        bake: String,
+        /// The bake's grid.
+        domain: crate::factor::Domain,
+        /// Its bins n.
+        resolution: usize,
+        /// The factor document the bake read.
+        baked_from: String,
+        /// The factor document given.
+        factors: String,
+        /// Its grid.
+        other_domain: crate::factor::Domain,
+        /// Its bins n.
+        other_resolution: usize,
+    },
+    /// Fewer terms than the bake has.
+    #[error("{bake} has {terms} terms; {factors} holds {held}")]
+    Terms {
+        /// The bake's file.
+        bake: String,
+        /// Its terms K.
+        terms: usize,
+        /// The factor document given.
+        factors: String,
+        /// Its terms.
+        held: usize,
+    },
+    /// Other singular values: another factorization on the same grid.
+    #[error("{bake} was baked from {baked_from} (σ_0 = {baked_sigma:.6e}); {factors} is another factorization (σ_0 = {sigma:.6e})")]
+    SingularValues {
+        /// The bake's file.
+        bake: String,
+        /// The factor document the bake read.
+        baked_from: String,
+        /// Its σ_0.
+        baked_sigma: f64,
+        /// The factor document given.
+        factors: String,
+        /// Its σ_0.
+        sigma: f64,
+    },
+}
+
+/// A transfer bake of another mesh than the one given.
+#[derive(Debug, thiserror::Error)]
+pub enum OtherMesh {
+    /// Other vertex or triangle counts.
+    #[error("{bake}: the transfer is of a mesh of {bake_vertices} vertices and {bake_triangles} triangles, the mesh has {vertices} and {triangles}")]
+    Size {
+        /// The bake's file.
+        bake: String,
+        /// Its vertices.
+        bake_vertices: usize,
+        /// Its triangles.
+        bake_triangles: usize,
+        /// The mesh's vertices.
+        vertices: usize,
+        /// The mesh's triangles.
+        triangles: usize,
+    },
+    /// A vertex elsewhere.
+    #[error("{bake}: vertex {vertex} is not where the mesh has it: the transfer is of another mesh")]
+    Vertex {
+        /// The bake's file.
+        bake: String,
+        /// The first vertex that differs.
+        vertex: usize,
+    },
 }
 
 impl TransferBake {
@@ -272,21 +355,20 @@ impl TransferBake {
         })
     }
 
-    /// Whether the bake is of `mesh` (`mesh_name` for the message): the same vertices, at the same
-    /// positions (to single precision, as the `.glb` stores them), and the same triangle count.
-    pub fn check_mesh(&self, mesh: &Mesh, mesh_name: &str) -> Result<(), String> {
-        let name = &self.name;
+    /// Whether the bake is of `mesh`: the same vertices, at the same positions (to single
+    /// precision, as the `.glb` stores them), and the same triangle count.
+    pub fn check_mesh(&self, mesh: &Mesh) -> Result<(), OtherMesh> {
         if self.positions.len() != mesh.positions.len() || self.triangles != mesh.triangles.len() {
-            return Err(format!(
-                "{name}: the transfer is of a mesh of {} vertices and {} triangles, {mesh_name} has {} and {}",
-                self.positions.len(),
-                self.triangles,
-                mesh.positions.len(),
-                mesh.triangles.len()
-            ));
+            return Err(OtherMesh::Size {
+                bake: self.name.clone(),
+                bake_vertices: self.positions.len(),
+                bake_triangles: self.triangles,
+                vertices: mesh.positions.len(),
+                triangles: mesh.triangles.len(),
+            });
         }
         if let Some(v) = self.positions.iter().zip(&mesh.positions).position(|(a, b)| *a != b.as_vec3().to_array()) {
-            return Err(format!("{name}: vertex {v} is not where {mesh_name} has it: the transfer is of another mesh"));
+            return Err(OtherMesh::Vertex { bake: self.name.clone(), vertex: v });
         }
         Ok(())
     }
