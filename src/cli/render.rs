@@ -71,8 +71,7 @@ impl Args {
                         Err("not a .glb (no glTF magic)".into())
                     }
                 })?;
-                let bake = crate::render::transfer::TransferBake::from_glb(&file.display().to_string(), &bytes)
-                    .map_err(anyhow::Error::msg)?;
+                let bake = crate::render::transfer::TransferBake::from_glb(&file.display().to_string(), &bytes)?;
                 let lightmap = match &self.lightmap {
                     Some(file) => Some(Box::new(crate::render::transfer::LightmapImage::load(file, &bake)?)),
                     None => None,
@@ -198,12 +197,9 @@ fn grid_error(error: GridError) -> anyhow::Error {
     }
 }
 
-impl Stage for Args {
-    const NAME: &'static str = "render";
-    fn execution(&self) -> &Execution {
-        &self.run
-    }
-    fn run(self, ctx: &Context) -> Result<Outcome> {
+impl Args {
+    /// Flags that make no sense together, refused before anything is read.
+    fn check_flags(&self) -> Result<()> {
         if self.outputs().next().is_none() && !self.json {
             bail!("nothing to write: give -o FILE.exr, --png, --panel or --json");
         }
@@ -219,7 +215,11 @@ impl Stage for Args {
         if self.transfer.is_some() && self.shading != ShadingArg::Transfer {
             bail!("--transfer is for --shading transfer");
         }
-        let json_out = self.json.then_some(Output::Stdout);
+        Ok(())
+    }
+
+    /// The outputs, with `--json`'s stdout, each checked for what it can hold.
+    fn check_outputs(&self, json_out: &Option<Output>) -> Result<()> {
         check_outputs(
             [
                 (&self.output, Holds::Image),
@@ -227,25 +227,65 @@ impl Stage for Args {
                 (&self.error_image, Holds::Image),
                 (&self.metrics, Holds::Text),
                 (&self.panel, Holds::Png),
-                (&json_out, Holds::Text),
+                (json_out, Holds::Text),
             ]
             .into_iter()
             .filter_map(|(o, holds)| o.as_ref().map(|o| (o, holds))),
-        )?;
-        let camera = Camera::look_at(self.eye, self.target, self.fov, self.res.0, self.res.1)?;
-        let scene = if self.scene == "sphere" {
-            Scene::unit_sphere()
-        } else {
-            let mesh = Mesh::load(Path::new(&self.scene))?;
-            if mesh.normals_computed {
-                ctx.note(format!(
-                    "{}: no vertex normals in the file; computed area-weighted normals for {} vertices",
-                    self.scene,
-                    mesh.positions.len()
-                ));
+        )
+    }
+
+    /// `--scene`: the unit sphere, or the mesh read (noting normals it had to compute).
+    fn scene(&self, ctx: &Context) -> Result<Scene> {
+        if self.scene == "sphere" {
+            return Ok(Scene::unit_sphere());
+        }
+        let mesh = Mesh::load(Path::new(&self.scene))?;
+        if mesh.normals_computed {
+            ctx.note(format!(
+                "{}: no vertex normals in the file; computed area-weighted normals for {} vertices",
+                self.scene,
+                mesh.positions.len()
+            ));
+        }
+        Ok(Scene::Mesh(Box::new(mesh)))
+    }
+
+    /// Writes what the flags ask for of `out`, all or nothing.
+    fn write(&self, out: &stage::Output, json_out: &Option<Output>) -> Result<()> {
+        let mut outputs = Outputs::new();
+        let stops = self.exposure.stops;
+        for o in self.output.iter().chain(&self.png) {
+            outputs.image(o, &out.frame.image, stops)?;
+        }
+        if let Some((doc, error_image)) = &out.comparison {
+            if let Some(o) = &self.error_image {
+                outputs.image(o, error_image, stops)?;
             }
-            Scene::Mesh(Box::new(mesh))
-        };
+            if let Some(o) = &self.metrics {
+                outputs.json(o, doc)?;
+            }
+        }
+        if let (Some(o), Some(panel)) = (&self.panel, &out.panel) {
+            outputs.image(o, panel, stops)?;
+        }
+        if let Some(o) = json_out {
+            outputs.json(o, &out.summary)?;
+        }
+        outputs.commit()
+    }
+}
+
+impl Stage for Args {
+    const NAME: &'static str = "render";
+    fn execution(&self) -> &Execution {
+        &self.run
+    }
+    fn run(self, ctx: &Context) -> Result<Outcome> {
+        self.check_flags()?;
+        let json_out = self.json.then_some(Output::Stdout);
+        self.check_outputs(&json_out)?;
+        let camera = Camera::look_at(self.eye, self.target, self.fov, self.res.0, self.res.1)?;
+        let scene = self.scene(ctx)?;
         let compare = match &self.compare {
             Some(p) => Some((p.display().to_string(), io::image::read_image(p)?)),
             None => None,
@@ -264,27 +304,7 @@ impl Stage for Args {
         };
         let env = self.input.load(ctx)?;
         let out = stage::run(&config, &env, &scene, ctx.progress()).map_err(|e| self.flag_error(e))?;
-
-        let mut outputs = Outputs::new();
-        let stops = self.exposure.stops;
-        for o in self.output.iter().chain(&self.png) {
-            outputs.image(o, &out.frame.image, stops)?;
-        }
-        if let Some((doc, error_image)) = &out.comparison {
-            if let Some(o) = &self.error_image {
-                outputs.image(o, error_image, stops)?;
-            }
-            if let Some(o) = &self.metrics {
-                outputs.json(o, doc)?;
-            }
-        }
-        if let (Some(o), Some(panel)) = (&self.panel, &out.panel) {
-            outputs.image(o, panel, stops)?;
-        }
-        if let Some(o) = &json_out {
-            outputs.json(o, &out.summary)?;
-        }
-        outputs.commit()?;
+        self.write(&out, &json_out)?;
         if let Some((doc, _)) = &out.comparison {
             ctx.note(format!("vs {}: {}", doc.body.reference, doc.body.metrics));
         }
