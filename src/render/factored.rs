@@ -88,13 +88,8 @@ impl Transport {
     }
 
     /// Number of points (normals or vertices).
-    pub fn len(&self) -> usize {
+    fn len(&self) -> usize {
         self.frames.len()
-    }
-
-    /// Whether there are no points.
-    pub fn is_empty(&self) -> bool {
-        self.frames.is_empty()
     }
 
     /// Fraction of (point, cell) pairs that are visible (1 for the sphere).

@@ -55,7 +55,7 @@ const GLYPHS: &[(char, [u8; 7])] = &[
 ];
 
 /// The rows of `c`'s glyph.
-pub fn glyph(c: char) -> [u8; 7] {
+fn glyph(c: char) -> [u8; 7] {
     let c = c.to_ascii_uppercase();
     GLYPHS
         .iter()

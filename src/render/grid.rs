@@ -13,11 +13,14 @@ use super::ibl::{ExactLobe, ExactSplitSum, IblBake, SplitSum};
 use super::panel::Cell;
 use super::reference::{Integrand, Reference};
 use super::{render, Camera, Frame, Scene};
+use crate::brdf::ggx::GgxError;
 use crate::brdf::models::{GgxMicrofacet, GltfMaterial};
 use crate::brdf::Brdf;
-use crate::envmap::{self, EnvMap, Layout};
+use crate::envmap::{self, EnvMap, EnvMapError, Layout};
+use crate::ibl::reference::ReferenceError;
 use crate::io::RgbImage;
-use crate::metrics::{compare, Metrics};
+use crate::metrics::{compare, CompareError, Metrics};
+use crate::prefilter::model::ModelError;
 use crate::progress::{NoProgress, Progress};
 use serde::{Deserialize, Serialize};
 
@@ -65,24 +68,59 @@ pub struct GridRender {
     pub cells: Vec<GridCell>,
 }
 
+/// Errors of the grid: its materials, and the steps of rendering it.
+#[derive(Debug, thiserror::Error)]
+pub enum GridError {
+    /// No roughness or no metalness.
+    #[error("the grid needs at least one roughness and one metalness")]
+    Empty,
+    /// More than [`MAX_CELLS`] cells.
+    #[error(
+        "{columns} × {rows} cells is more than the {MAX_CELLS} a grid renders (each twice, the reference at full cost)"
+    )]
+    TooManyCells {
+        /// Roughness columns.
+        columns: usize,
+        /// Metalness rows.
+        rows: usize,
+    },
+    /// A roughness outside (0, 1].
+    #[error("grid roughness {0} must be in (0, 1] (r = 0, the mirror, has no GGX lobe)")]
+    Roughness(f64),
+    /// A metalness outside [0, 1].
+    #[error("grid metalness {0} must be in [0, 1]")]
+    Metalness(f64),
+    /// The environment could not be resampled to lat-long for the exact integrals.
+    #[error(transparent)]
+    Resample(#[from] EnvMapError),
+    /// The exact split-sum integrals could not be set up.
+    #[error(transparent)]
+    Exact(#[from] ReferenceError),
+    /// A roughness GGX does not take.
+    #[error(transparent)]
+    Ggx(#[from] GgxError),
+    /// The reference could not be set up.
+    #[error(transparent)]
+    Reference(#[from] ModelError),
+    /// A cell could not be compared with its reference.
+    #[error(transparent)]
+    Compare(#[from] CompareError),
+}
+
 impl MaterialGrid {
     /// Checks the values and the cell count.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), GridError> {
         if self.roughness.is_empty() || self.metalness.is_empty() {
-            return Err("the grid needs at least one roughness and one metalness".into());
+            return Err(GridError::Empty);
         }
         if self.roughness.len() * self.metalness.len() > MAX_CELLS {
-            return Err(format!(
-                "{} × {} cells is more than the {MAX_CELLS} a grid renders (each twice, the reference at full cost)",
-                self.roughness.len(),
-                self.metalness.len()
-            ));
+            return Err(GridError::TooManyCells { columns: self.roughness.len(), rows: self.metalness.len() });
         }
         if let Some(r) = self.roughness.iter().find(|r| !(**r > 0.0 && **r <= 1.0)) {
-            return Err(format!("grid roughness {r} must be in (0, 1] (r = 0, the mirror, has no GGX lobe)"));
+            return Err(GridError::Roughness(*r));
         }
         if let Some(m) = self.metalness.iter().find(|m| !(0.0..=1.0).contains(*m)) {
-            return Err(format!("grid metalness {m} must be in [0, 1]"));
+            return Err(GridError::Metalness(*m));
         }
         Ok(())
     }
@@ -98,14 +136,14 @@ pub fn render_grid(
     scene: &Scene,
     camera: &Camera,
     progress: &dyn Progress,
-) -> Result<GridRender, String> {
+) -> Result<GridRender, GridError> {
     grid.check()?;
     // The exact integrals sum a lat-long map: another layout is resampled as `ibl` does it.
     let latlong = match env.layout() {
         Layout::LatLong => env.clone(),
-        _ => envmap::resample(env, Layout::LatLong, 4 * bake.size(), 2 * bake.size(), 2).map_err(|e| e.to_string())?,
+        _ => envmap::resample(env, Layout::LatLong, 4 * bake.size(), 2 * bake.size(), 2)?,
     };
-    let exact = crate::ibl::reference::Reference::new(&latlong).map_err(|e| e.to_string())?;
+    let exact = crate::ibl::reference::Reference::new(&latlong)?;
     let irradiance = ExactLobe::new(&exact, 1.0)?;
     let lobes = grid.roughness.iter().map(|&r| ExactLobe::new(&exact, r)).collect::<Result<Vec<_>, _>>()?;
     progress.start("grid", (grid.roughness.len() * grid.metalness.len()) as u64);
@@ -115,7 +153,7 @@ pub fn render_grid(
     for &metalness in &grid.metalness {
         let (mut split_row, mut truth_row, mut frames) = (Vec::new(), Vec::new(), Vec::new());
         for (&roughness, lobe) in grid.roughness.iter().zip(&lobes) {
-            let specular = GgxMicrofacet::new(roughness).map_err(|e| e.to_string())?;
+            let specular = GgxMicrofacet::new(roughness)?;
             let material = GltfMaterial { base, metalness, specular };
             let split = render(scene, camera, env, &SplitSum::new(bake, material), &NoProgress);
             let exact_lighting = ExactSplitSum { specular: lobe, irradiance: &irradiance };
@@ -123,8 +161,7 @@ pub fn render_grid(
             let reference = Reference::new(env, Brdf::Gltf(material), Integrand::BrdfCosine, scene)?;
             let truth = render(scene, camera, env, &reference, &NoProgress);
             let against = |other: &Frame| compare(&split.image, &other.image, &split.mask).map(|(m, _)| m);
-            let (bake_error, reference_error) =
-                (against(&exact).map_err(|e| e.to_string())?, against(&truth).map_err(|e| e.to_string())?);
+            let (bake_error, reference_error) = (against(&exact)?, against(&truth)?);
             let name = format!("r={roughness} m={metalness}");
             let percent = |m: &Metrics| format!("{:.2}%", 100.0 * m.rel_error);
             split_row.push(Cell {

@@ -19,7 +19,7 @@
 //! resolution, which is the point of the comparison.
 
 use super::{Hit, Shade};
-use crate::brdf::ggx::SplitSumLobe;
+use crate::brdf::ggx::{GgxError, SplitSumLobe};
 use crate::brdf::models::GltfMaterial;
 use crate::envmap::EnvMap;
 use crate::ibl::cube::CubeMap;
@@ -297,8 +297,8 @@ pub struct ExactLobe {
 impl ExactLobe {
     /// The lobe of perceptual roughness `roughness` over `reference`'s environment. At r = 1 GGX
     /// has D = 1/π, so the split-sum kernel is the clamped cosine over π and B(n) is E(n)/π.
-    pub fn new(reference: &Reference, roughness: f64) -> Result<Self, String> {
-        let lobe = SplitSumLobe::new(roughness).map_err(|e| e.to_string())?;
+    pub fn new(reference: &Reference, roughness: f64) -> Result<Self, GgxError> {
+        let lobe = SplitSumLobe::new(roughness)?;
         Ok(ExactLobe { integral: reference.lobe(&lobe), memo: Mutex::default() })
     }
 

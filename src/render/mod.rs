@@ -21,6 +21,7 @@ pub mod grid;
 pub mod ibl;
 pub mod irradiance;
 pub mod panel;
+mod plan;
 pub mod reference;
 pub mod reflection;
 pub mod scene;

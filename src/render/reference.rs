@@ -10,7 +10,7 @@
 use super::{Hit, Scene, Shade};
 use crate::brdf::Brdf;
 use crate::envmap::EnvMap;
-use crate::prefilter::model::{Centre, Model};
+use crate::prefilter::model::{Centre, Model, ModelError};
 use glam::DVec3;
 
 /// What is integrated.
@@ -34,7 +34,7 @@ pub struct Reference<'a> {
 impl<'a> Reference<'a> {
     /// Gathers the environment's texels (direction, solid angle, radiance); zero texels are
     /// skipped, they add nothing.
-    pub fn new(env: &EnvMap, brdf: Brdf, integrand: Integrand, scene: &'a Scene) -> Result<Self, String> {
+    pub fn new(env: &EnvMap, brdf: Brdf, integrand: Integrand, scene: &'a Scene) -> Result<Self, ModelError> {
         let mut texels = Vec::with_capacity(env.texel_count());
         env.for_each_texel(|t| {
             if t.rgb.iter().any(|&v| v != 0.0) {
@@ -51,9 +51,9 @@ impl<'a> Reference<'a> {
         brdf: Brdf,
         integrand: Integrand,
         scene: &'a Scene,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ModelError> {
         let model = match integrand {
-            Integrand::Prefilter => Some(Model::new(brdf.clone(), true).map_err(|e| e.to_string())?),
+            Integrand::Prefilter => Some(Model::new(brdf.clone(), true)?),
             Integrand::BrdfCosine => None,
         };
         Ok(Reference { texels, brdf, model, integrand, scene })
@@ -65,11 +65,6 @@ impl<'a> Reference<'a> {
             t.0 = rotation * t.0;
         }
         self
-    }
-
-    /// Number of texels summed per pixel.
-    pub fn texel_count(&self) -> usize {
-        self.texels.len()
     }
 }
 

@@ -93,11 +93,6 @@ impl ShrmShader {
         let table = LegendreTable::new(shrm.p_b);
         ShrmShader { shrm, by_normal, frame_map, table }
     }
-
-    /// The reflection map used for this frame (global SHRMs and view-independent ones).
-    pub fn frame_map(&self) -> Option<&RgbImage> {
-        self.frame_map.as_ref()
-    }
 }
 
 impl Shade for ShrmShader {

@@ -1,28 +1,26 @@
 //! The `render` stage as one library call: a sphere or mesh shaded with one of the bakes (SH
-//! irradiance, an SHRM, a K-term factorization) or the reference integrator, compared with a
-//! reference render, and laid out in a labelled panel.
+//! irradiance, an SHRM, a K-term factorization, an `ibl` bake, a transfer bake) or the reference
+//! integrator, compared with a reference render, and laid out in a labelled panel. The shading
+//! path is decided once, its inputs checked, in a plan (`render::plan`), then executed.
 
-use super::factored::{Factored, Transport};
-use super::grid::{render_grid, GridCell, MaterialGrid};
-use super::ibl::{IblBake, SplitSum};
-use super::irradiance::Irradiance;
+use super::grid::{legend, GridCell, GridError, MaterialGrid};
+use super::ibl::{IblBake, OtherSource};
 use super::panel::{layout, layout_grid, Cell};
-use super::reference::{Integrand, Reference};
-use super::reflection::ShrmShader;
-use super::transfer::TransferBake;
-use super::{render, render_turned, Camera, Frame, Scene, Sum};
+use super::plan::{Plan, Report, Shaded, Shot};
+use super::reference::Integrand;
+use super::transfer::{OtherFactors, OtherMesh, TransferBake};
+use super::{Camera, Frame, Scene};
 use crate::brdf::Brdf;
-use crate::envmap::bright::{split, BrightRule};
+use crate::envmap::bright::BrightRule;
 use crate::envmap::EnvMap;
-use crate::factor::{Channel, Domain, Factorization, Method, Sampling};
+use crate::factor::Factorization;
 use crate::io::{Document, Provenance, RgbImage};
-use crate::metrics::{compare, Metrics};
+use crate::metrics::{compare, CompareError, Metrics};
 use crate::prefilter::document::ShrmBody;
+use crate::prefilter::model::ModelError;
 use crate::prefilter::shrm::Shrm;
-use crate::progress::NoProgress;
 use crate::progress::Progress;
-use crate::sh::convolve::clamped_cosine;
-use crate::sh::window::{self, Window, WindowReport};
+use crate::sh::window::{Window, WindowReport};
 use crate::sh::ShCoeffs;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -80,7 +78,7 @@ pub enum Shading {
         /// The bake.
         bake: Box<IblBake>,
         /// A roughness × metalness grid of spheres, each with its reference, instead of one
-        /// render of `--brdf`'s material.
+        /// render of the BRDF's material.
         grid: Option<MaterialGrid>,
     },
     /// From a `transfer` bake: the per-vertex dot product with the environment's SH (Sloan,
@@ -88,9 +86,9 @@ pub enum Shading {
     Transfer {
         /// The bake, read from its `.glb`.
         bake: Box<TransferBake>,
-        /// The factorization a glossy bake was made with (`--factors`), for h_k.
+        /// The factorization a glossy bake was made with, checked against the bake.
         factors: Option<Box<StoredFactors>>,
-        /// The per-texel lightmap to shade from instead of the vertices (`--lightmap`).
+        /// The per-texel lightmap to shade from instead of the vertices.
         lightmap: Option<Box<super::transfer::LightmapImage>>,
     },
     /// Ground truth: a sum over every environment texel.
@@ -261,10 +259,8 @@ fn one() -> usize {
     1
 }
 
-/// Most degrees `--env-rotation` turns the environment by, either way.
+/// Most degrees the environment turns by, either way.
 pub const MAX_ENV_ROTATION: f64 = 360.0;
-/// Frames of relighting timed for [`RelightSummary`].
-const RELIGHT_FRAMES: usize = 31;
 
 /// The bright texels a factored render shades exactly, and their share of the map's energy.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
@@ -275,366 +271,267 @@ pub struct BrightShare {
     pub energy_fraction: f64,
 }
 
-/// Errors of the stage.
+/// Errors of the stage: inputs that do not fit together, and the failures of the steps.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// The configuration is inconsistent (BRDF vs mode, sizes, counts).
-    #[error("{0}")]
-    Config(String),
+    /// A rendering of this shading mode other than transfer and reference with the environment
+    /// turned.
+    #[error("the environment turns for transfer and reference shading only, not {shading}")]
+    EnvRotationShading {
+        /// The shading mode.
+        shading: &'static str,
+    },
+    /// The environment's turn is not a number or beyond ±[`MAX_ENV_ROTATION`] degrees.
+    #[error("an environment turn of {0} degrees is outside -360..=360")]
+    EnvRotation(f64),
+    /// A shading mode of Lambertian surfaces given another BRDF.
+    #[error("{shading} shading is of Lambertian surfaces; {brdf} is not lambert")]
+    NotLambert {
+        /// The shading mode.
+        shading: &'static str,
+        /// The BRDF's spec.
+        brdf: String,
+    },
+    /// The SH lighting given has fewer bands than the order asked for.
+    #[error("the coefficients have order {available}, the irradiance asks for order {wanted}")]
+    ShOrder {
+        /// The coefficients' order.
+        available: usize,
+        /// The order asked for.
+        wanted: usize,
+    },
+    /// The SHRM is of another BRDF.
+    #[error("the SHRM was computed for {shrm}, not {brdf}")]
+    ShrmBrdf {
+        /// The SHRM's BRDF.
+        shrm: String,
+        /// The BRDF of the rendering.
+        brdf: String,
+    },
+    /// A factored rendering of no term.
+    #[error("a factored rendering needs at least one term")]
+    NoTerms,
+    /// Lighting samples per grid cell outside 1..=8.
+    #[error("{0} lighting samples per factor-grid cell is outside 1..=8")]
+    CellSamples(usize),
+    /// A stored factorization of another BRDF.
+    #[error("{factors}: the factorization is of {factored}, not {brdf}")]
+    FactorsBrdf {
+        /// The factor document.
+        factors: String,
+        /// Its BRDF.
+        factored: String,
+        /// The BRDF of the rendering.
+        brdf: String,
+    },
+    /// A stored factorization of another resolution than asked for.
+    #[error("{factors}: a factorization of another resolution: n = {stored}, not {asked}")]
+    FactorsResolution {
+        /// The factor document.
+        factors: String,
+        /// Its bins n.
+        stored: usize,
+        /// The bins asked for.
+        asked: usize,
+    },
+    /// A stored factorization of fewer terms than asked for.
+    #[error("{factors}: the factor file holds {stored} terms, not the {asked} asked for")]
+    FactorsTerms {
+        /// The factor document.
+        factors: String,
+        /// Its terms.
+        stored: usize,
+        /// The terms asked for.
+        asked: usize,
+    },
+    /// A factorization to make at a resolution outside 2..=256.
+    #[error("a factorization of {0} bins is outside 2..=256")]
+    FactorResolution(usize),
+    /// More terms than an n² × n² matrix has.
+    #[error("{terms} terms are more than the {} a factorization at {resolution} bins has", resolution * resolution)]
+    TermsAboveRank {
+        /// The terms asked for.
+        terms: usize,
+        /// The bins n.
+        resolution: usize,
+    },
+    /// The split sum given a BRDF other than the glTF material.
+    #[error(
+        "ibl shading shades glTF metallic-roughness materials; {brdf} is not gltf:base=R/G/B,metalness=M,roughness=R"
+    )]
+    NotGltf {
+        /// The BRDF's spec.
+        brdf: String,
+    },
+    /// A material grid asked to compare with a reference or to lay out panel items.
+    #[error("a material grid renders its own references: no reference to compare with, no panel items")]
+    GridReferences,
+    /// A transfer bake given the sphere.
+    #[error("transfer shading relights a mesh, the mesh the bake is of, not the sphere")]
+    TransferOfSphere,
+    /// A glossy transfer bake of another BRDF.
+    #[error("{bake}: the transfer holds {baked}, not {brdf}")]
+    TransferBrdf {
+        /// The bake's file.
+        bake: String,
+        /// Its BRDF.
+        baked: String,
+        /// The BRDF of the rendering.
+        brdf: String,
+    },
+    /// A factorization given with a diffuse bake.
+    #[error("{bake}: a diffuse transfer has no factorization to check")]
+    FactorsForDiffuse {
+        /// The bake's file.
+        bake: String,
+    },
+    /// A diffuse bake given a BRDF other than Lambert.
+    #[error("{bake}: a diffuse transfer relights a lambert BRDF; {brdf} is not lambert")]
+    DiffuseTransferNotLambert {
+        /// The bake's file.
+        bake: String,
+        /// The BRDF's spec.
+        brdf: String,
+    },
+    /// A diffuse bake of another albedo.
+    #[error("{bake}: the transfer was baked with albedo {albedo}, not {brdf}")]
+    TransferAlbedo {
+        /// The bake's file.
+        bake: String,
+        /// The albedo baked.
+        albedo: f64,
+        /// The BRDF of the rendering.
+        brdf: String,
+    },
+    /// A lightmap given with a mesh that has no UVs.
+    #[error("{lightmap}: the mesh has no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt) to look the lightmap up with")]
+    NoLightmapUvs {
+        /// The lightmap's file.
+        lightmap: String,
+    },
+    /// The transfer bake is of another mesh.
+    #[error(transparent)]
+    OtherMesh(#[from] OtherMesh),
+    /// The factorization given is not the one the glossy bake was made from.
+    #[error(transparent)]
+    OtherFactors(#[from] OtherFactors),
+    /// The `ibl` bake was made from another map.
+    #[error(transparent)]
+    OtherSource(#[from] OtherSource),
+    /// The BRDF has no ρ̂ for the reference to integrate.
+    #[error(transparent)]
+    Integrand(#[from] ModelError),
     /// Projection of the lighting failed.
     #[error(transparent)]
     Project(#[from] crate::sh::project::ProjectError),
     /// The factorization failed.
     #[error(transparent)]
     Factor(#[from] crate::factor::FactorError),
-    /// The `ibl` bake was made from another map.
+    /// The material grid failed.
     #[error(transparent)]
-    OtherSource(#[from] super::ibl::OtherSource),
+    Grid(#[from] GridError),
     /// Comparing failed.
     #[error("comparing with {reference}: {error}")]
     Compare {
         /// The reference's name.
         reference: String,
         /// Why.
-        error: crate::metrics::CompareError,
+        error: CompareError,
     },
 }
 
 /// Runs `render` of `scene` under `env`.
 pub fn run(config: &Config, env: &EnvMap, scene: &Scene, progress: &dyn Progress) -> Result<Output, Error> {
-    let bad = |m: String| Error::Config(m);
-    let (w, h) = (config.camera.width, config.camera.height);
-    if let Some((name, r)) = &config.compare {
-        if (r.width, r.height) != (w, h) {
-            return Err(bad(format!(
-                "{name}: the reference is {}x{}, the render is {w}x{h} (--res)",
-                r.width, r.height
-            )));
-        }
-    }
-    if let Shading::Ibl { bake, .. } = &config.shading {
-        bake.check_source(env)?;
-    }
-    if config.env_rotation.is_nan() || config.env_rotation.abs() > MAX_ENV_ROTATION {
-        return Err(bad(format!("--env-rotation {} is outside -360..=360 degrees", config.env_rotation)));
-    }
-    if config.env_rotation != 0.0 && !matches!(config.shading, Shading::Transfer { .. } | Shading::Reference { .. }) {
-        return Err(bad("--env-rotation is for --shading transfer and reference".into()));
-    }
-    let turn = super::transfer::rotation_about_z(config.env_rotation);
-    let brdf = &config.brdf;
+    check_reference_size(config)?;
+    let plan = Plan::new(config, env, scene)?;
+    let shot = Shot { scene, brdf: &config.brdf, camera: &config.camera, env };
     let start = Instant::now();
+    let Shaded { frame, label, report } = plan.execute(&shot, progress)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let label = config.label.clone().unwrap_or(label);
+    let comparison = match &config.compare {
+        Some((name, reference)) => Some(comparison(config, env, &frame, &label, name, reference)?),
+        None => None,
+    };
+    let metrics = comparison.as_ref().map(|(document, _)| document.body.metrics);
+    let panel = config.panel.as_ref().map(|items| match &report {
+        Report::IblGrid { rows, .. } => layout_grid(rows, &legend(), config.exposure),
+        _ => panel(items, &frame, &label, config, metrics),
+    });
+    let summary = summary(config, report, seconds, label, metrics);
+    Ok(Output { frame, comparison, panel, summary })
+}
+
+/// The reference must be of the render's size: refused before the render, not after.
+fn check_reference_size(config: &Config) -> Result<(), Error> {
+    let (w, h) = (config.camera.width, config.camera.height);
+    match &config.compare {
+        Some((name, r)) if (r.width, r.height) != (w, h) => Err(Error::Compare {
+            reference: name.clone(),
+            error: CompareError::Size { rw: r.width, rh: r.height, w, h },
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// The metrics of `frame` against `reference` (the file `name`) over the object's pixels, as the
+/// `prtkit.render-metrics` document, and the error image |render − reference|.
+fn comparison(
+    config: &Config,
+    env: &EnvMap,
+    frame: &Frame,
+    label: &str,
+    name: &str,
+    reference: &RgbImage,
+) -> Result<(Document<MetricsBody>, RgbImage), Error> {
+    let (metrics, error_image) = compare(&frame.image, reference, &frame.mask)
+        .map_err(|error| Error::Compare { reference: name.to_string(), error })?;
+    let body = MetricsBody {
+        render: config.output_name.clone(),
+        reference: name.to_string(),
+        shading: config.shading.name().into(),
+        brdf: config.brdf.spec(),
+        label: label.to_string(),
+        metrics,
+    };
+    let provenance = Provenance::new("render", &config.args, vec![name.to_string()]);
+    let document = Document::new(METRICS_FORMAT, METRICS_VERSION, provenance, body)
+        .with_input_orientation(env.orientation().describe());
+    Ok((document, error_image))
+}
+
+/// The `--json` summary: the run's shape, the mode's report and the metrics.
+fn summary(config: &Config, report: Report, seconds: f64, label: String, metrics: Option<Metrics>) -> Summary {
     let mut summary = Summary {
         shading: config.shading.name().into(),
-        brdf: brdf.spec(),
-        width: w,
-        height: h,
-        seconds: 0.0,
-        label: String::new(),
+        brdf: config.brdf.spec(),
+        width: config.camera.width,
+        height: config.camera.height,
+        seconds,
+        label,
         order: None,
         orders: None,
         epsilon_achieved: None,
         terms: None,
         bright: None,
         window: None,
-        metrics: None,
+        metrics,
         grid: None,
         transfer: None,
     };
-    let mut grid_panel = None;
-    let (frame, label) = match &config.shading {
-        Shading::Irradiance { order, coefficients, window } => {
-            let Brdf::Lambert(m) = brdf else {
-                return Err(bad(format!(
-                    "--shading irradiance shades Lambertian surfaces; --brdf {} is not lambert",
-                    brdf.spec()
-                )));
-            };
-            let light = match coefficients {
-                Some(c) if c.order < *order => {
-                    return Err(bad(format!("the coefficients have order {}, --order asks for {order}", c.order)))
-                }
-                Some(c) => c.truncated(*order),
-                None => crate::sh::project::project(env, *order, progress)?,
-            };
-            summary.order = Some(*order);
-            // The window multiplies the lighting's bands; the bands it shapes are Â_l L_lm.
-            let kernel: Vec<f64> = (0..=*order).map(clamped_cosine).collect();
-            let (frame, report) = windowed(*window, &kernel, progress, |factors, progress| {
-                let shader = Irradiance::new(&window::apply(&light, factors), m.albedo);
-                render(scene, &config.camera, env, &shader, progress)
-            });
-            summary.window = Some(report);
-            (frame, format!("irradiance F={order}"))
+    match report {
+        Report::Irradiance { order, window } => (summary.order, summary.window) = (Some(order), Some(window)),
+        Report::Shrm { orders, epsilon_achieved, window } => {
+            summary.orders = Some(orders);
+            summary.epsilon_achieved = Some(epsilon_achieved);
+            summary.window = Some(window);
         }
-        Shading::Shrm { shrm, body, window } => {
-            if body.brdf != brdf.spec() {
-                return Err(bad(format!("the SHRM was computed for {}, --brdf says {}", body.brdf, brdf.spec())));
-            }
-            summary.orders = Some((body.f_b, body.p_b));
-            summary.epsilon_achieved = Some(body.epsilon_achieved);
-            let by_normal = body.parameterization == "normal";
-            let (frame, report) = windowed(*window, &vec![1.0; body.p_b + 1], progress, |factors, progress| {
-                let shader = ShrmShader::new(shrm.with_view_window(factors), by_normal, config.camera.view_direction());
-                render(scene, &config.camera, env, &shader, progress)
-            });
-            summary.window = Some(report);
-            (frame, format!("SHRM F={} P={}", body.f_b, body.p_b))
-        }
-        Shading::Factored { terms, factors, resolution, cell_samples, normal_table, bright } => {
-            if *terms == 0 {
-                return Err(bad("--terms must be at least 1".into()));
-            }
-            if !(1..=8).contains(cell_samples) {
-                return Err(bad(format!("--cell-samples {cell_samples} must be in 1..=8")));
-            }
-            let (f, cosine_in_factors) = match factors {
-                Some(stored) => {
-                    let (name, f) = (&stored.name, &stored.factorization);
-                    if stored.brdf != brdf.spec() {
-                        return Err(bad(format!(
-                            "{name}: the factorization is of {}, --brdf says {}",
-                            stored.brdf,
-                            brdf.spec()
-                        )));
-                    }
-                    if let Some(n) = resolution.filter(|&n| n != f.grid.n) {
-                        return Err(bad(format!(
-                            "{name}: a factorization of another resolution: n = {}, --factor-resolution asks for {n}",
-                            f.grid.n
-                        )));
-                    }
-                    if f.g.len() < *terms {
-                        return Err(bad(format!(
-                            "{name}: the factor file holds {} terms, --terms asks for {terms} (factor-brdf --terms {terms})",
-                            f.g.len()
-                        )));
-                    }
-                    (f.clone(), stored.cosine)
-                }
-                None => {
-                    let resolution = &resolution.unwrap_or(DEFAULT_FACTOR_RESOLUTION);
-                    if !(2..=256).contains(resolution) {
-                        return Err(bad(format!("--factor-resolution {resolution} must be in 2..=256")));
-                    }
-                    // An n² × n² matrix has at most n² terms: refuse before the factorization.
-                    if *terms > resolution * resolution {
-                        return Err(bad(format!(
-                            "--terms {terms} is more than the {} a factorization at --factor-resolution {resolution} has",
-                            resolution * resolution
-                        )));
-                    }
-                    let sampling = Sampling {
-                        resolution: *resolution,
-                        domain: Domain::Hemisphere,
-                        cosine: true,
-                        channel: Channel::Mean,
-                    };
-                    (crate::factor::factor(brdf, &sampling, Method::Auto, *terms, progress)?, true)
-                }
-            };
-            let transport = match scene {
-                Scene::Sphere { .. } => Transport::sphere(normal_table.0, normal_table.1),
-                Scene::Mesh(_) => Transport::mesh(scene, &f.grid, progress),
-            };
-            let energy = f.cumulative_energy().get(terms - 1).copied().unwrap_or(1.0);
-            summary.terms = Some((*terms, energy));
-            // A truncated factorization spreads a sun 10⁴ times the sky into blotches and negative
-            // texels: the bright texels are shaded exactly, the smooth remainder by the factors.
-            let (remainder, sources) = split(env, *bright);
-            let shader = Factored::new(&f, *terms, cosine_in_factors, transport, &remainder, *cell_samples);
-            let label = format!("K={}", shader.terms());
-            let exact = sources.texels.iter().map(|t| (t.dir, t.solid_angle, t.excess)).collect();
-            let exact = Reference::from_texels(exact, brdf.clone(), Integrand::BrdfCosine, scene).map_err(bad)?;
-            summary.bright = (!sources.is_empty())
-                .then_some(BrightShare { texels: sources.texels.len(), energy_fraction: sources.energy_fraction });
-            (render(scene, &config.camera, env, &Sum(&shader, &exact), progress), label)
-        }
-        Shading::Ibl { bake, grid } => {
-            let Brdf::Gltf(material) = brdf else {
-                return Err(bad(format!(
-                    "--shading ibl shades glTF metallic-roughness materials; --brdf {} is not gltf:base=R/G/B,metalness=M,roughness=R",
-                    brdf.spec()
-                )));
-            };
-            match grid {
-                None => {
-                    let frame = render(scene, &config.camera, env, &SplitSum::new(bake.as_ref(), *material), progress);
-                    let r = material.specular.roughness();
-                    (frame, format!("ibl r={r} m={}", material.metalness))
-                }
-                Some(grid) => {
-                    if config.compare.is_some() || config.panel.as_ref().is_some_and(|p| !p.is_empty()) {
-                        return Err(bad("--grid renders its own references: no --compare or --panel-item".into()));
-                    }
-                    // The base colour is --brdf's; roughness and metalness are the grid's.
-                    let g =
-                        render_grid(grid, material.base, bake, env, scene, &config.camera, progress).map_err(bad)?;
-                    summary.grid = Some(g.cells);
-                    grid_panel = Some(layout_grid(&g.rows, &super::grid::legend(), config.exposure));
-                    (g.mosaic, "ibl grid".to_string())
-                }
-            }
-        }
-        Shading::Transfer { bake, factors, lightmap } => {
-            let Scene::Mesh(mesh) = scene else {
-                return Err(
-                    bad("--shading transfer relights a mesh: --scene FILE.obj, the mesh the bake is of".into()),
-                );
-            };
-            bake.check_mesh(mesh, "the --scene mesh").map_err(bad)?;
-            // The BRDF the bake holds must be --brdf's (the reference and the labels use it).
-            // A glossy bake carries h_k; --factors, when given, must be what it was baked from.
-            let glossy = match (&bake.glossy, factors) {
-                (Some(glossy), stored) => {
-                    if let Some(stored) = stored {
-                        glossy.check_factors(&bake.name, &stored.factorization, &stored.name).map_err(bad)?;
-                    }
-                    if brdf.spec() != glossy.brdf {
-                        return Err(bad(format!(
-                            "{}: the transfer holds {}, --brdf says {}",
-                            bake.name,
-                            glossy.brdf,
-                            brdf.spec()
-                        )));
-                    }
-                    Some(glossy)
-                }
-                (None, Some(_)) => {
-                    return Err(bad(format!("{}: a diffuse transfer; --factors is for glossy bakes", bake.name)))
-                }
-                (None, None) => {
-                    let Brdf::Lambert(m) = brdf else {
-                        return Err(bad(format!(
-                            "{}: a diffuse transfer relights a lambert BRDF; --brdf {} is not lambert",
-                            bake.name,
-                            brdf.spec()
-                        )));
-                    };
-                    if m.albedo != bake.albedo {
-                        return Err(bad(format!(
-                            "{}: the transfer was baked with albedo {}, --brdf says {}",
-                            bake.name,
-                            bake.albedo,
-                            brdf.spec()
-                        )));
-                    }
-                    None
-                }
-            };
-            // The lighting's SH at the bake's bands, projected once; each frame turns it and
-            // takes the dot products (K per vertex for a glossy bake).
-            let light = crate::sh::project::project(env, bake.order - 1, progress)?;
-            let mut relit = Vec::new();
-            let mut times = Vec::with_capacity(RELIGHT_FRAMES);
-            for _ in 0..RELIGHT_FRAMES {
-                let t = Instant::now();
-                let rotation = crate::sh::rotate::ShRotation::new(turn, bake.order - 1);
-                super::transfer::relight(bake, &light, &rotation, &mut relit);
-                times.push(t.elapsed().as_secs_f64().max(1e-9));
-            }
-            times.sort_by(f64::total_cmp);
-            summary.transfer = Some(RelightSummary {
-                order: bake.order,
-                mode: bake.mode.clone(),
-                terms: bake.terms(),
-                vertices: mesh.positions.len(),
-                frames: RELIGHT_FRAMES,
-                frames_per_second: 1.0 / times[0],
-                median_frames_per_second: 1.0 / times[RELIGHT_FRAMES / 2],
-            });
-            match glossy {
-                // B(x, ω_o) = Σ_k h_k(F_xᵀ ω_o) c_k(x), c_k interpolated over the triangle.
-                Some(g) => {
-                    let coeffs = relit.iter().map(|c| c.map(f64::from)).collect();
-                    let shader = Factored::from_vertex_coefficients(g.grid(), &g.h, mesh.triangles.clone(), coeffs);
-                    let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
-                    (frame, format!("transfer glossy {} n={} K={}", bake.mode, bake.order, bake.terms()))
-                }
-                None if lightmap.is_some() => {
-                    let lightmap = lightmap.as_deref().expect("matched");
-                    let uvs = mesh.uvs.as_deref().ok_or_else(|| {
-                        bad(format!(
-                            "{}: the --scene mesh has no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt) to look the lightmap up with",
-                            lightmap.name
-                        ))
-                    })?;
-                    let rotation = crate::sh::rotate::ShRotation::new(turn, bake.order - 1);
-                    let shader = super::transfer::LightmapShader::new(lightmap, &light, &rotation, uvs, mesh);
-                    let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
-                    (frame, format!("transfer lightmap {} n={}", bake.mode, bake.order))
-                }
-                None => {
-                    let shader = super::transfer::TransferShader::new(relit, mesh);
-                    let frame = render_turned(scene, &config.camera, env, turn, &shader, progress);
-                    (frame, format!("transfer {} n={}", bake.mode, bake.order))
-                }
-            }
-        }
-        Shading::Reference { integrand } => {
-            let shader = Reference::new(env, brdf.clone(), *integrand, scene).map_err(bad)?.turned(turn);
-            (render_turned(scene, &config.camera, env, turn, &shader, progress), "reference".to_string())
-        }
-    };
-    summary.seconds = start.elapsed().as_secs_f64();
-    let label = config.label.clone().unwrap_or(label);
-    summary.label = label.clone();
-
-    let comparison = match &config.compare {
-        Some((name, reference)) => {
-            let (metrics, error_image) = compare(&frame.image, reference, &frame.mask)
-                .map_err(|error| Error::Compare { reference: name.clone(), error })?;
-            summary.metrics = Some(metrics);
-            let body = MetricsBody {
-                render: config.output_name.clone(),
-                reference: name.clone(),
-                shading: config.shading.name().into(),
-                brdf: brdf.spec(),
-                label: label.clone(),
-                metrics,
-            };
-            let provenance = Provenance::new("render", &config.args, vec![name.clone()]);
-            let document = Document::new(METRICS_FORMAT, METRICS_VERSION, provenance, body)
-                .with_input_orientation(env.orientation().describe());
-            Some((document, error_image))
-        }
-        None => None,
-    };
-    let panel = match grid_panel {
-        Some(grid) => config.panel.is_some().then_some(grid),
-        None => config.panel.as_ref().map(|items| panel(items, &frame, &label, config, summary.metrics)),
-    };
-    Ok(Output { frame, comparison, panel, summary })
-}
-
-/// Renders with `window`'s band factors for bands 0..=F (F + 1 = `kernel.len()`), then, unless
-/// the window is `none`, the non-negativity guard [`window::nonneg`] on the object's pixels (one
-/// render when none is negative; the search renders without progress). `kernel` is the zonal
-/// factors the window multiplies, which bracket the search.
-fn windowed(
-    kind: Window,
-    kernel: &[f64],
-    progress: &dyn Progress,
-    draw: impl Fn(&[f64], &dyn Progress) -> Frame,
-) -> (Frame, WindowReport) {
-    let order = kernel.len().saturating_sub(1);
-    let base = kind.factors(order);
-    if !kind.guarded() || order == 0 {
-        let t = kind.guarded().then_some(0.0);
-        return (draw(&base, progress), WindowReport { kind, t });
+        Report::Factored { terms, bright } => (summary.terms, summary.bright) = (Some(terms), bright),
+        Report::IblGrid { cells, .. } => summary.grid = Some(cells),
+        Report::Transfer(relit) => summary.transfer = Some(relit),
+        Report::Ibl | Report::Reference => {}
     }
-    let object_min = |frame: &Frame| {
-        frame
-            .image
-            .pixels
-            .iter()
-            .zip(&frame.mask)
-            .filter(|(_, &m)| m)
-            .flat_map(|(p, _)| p)
-            .fold(0.0f64, |a, &v| a.min(v as f64))
-    };
-    let found = window::nonneg(&base, kernel, |factors| draw(factors, &NoProgress), object_min);
-    (found.map, WindowReport { kind, t: Some(found.t) })
+    summary
 }
 
 /// Lays out the panel: the items in order (each labelled with its error against the reference

@@ -88,22 +88,28 @@ impl GlossyBake {
         crate::factor::Grid { n: self.resolution, domain: self.domain }
     }
 
-    /// Whether `f` (read from `factors_name`) is the factorization this bake was made with: the
-    /// same grid and the same leading singular values.
+    /// Whether `f` (read from `factors_name`) is the factorization the bake `bake` was made with:
+    /// the same grid and the same leading singular values.
     pub fn check_factors(
         &self,
         bake: &str,
         f: &crate::factor::Factorization,
         factors_name: &str,
-    ) -> Result<(), String> {
+    ) -> Result<(), OtherFactors> {
+        let (bake, factors) = (bake.to_string(), factors_name.to_string());
         if f.grid.n != self.resolution || f.grid.domain != self.domain {
-            return Err(format!(
-                "{bake} was baked on a {} grid of {} bins ({}); {factors_name} is a {} grid of {}",
-                self.domain, self.resolution, self.factors, f.grid.domain, f.grid.n
-            ));
+            return Err(OtherFactors::Grid {
+                bake,
+                domain: self.domain,
+                resolution: self.resolution,
+                baked_from: self.factors.clone(),
+                factors,
+                other_domain: f.grid.domain,
+                other_resolution: f.grid.n,
+            });
         }
         if f.h.len() < self.terms {
-            return Err(format!("{bake} has {} terms; {factors_name} holds {}", self.terms, f.h.len()));
+            return Err(OtherFactors::Terms { bake, terms: self.terms, factors, held: f.h.len() });
         }
         let same = self
             .singular_values
@@ -111,154 +117,273 @@ impl GlossyBake {
             .zip(&f.singular_values)
             .all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(1e-300));
         if !same {
-            return Err(format!(
-                "{bake} was baked from {} (σ_0 = {:.6e}); {factors_name} is another factorization (σ_0 = {:.6e})",
-                self.factors,
-                self.singular_values.first().copied().unwrap_or(0.0),
-                f.singular_values.first().copied().unwrap_or(0.0)
-            ));
+            return Err(OtherFactors::SingularValues {
+                bake,
+                baked_from: self.factors.clone(),
+                baked_sigma: self.singular_values.first().copied().unwrap_or(0.0),
+                factors,
+                sigma: f.singular_values.first().copied().unwrap_or(0.0),
+            });
         }
         Ok(())
     }
 }
 
+/// A factorization that is not the one a glossy bake was made with.
+#[derive(Debug, thiserror::Error)]
+pub enum OtherFactors {
+    /// Another grid.
+    #[error("{bake} was baked on a {domain} grid of {resolution} bins ({baked_from}); {factors} is a {other_domain} grid of {other_resolution}")]
+    Grid {
+        /// The bake's file.
+        bake: String,
+        /// The bake's grid.
+        domain: crate::factor::Domain,
+        /// Its bins n.
+        resolution: usize,
+        /// The factor document the bake read.
+        baked_from: String,
+        /// The factor document given.
+        factors: String,
+        /// Its grid.
+        other_domain: crate::factor::Domain,
+        /// Its bins n.
+        other_resolution: usize,
+    },
+    /// Fewer terms than the bake has.
+    #[error("{bake} has {terms} terms; {factors} holds {held}")]
+    Terms {
+        /// The bake's file.
+        bake: String,
+        /// Its terms K.
+        terms: usize,
+        /// The factor document given.
+        factors: String,
+        /// Its terms.
+        held: usize,
+    },
+    /// Other singular values: another factorization on the same grid.
+    #[error("{bake} was baked from {baked_from} (σ_0 = {baked_sigma:.6e}); {factors} is another factorization (σ_0 = {sigma:.6e})")]
+    SingularValues {
+        /// The bake's file.
+        bake: String,
+        /// The factor document the bake read.
+        baked_from: String,
+        /// Its σ_0.
+        baked_sigma: f64,
+        /// The factor document given.
+        factors: String,
+        /// Its σ_0.
+        sigma: f64,
+    },
+}
+
+/// A transfer bake of another mesh than the one given.
+#[derive(Debug, thiserror::Error)]
+pub enum OtherMesh {
+    /// Other vertex or triangle counts.
+    #[error("{bake}: the transfer is of a mesh of {bake_vertices} vertices and {bake_triangles} triangles, the mesh has {vertices} and {triangles}")]
+    Size {
+        /// The bake's file.
+        bake: String,
+        /// Its vertices.
+        bake_vertices: usize,
+        /// Its triangles.
+        bake_triangles: usize,
+        /// The mesh's vertices.
+        vertices: usize,
+        /// The mesh's triangles.
+        triangles: usize,
+    },
+    /// A vertex elsewhere.
+    #[error("{bake}: vertex {vertex} is not where the mesh has it: the transfer is of another mesh")]
+    Vertex {
+        /// The bake's file.
+        bake: String,
+        /// The first vertex that differs.
+        vertex: usize,
+    },
+}
+
+/// A `.glb` that is not a transfer bake `render` can read.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: not a prtkit transfer .glb: {reason}")]
+pub struct NotATransfer {
+    /// The file.
+    pub file: String,
+    /// What is wrong or missing.
+    pub reason: String,
+}
+
+/// A `.glb`'s JSON and BIN chunks, read with every fault naming the file.
+struct Glb<'a> {
+    name: &'a str,
+    gltf: Value,
+    bin: &'a [u8],
+}
+
+impl<'a> Glb<'a> {
+    fn bad(&self, reason: impl Into<String>) -> NotATransfer {
+        NotATransfer { file: self.name.to_string(), reason: reason.into() }
+    }
+
+    /// The accessor `index` of float `kind` (SCALAR, VEC3, VEC4): its count and its bytes.
+    fn accessor(&self, index: &Value, kind: &str) -> Result<(usize, &'a [u8]), NotATransfer> {
+        let index = index.as_u64().ok_or_else(|| self.bad("an attribute has no accessor"))?;
+        let a = &self.gltf["accessors"][index as usize];
+        if a["componentType"].as_u64() != Some(5126) || a["type"].as_str() != Some(kind) {
+            return Err(self.bad(format!("an accessor is not float {kind}")));
+        }
+        let count = a["count"].as_u64().ok_or_else(|| self.bad("an accessor has no count"))? as usize;
+        let view = a["bufferView"].as_u64().ok_or_else(|| self.bad("no bufferView"))?;
+        let view = &self.gltf["bufferViews"][view as usize];
+        let start = view["byteOffset"].as_u64().unwrap_or(0) as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let components = match kind {
+            "SCALAR" => 1,
+            "VEC3" => 3,
+            _ => 4,
+        };
+        let data = count
+            .checked_mul(4 * components)
+            .and_then(|length| start.checked_add(length))
+            .and_then(|end| self.bin.get(start..end))
+            .ok_or_else(|| self.bad("an accessor runs past the BIN chunk"))?;
+        Ok((count, data))
+    }
+
+    /// `per_vertex` values for each of `vertices`, packed four to a VEC4 attribute PREFIX0,
+    /// PREFIX1, … of `attributes`.
+    fn vec4s(
+        &self,
+        attributes: &Value,
+        prefix: &str,
+        vertices: usize,
+        per_vertex: usize,
+    ) -> Result<Vec<f32>, NotATransfer> {
+        crate::limits::check_memory("the transfer", (vertices as u128) * (per_vertex as u128) * 4)
+            .map_err(|e| self.bad(e.to_string()))?;
+        let mut out = vec![0.0f32; vertices * per_vertex];
+        for k in 0..per_vertex.div_ceil(4) {
+            let (count, data) = self.accessor(&attributes[format!("{prefix}{k}")], "VEC4")?;
+            if count != vertices {
+                return Err(self.bad(format!("{prefix}{k} has {count} vertices, POSITION {vertices}")));
+            }
+            for (v, c) in floats(data).chunks_exact(4).enumerate() {
+                for j in 0..4 {
+                    if 4 * k + j < per_vertex {
+                        out[v * per_vertex + 4 * k + j] = c[j];
+                    }
+                }
+            }
+        }
+        if out.iter().any(|t| !t.is_finite()) {
+            return Err(self.bad(format!("a value of {prefix}k is not finite")));
+        }
+        Ok(out)
+    }
+
+    /// The blob `name` of the mesh's extras, `None` when absent.
+    fn blob(&self, name: &str) -> Option<Result<Vec<f32>, NotATransfer>> {
+        glb::blob(&self.gltf, self.bin, name).map(|read| read.map_err(|e| self.bad(e)))
+    }
+
+    /// A glossy bake's record and its h_k (the `glossy.h` blob), checked.
+    fn glossy(&self, record: &Value) -> Result<GlossyBake, NotATransfer> {
+        let mut g = serde_json::from_value::<GlossyBake>(record.clone())
+            .map_err(|e| self.bad(format!("extras.prtkit.transfer.glossy: {e}")))?;
+        let max_resolution = crate::limits::MAX_FACTOR_RESOLUTION;
+        if !(1..=max_resolution.pow(2)).contains(&g.terms) || g.singular_values.len() != g.terms {
+            return Err(self.bad(format!("glossy terms {} with {} singular values", g.terms, g.singular_values.len())));
+        }
+        if !(2..=max_resolution).contains(&g.resolution) {
+            return Err(self.bad(format!("glossy resolution {} is outside 2..={max_resolution}", g.resolution)));
+        }
+        let cells = g.resolution * g.resolution;
+        let h = self
+            .blob(crate::transfer::stage::GLOSSY_H_BLOB)
+            .ok_or_else(|| self.bad("a glossy transfer without its glossy.h blob"))??;
+        if h.len() != g.terms * cells || h.iter().any(|v| !v.is_finite()) {
+            return Err(self.bad(format!(
+                "glossy.h holds {} values, not {} finite ones ({} terms of {cells})",
+                h.len(),
+                g.terms * cells,
+                g.terms
+            )));
+        }
+        g.h = h.chunks_exact(cells).map(|t| t.iter().map(|&v| v as f64).collect()).collect();
+        Ok(g)
+    }
+
+    /// The clustered PCA `record` describes, for `vertices` of `coeffs` values each.
+    fn compressed(
+        &self,
+        record: &Value,
+        attributes: &Value,
+        vertices: usize,
+        coeffs: usize,
+    ) -> Result<Compressed, NotATransfer> {
+        let clusters = record["clusters"].as_u64().unwrap_or(0) as usize;
+        let components = record["components"].as_u64().unwrap_or(0) as usize;
+        if !(1..=crate::transfer::stage::MAX_CLUSTERS).contains(&clusters)
+            || !(1..=crate::transfer::stage::MAX_PCA).contains(&components)
+        {
+            return Err(self.bad(format!("cpca: {clusters} clusters of {components} directions")));
+        }
+        let (count, data) = self.accessor(&attributes["_PRT_CLUSTER"], "SCALAR")?;
+        let cluster_of = floats(data)
+            .into_iter()
+            .map(|c| (c >= 0.0 && c.fract() == 0.0 && (c as usize) < clusters).then_some(c as u32))
+            .collect::<Option<Vec<u32>>>()
+            .filter(|_| count == vertices)
+            .ok_or_else(|| self.bad(format!("_PRT_CLUSTER must hold {vertices} cluster numbers below {clusters}")))?;
+        let blob = |name: &str, len: usize| -> Result<Vec<f32>, NotATransfer> {
+            let values = self.blob(name).ok_or_else(|| self.bad(format!("no {name} blob")))??;
+            if values.len() != len || values.iter().any(|v| !v.is_finite()) {
+                return Err(self.bad(format!("{name} holds {} values, not {len} finite ones", values.len())));
+            }
+            Ok(values)
+        };
+        let means = blob("cpca.means", clusters * coeffs)?;
+        let bases = blob("cpca.bases", clusters * components * coeffs)?;
+        let weights = self.vec4s(attributes, "_PRT_W_", vertices, components)?;
+        Ok(Compressed { clusters, components, means, bases, cluster_of, weights })
+    }
+}
+
+/// Little-endian f32s.
+fn floats(data: &[u8]) -> Vec<f32> {
+    data.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
+}
+
 impl TransferBake {
     /// Reads the `.glb` bytes of the file `name`. Every fault names the file.
-    pub fn from_glb(name: &str, bytes: &[u8]) -> Result<TransferBake, String> {
-        let bad = |why: &str| format!("{name}: not a prtkit transfer .glb: {why}");
+    pub fn from_glb(name: &str, bytes: &[u8]) -> Result<TransferBake, NotATransfer> {
+        let bad = |why: &str| NotATransfer { file: name.to_string(), reason: why.to_string() };
         let gltf = glb::json_chunk(bytes).ok_or_else(|| bad("no glTF 2 header and JSON chunk"))?;
         let bin = glb::bin_chunk(bytes).ok_or_else(|| bad("no BIN chunk"))?;
-        let mesh = &gltf["meshes"][0];
+        let glb = Glb { name, gltf, bin };
+        let mesh = &glb.gltf["meshes"][0];
         let extras = &mesh["extras"]["prtkit.transfer"];
         let order = extras["order"].as_u64().ok_or_else(|| bad("no extras.prtkit.transfer.order"))? as usize;
         if !(1..=crate::transfer::stage::MAX_ORDER).contains(&order) {
             return Err(bad(&format!("order {order} is outside 1..={}", crate::transfer::stage::MAX_ORDER)));
         }
         let mode = extras["mode"].as_str().ok_or_else(|| bad("no extras.prtkit.transfer.mode"))?.to_string();
-        let mut glossy = match extras.get("glossy") {
-            None => None,
-            Some(g) => Some(
-                serde_json::from_value::<GlossyBake>(g.clone())
-                    .map_err(|e| bad(&format!("extras.prtkit.transfer.glossy: {e}")))?,
-            ),
-        };
-        if let Some(g) = &mut glossy {
-            if !(1..=crate::limits::MAX_FACTOR_RESOLUTION.pow(2)).contains(&g.terms)
-                || g.singular_values.len() != g.terms
-            {
-                return Err(bad(&format!("glossy terms {} with {} singular values", g.terms, g.singular_values.len())));
-            }
-            if !(2..=crate::limits::MAX_FACTOR_RESOLUTION).contains(&g.resolution) {
-                return Err(bad(&format!(
-                    "glossy resolution {} is outside 2..={}",
-                    g.resolution,
-                    crate::limits::MAX_FACTOR_RESOLUTION
-                )));
-            }
-            let cells = g.resolution * g.resolution;
-            let h = glb::blob(&gltf, bin, crate::transfer::stage::GLOSSY_H_BLOB)
-                .ok_or_else(|| bad("a glossy transfer without its glossy.h blob"))?
-                .map_err(|e| bad(&e))?;
-            if h.len() != g.terms * cells || h.iter().any(|v| !v.is_finite()) {
-                return Err(bad(&format!(
-                    "glossy.h holds {} values, not {} finite ones ({} terms of {cells})",
-                    h.len(),
-                    g.terms * cells,
-                    g.terms
-                )));
-            }
-            g.h = h.chunks_exact(cells).map(|t| t.iter().map(|&v| v as f64).collect()).collect();
-        }
+        let glossy = extras.get("glossy").map(|g| glb.glossy(g)).transpose()?;
         let terms = glossy.as_ref().map_or(1, |g| g.terms);
         let albedo = extras["albedo"].as_f64().filter(|a| a.is_finite()).ok_or_else(|| bad("no finite albedo"))?;
         let primitive = &mesh["primitives"][0];
         let attributes = &primitive["attributes"];
-        let accessor = |index: &Value, kind: &str| -> Result<(usize, &[u8]), String> {
-            let a = &gltf["accessors"][index.as_u64().ok_or_else(|| bad("an attribute has no accessor"))? as usize];
-            if a["componentType"].as_u64() != Some(5126) || a["type"].as_str() != Some(kind) {
-                return Err(bad(&format!("an accessor is not float {kind}")));
-            }
-            let count = a["count"].as_u64().ok_or_else(|| bad("an accessor has no count"))? as usize;
-            let view = &gltf["bufferViews"][a["bufferView"].as_u64().ok_or_else(|| bad("no bufferView"))? as usize];
-            let start =
-                view["byteOffset"].as_u64().unwrap_or(0) as usize + a["byteOffset"].as_u64().unwrap_or(0) as usize;
-            let components = match kind {
-                "SCALAR" => 1,
-                "VEC3" => 3,
-                _ => 4,
-            };
-            let data = count
-                .checked_mul(4 * components)
-                .and_then(|length| start.checked_add(length))
-                .and_then(|end| bin.get(start..end))
-                .ok_or_else(|| bad("an accessor runs past the BIN chunk"))?;
-            Ok((count, data))
-        };
-        let floats = |data: &[u8]| {
-            data.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect::<Vec<f32>>()
-        };
-        let (vertices, data) = accessor(&attributes["POSITION"], "VEC3")?;
+        let (vertices, data) = glb.accessor(&attributes["POSITION"], "VEC3")?;
         let positions: Vec<[f32; 3]> = floats(data).chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        // `per_vertex` values packed four to a VEC4 attribute PREFIX0, PREFIX1, ….
-        let vec4s = |prefix: &str, per_vertex: usize| -> Result<Vec<f32>, String> {
-            crate::limits::check_memory("the transfer", (vertices as u128) * (per_vertex as u128) * 4)
-                .map_err(|e| bad(&e.to_string()))?;
-            let mut out = vec![0.0f32; vertices * per_vertex];
-            for k in 0..per_vertex.div_ceil(4) {
-                let (count, data) = accessor(&attributes[format!("{prefix}{k}")], "VEC4")?;
-                if count != vertices {
-                    return Err(bad(&format!("{prefix}{k} has {count} vertices, POSITION {vertices}")));
-                }
-                for (v, c) in floats(data).chunks_exact(4).enumerate() {
-                    for j in 0..4 {
-                        if 4 * k + j < per_vertex {
-                            out[v * per_vertex + 4 * k + j] = c[j];
-                        }
-                    }
-                }
-            }
-            if out.iter().any(|t| !t.is_finite()) {
-                return Err(bad(&format!("a value of {prefix}k is not finite")));
-            }
-            Ok(out)
-        };
         let coeffs = terms * order * order;
         let (transfer, compressed) = match extras.get("cpca") {
-            None => (vec4s("_PRT_", coeffs)?, None),
-            Some(c) => {
-                let clusters = c["clusters"].as_u64().unwrap_or(0) as usize;
-                let components = c["components"].as_u64().unwrap_or(0) as usize;
-                if !(1..=crate::transfer::stage::MAX_CLUSTERS).contains(&clusters)
-                    || !(1..=crate::transfer::stage::MAX_PCA).contains(&components)
-                {
-                    return Err(bad(&format!("cpca: {clusters} clusters of {components} directions")));
-                }
-                let (count, data) = accessor(&attributes["_PRT_CLUSTER"], "SCALAR")?;
-                let cluster_of = floats(data)
-                    .into_iter()
-                    .map(|c| (c >= 0.0 && c.fract() == 0.0 && (c as usize) < clusters).then_some(c as u32))
-                    .collect::<Option<Vec<u32>>>()
-                    .filter(|_| count == vertices)
-                    .ok_or_else(|| {
-                        bad(&format!("_PRT_CLUSTER must hold {vertices} cluster numbers below {clusters}"))
-                    })?;
-                let blob = |name: &str, len: usize| -> Result<Vec<f32>, String> {
-                    let values = glb::blob(&gltf, bin, name)
-                        .ok_or_else(|| bad(&format!("no {name} blob")))?
-                        .map_err(|e| bad(&e))?;
-                    if values.len() != len || values.iter().any(|v| !v.is_finite()) {
-                        return Err(bad(&format!("{name} holds {} values, not {len} finite ones", values.len())));
-                    }
-                    Ok(values)
-                };
-                let means = blob("cpca.means", clusters * coeffs)?;
-                let bases = blob("cpca.bases", clusters * components * coeffs)?;
-                let weights = vec4s("_PRT_W_", components)?;
-                (Vec::new(), Some(Compressed { clusters, components, means, bases, cluster_of, weights }))
-            }
+            None => (glb.vec4s(attributes, "_PRT_", vertices, coeffs)?, None),
+            Some(c) => (Vec::new(), Some(glb.compressed(c, attributes, vertices, coeffs)?)),
         };
-        let indices = &gltf["accessors"][primitive["indices"].as_u64().ok_or_else(|| bad("no indices"))? as usize];
-        let triangles = indices["count"].as_u64().ok_or_else(|| bad("the indices have no count"))? as usize / 3;
+        let indices = primitive["indices"].as_u64().ok_or_else(|| bad("no indices"))?;
+        let count = glb.gltf["accessors"][indices as usize]["count"].as_u64();
+        let triangles = count.ok_or_else(|| bad("the indices have no count"))? as usize / 3;
         Ok(TransferBake {
             name: name.to_string(),
             order,
@@ -272,21 +397,20 @@ impl TransferBake {
         })
     }
 
-    /// Whether the bake is of `mesh` (`mesh_name` for the message): the same vertices, at the same
-    /// positions (to single precision, as the `.glb` stores them), and the same triangle count.
-    pub fn check_mesh(&self, mesh: &Mesh, mesh_name: &str) -> Result<(), String> {
-        let name = &self.name;
+    /// Whether the bake is of `mesh`: the same vertices, at the same positions (to single
+    /// precision, as the `.glb` stores them), and the same triangle count.
+    pub fn check_mesh(&self, mesh: &Mesh) -> Result<(), OtherMesh> {
         if self.positions.len() != mesh.positions.len() || self.triangles != mesh.triangles.len() {
-            return Err(format!(
-                "{name}: the transfer is of a mesh of {} vertices and {} triangles, {mesh_name} has {} and {}",
-                self.positions.len(),
-                self.triangles,
-                mesh.positions.len(),
-                mesh.triangles.len()
-            ));
+            return Err(OtherMesh::Size {
+                bake: self.name.clone(),
+                bake_vertices: self.positions.len(),
+                bake_triangles: self.triangles,
+                vertices: mesh.positions.len(),
+                triangles: mesh.triangles.len(),
+            });
         }
         if let Some(v) = self.positions.iter().zip(&mesh.positions).position(|(a, b)| *a != b.as_vec3().to_array()) {
-            return Err(format!("{name}: vertex {v} is not where {mesh_name} has it: the transfer is of another mesh"));
+            return Err(OtherMesh::Vertex { bake: self.name.clone(), vertex: v });
         }
         Ok(())
     }
