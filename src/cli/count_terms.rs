@@ -7,7 +7,7 @@ use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::brdf::Brdf;
-use crate::factor::count::{self, CountConfig, Material};
+use crate::factor::count::{self, CountConfig, CountError, Material};
 use crate::factor::{manifest, plot};
 use crate::io::Output;
 use anyhow::Result;
@@ -55,6 +55,19 @@ impl Args {
     }
 }
 
+/// The stage's error in the words of the flags that set the refused values; the others as they
+/// are.
+fn flagged(error: CountError) -> anyhow::Error {
+    let message = match &error {
+        CountError::NoMaterial => Some("no material: give --brdf SPEC (repeatable) or --manifest FILE".to_string()),
+        CountError::Energy(energy) => Some(format!("--energy must be in (0, 1), got {energy}")),
+        CountError::Material { name, error } => {
+            super::factor_brdf::factor_flagged(error).map(|m| format!("material {name}: {m}"))
+        }
+    };
+    message.map_or_else(|| error.into(), anyhow::Error::msg)
+}
+
 impl Stage for Args {
     const NAME: &'static str = "count-terms";
     fn execution(&self) -> &Execution {
@@ -71,7 +84,7 @@ impl Stage for Args {
         };
         check_outputs(self.plot.iter().chain(&table).map(|o| (o, Holds::Text)))?;
         let config = CountConfig::try_from(&self)?;
-        let out = count::run(&config, self.materials()?, ctx.progress())?;
+        let out = count::run(&config, self.materials()?, ctx.progress()).map_err(flagged)?;
 
         let mut outputs = Outputs::new();
         if let Some(plot_out) = &self.plot {

@@ -5,7 +5,7 @@ use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::{document::to_json_pretty, read_bytes, Output};
-use crate::normals::sources::{write_normals, NormalSource};
+use crate::normals::sources::{write_normals, NormalSource, WriteError};
 use crate::normals::{decode, encode, pack::Stream, report, shader, table, Codec, NormalsError};
 mod args;
 
@@ -66,6 +66,21 @@ impl TryFrom<&Args> for Mode {
     }
 }
 
+/// A write error in the words of `--size`, which sets the image's size; the others as they are.
+fn flagged(error: WriteError) -> anyhow::Error {
+    match error {
+        WriteError::NoSize { path } => {
+            anyhow!("{}: invalid OpenEXR file: writing an EXR needs --size WxH", path.display())
+        }
+        WriteError::Size { path, width, height, normals } => anyhow!(
+            "{}: invalid OpenEXR file: --size {width}x{height} holds {} normals, the codes hold {normals}",
+            path.display(),
+            width * height
+        ),
+        error => error.into(),
+    }
+}
+
 impl Stage for Args {
     const NAME: &'static str = "encode-normals";
     fn execution(&self) -> &Execution {
@@ -87,7 +102,7 @@ impl Stage for Args {
                 let codes = read_bytes(&input, "normal codes", crate::limits::max_file_bytes(), |_| Ok(()))?;
                 let normals = decode::run(&config, &codes, bar).map_err(named)?;
                 let target = if let Output::File(p) = &output { p.clone() } else { PathBuf::from("stdout.raw") };
-                out_set.bytes(&output, write_normals(&target, &normals, args.size, args.unorm)?)?;
+                out_set.bytes(&output, write_normals(&target, &normals, args.size, args.unorm).map_err(flagged)?)?;
                 Some(format!("decoded {} codes to {}", normals.len(), output.display()))
             }
             Mode::Encode(config, input, [codes, report, decoded]) => {

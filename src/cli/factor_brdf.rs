@@ -6,6 +6,7 @@ use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
 use super::outputs::{check_output_dir, check_outputs, Holds, Outputs};
 use crate::factor::stage::{self, Config};
+use crate::factor::svd::{FactorError, Method};
 use crate::io::{self, Output};
 use anyhow::Result;
 pub use args::*;
@@ -26,6 +27,32 @@ impl TryFrom<&Args> for Config {
     }
 }
 
+/// The stage's error in the words of the flags that set the refused values; the others as they
+/// are.
+fn flagged(error: stage::Error) -> anyhow::Error {
+    let message = match &error {
+        stage::Error::NoTerms => Some("--terms must be at least 1 with --maps or --factors".to_string()),
+        stage::Error::Factor(e) => factor_flagged(e),
+    };
+    message.map_or_else(|| error.into(), anyhow::Error::msg)
+}
+
+/// A factorization's error in the words of the matrix flags (`--resolution`, `--method`,
+/// `--max-memory`, which `count-terms` shares); `None` when no flag set the refused value.
+pub(super) fn factor_flagged(error: &FactorError) -> Option<String> {
+    match error {
+        FactorError::TooLarge { n, domain, dirs, method, need, limit } => Some(format!(
+            "resolution {n} on the {domain} ({dirs} directions per side) with the {method} method needs about {need} \
+             of memory (limit {limit}); lower --resolution{} or raise --max-memory",
+            if *method == Method::Dense { ", use an isotropic BRDF with --method fft" } else { "" }
+        )),
+        FactorError::Anisotropic(brdf) => {
+            Some(format!("--method fft needs an isotropic BRDF; {brdf} is anisotropic (use --method dense)"))
+        }
+        _ => None,
+    }
+}
+
 impl Stage for Args {
     const NAME: &'static str = "factor-brdf";
     fn execution(&self) -> &Execution {
@@ -39,7 +66,7 @@ impl Stage for Args {
             check_output_dir(dir)?;
         }
         let config = Config::try_from(&self)?;
-        let out = stage::run(&config, &self.brdf, ctx.progress())?;
+        let out = stage::run(&config, &self.brdf, ctx.progress()).map_err(flagged)?;
 
         let mut outputs = Outputs::new();
         if let (Some(dir), Some((layers, sheet))) = (&self.maps, &out.maps) {

@@ -5,7 +5,7 @@
 
 use super::common::Context;
 use crate::brdf::Brdf;
-use crate::envmap::{EnvMap, Layout, LoadOptions, NegativePolicy, Orientation};
+use crate::envmap::{EnvMap, Layout, LoadError, LoadOptions, NegativePolicy, Orientation, PixelFault};
 use crate::factor::{Channel, Domain, Method, Sampling};
 use crate::io::Output;
 use anyhow::{Context as _, Result};
@@ -100,11 +100,24 @@ impl EnvArgs {
 
     /// Reads the map, saying how many negative components were clamped.
     pub fn load(&self, ctx: &Context) -> Result<EnvMap> {
-        let loaded = self.options().load(&self.path)?;
+        let loaded = self.options().load(&self.path).map_err(flagged)?;
         if loaded.clamped > 0 {
             ctx.note(format!("{}: clamped {} negative pixel components to 0", self.name(), loaded.clamped));
         }
         Ok(loaded.map)
+    }
+}
+
+/// A reading error in the words of `--negative` when that policy refused a pixel; the others as
+/// they are.
+fn flagged(error: LoadError) -> anyhow::Error {
+    match error {
+        LoadError::BadPixel { path, x, y, channel, value, fault: PixelFault::Negative } => anyhow::anyhow!(
+            "{}: pixel ({x}, {y}) channel {channel} is {value}: negative radiance; pass --negative clamp or \
+             --negative keep",
+            path.display()
+        ),
+        error => error.into(),
     }
 }
 

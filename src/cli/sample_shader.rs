@@ -7,7 +7,7 @@ use super::options::Execution;
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::{self, Output, RgbImage};
 use crate::shader::sampler::{Arith, Domain};
-use crate::shader::stage::{self, comparison_table, Config};
+use crate::shader::stage::{self, comparison_table, Config, Error, MAX_DEPTH};
 use crate::shader::Shader;
 use anyhow::Result;
 pub use args::*;
@@ -38,6 +38,15 @@ impl TryFrom<&Args> for Config {
     }
 }
 
+/// The stage's error in the words of the flag that set the refused value; the others as they are.
+fn flagged(error: Error) -> anyhow::Error {
+    match error {
+        Error::Tolerance(t) => anyhow::anyhow!("--tolerance must be a finite number >= 0, got {t}"),
+        Error::Depth(d) => anyhow::anyhow!("--max-depth {d} is too deep (at most {MAX_DEPTH}: 4^{MAX_DEPTH} nodes)"),
+        error => error.into(),
+    }
+}
+
 fn layered(texture: &RgbImage, width: &RgbImage, depth: &RgbImage) -> Result<Vec<u8>> {
     io::exr::encode_layers(&[("", texture), ("width", width), ("depth", depth)]).map_err(anyhow::Error::msg)
 }
@@ -58,7 +67,7 @@ impl Stage for Args {
         let source = crate::shader::read_source(&self.shader)?;
         let mut shader = Shader::compile(&source, &config.file)?;
         shader.set_params(&self.params)?;
-        let out = stage::run(&config, &shader, ctx.progress())?;
+        let out = stage::run(&config, &shader, ctx.progress()).map_err(flagged)?;
 
         let mut outputs = Outputs::new();
         if let Some(o) = &self.output {

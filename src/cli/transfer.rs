@@ -8,7 +8,10 @@ use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::Output;
 use crate::mesh::Mesh;
 use crate::transfer::lightmap::LightmapConfig;
-use crate::transfer::stage::{self, Compression, Config, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES};
+use crate::transfer::stage::{
+    self, Compression, Config, Error, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES, MAX_BOUNCES, MAX_CELL_SAMPLES,
+    MAX_CLUSTERS, MAX_CPCA_ROUND_WORK, MAX_ORDER, MAX_PCA, MAX_RAYS,
+};
 use anyhow::{Context as _, Result};
 pub use args::*;
 
@@ -115,6 +118,48 @@ fn glossy_config(args: &Args, doc: &std::path::Path) -> Result<GlossyConfig> {
     })
 }
 
+/// The stage's error in the words of the flag that set the refused value (the library's speak of
+/// the bake); the others as they are.
+fn flagged(error: Error) -> anyhow::Error {
+    let message = match &error {
+        Error::Order(n) => format!("--order {n} is outside 1..={MAX_ORDER}"),
+        Error::Rays(n) => format!("--rays {n} is outside 1..={MAX_RAYS}"),
+        Error::Bounces(n) => format!("--bounces {n} is outside 1..={MAX_BOUNCES}"),
+        Error::Albedo(albedo) => format!("--albedo {albedo} must be a finite number ≥ 0"),
+        Error::Offset(offset) => format!("--offset {offset} must be in [0, 0.1)"),
+        Error::GlossyInterreflected => {
+            "glossy transfer (--factors) is unshadowed or shadowed; its interreflections are not built".into()
+        }
+        Error::Terms { factors, terms, stored } => {
+            format!("{factors}: --terms {terms} is outside 1..={stored}, the terms the factor file holds")
+        }
+        Error::CellSamples(s) => format!("--cell-samples {s} is outside 1..={MAX_CELL_SAMPLES}"),
+        Error::Compression { clusters, components, most_components } => format!(
+            "--clusters {clusters} --pca {components}: clusters must be in 1..={MAX_CLUSTERS}, directions in \
+             1..={most_components} (the values per vertex, at most {MAX_PCA})"
+        ),
+        Error::CompressionWork { clusters, components, vertices, per_vertex, work } => format!(
+            "--clusters {clusters} --pca {components} on {vertices} vertices of {per_vertex} values: a round of \
+             clustered PCA would take {work:.2e} multiply-adds, above the ceiling of {MAX_CPCA_ROUND_WORK:.0e} \
+             (minutes per round); use fewer clusters or directions"
+        ),
+        Error::NoUvs(mesh) => format!(
+            "{mesh}: no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt): --lightmap needs a UV set on every vertex (PLY \
+             texture coordinates are not read yet)"
+        ),
+        Error::NoTexels { source_name, width, height } => {
+            format!("{source_name}: --lightmap {width}x{height} has no texels")
+        }
+        Error::LightmapOf { source_name, .. } => format!(
+            "{source_name}: --lightmap bakes diffuse unshadowed or shadowed transfer; interreflected (its bounces \
+             gather the per-vertex transfer at the rays' hits), glossy (--factors) and compressed (--clusters) \
+             lightmaps are not built"
+        ),
+        _ => return error.into(),
+    };
+    anyhow::Error::msg(message)
+}
+
 impl Stage for Args {
     const NAME: &'static str = "transfer";
     fn execution(&self) -> &Execution {
@@ -138,6 +183,7 @@ impl Stage for Args {
         let config = Config::try_from(&self)?;
         let mesh = Mesh::load(&self.mesh)?;
         let out = stage::run(&config, &mesh, ctx.progress())
+            .map_err(flagged)
             .with_context(|| format!("cannot bake {}", self.mesh.display()))?;
         if out.summary.rays > 0 {
             ctx.note(format!(

@@ -38,6 +38,17 @@ pub struct Loaded {
     pub clamped: usize,
 }
 
+/// Why a pixel is refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum PixelFault {
+    /// NaN or infinite: refused under every policy.
+    #[error("NaN and infinite radiance are not accepted")]
+    NotFinite,
+    /// Negative, under [`NegativePolicy::Error`] (the CLI names `--negative`).
+    #[error("negative radiance, which the reading policy refuses (it can clamp it to 0 or keep it)")]
+    Negative,
+}
+
 /// Errors of reading an environment map; each names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
@@ -45,7 +56,7 @@ pub enum LoadError {
     #[error(transparent)]
     Io(#[from] IoError),
     /// A pixel the policy refuses.
-    #[error("{path}: pixel ({x}, {y}) channel {channel} is {value}: {reason}")]
+    #[error("{path}: pixel ({x}, {y}) channel {channel} is {value}: {fault}")]
     BadPixel {
         /// The file.
         path: PathBuf,
@@ -57,8 +68,8 @@ pub enum LoadError {
         channel: &'static str,
         /// The value.
         value: f32,
-        /// Why it is refused and what to do.
-        reason: &'static str,
+        /// Why it is refused.
+        fault: PixelFault,
     },
     /// A face file of a cube directory is missing.
     #[error("{}: no face file {face}.exr, {face}.hdr or {face}.pfm", dir.display())]
@@ -144,22 +155,20 @@ impl LoadOptions {
         let mut clamped = 0;
         for (i, px) in image.pixels.iter_mut().enumerate() {
             for (c, v) in px.iter_mut().enumerate() {
-                let bad = |reason| LoadError::BadPixel {
+                let bad = |fault| LoadError::BadPixel {
                     path: path.into(),
                     x: i % width,
                     y: i / width,
                     channel: ["R", "G", "B"][c],
                     value: *v,
-                    reason,
+                    fault,
                 };
                 if !v.is_finite() {
-                    return Err(bad("NaN and infinite radiance are not accepted"));
+                    return Err(bad(PixelFault::NotFinite));
                 }
                 if *v < 0.0 {
                     match self.negative {
-                        NegativePolicy::Error => {
-                            return Err(bad("negative radiance; pass --negative clamp or --negative keep"))
-                        }
+                        NegativePolicy::Error => return Err(bad(PixelFault::Negative)),
                         NegativePolicy::Clamp => {
                             *v = 0.0;
                             clamped += 1;
@@ -210,7 +219,7 @@ mod tests {
         let e = strict.check_pixels(path, &mut image_with(f32::NAN)).unwrap_err().to_string();
         assert!(e.starts_with("sky.exr: pixel (3, 2) channel G is NaN"), "{e}");
         let e = strict.check_pixels(path, &mut image_with(-0.5)).unwrap_err().to_string();
-        assert!(e.contains("(3, 2) channel G is -0.5") && e.contains("--negative clamp"), "{e}");
+        assert!(e.contains("(3, 2) channel G is -0.5: negative radiance"), "{e}");
         let clamp = LoadOptions { negative: NegativePolicy::Clamp, ..strict };
         let mut img = image_with(-0.5);
         assert_eq!(clamp.check_pixels(path, &mut img).unwrap(), 1);

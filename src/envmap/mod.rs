@@ -14,7 +14,7 @@ pub mod zonal;
 
 pub use cube::{select_face, Face, FACES};
 pub use layout::Layout;
-pub use load::{LoadError, LoadOptions, Loaded, NegativePolicy};
+pub use load::{LoadError, LoadOptions, Loaded, NegativePolicy, PixelFault};
 pub use orient::Orientation;
 pub use probe::WORLD_FROM_PROBE;
 pub use resample::resample;

@@ -197,14 +197,15 @@ impl CountOutput {
     }
 }
 
-/// Errors of `count-terms`, naming the material.
+/// Errors of `count-terms`, naming the material. The CLI (`cli/count_terms.rs`) words them with
+/// the flags' names.
 #[derive(Debug, thiserror::Error)]
 pub enum CountError {
     /// No material was given.
-    #[error("no material: give --brdf SPEC (repeatable) or --manifest FILE")]
+    #[error("no material to count the terms of")]
     NoMaterial,
     /// The energy fraction is not in (0, 1).
-    #[error("--energy must be in (0, 1), got {0}")]
+    #[error("the energy fraction must be in (0, 1), got {0}")]
     Energy(f64),
     /// A material's factorization cannot run (method, memory budget) or failed.
     #[error("material {name}: {error}")]

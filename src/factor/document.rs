@@ -8,8 +8,8 @@
 //! the L²-normalized factors (Σ g² ΔΩ = 1) as 32-bit floats; σ_k stay in the JSON.
 
 use super::{Channel, Domain, Factorization, Grid, Method};
+use crate::io;
 use crate::io::document::{read_document, read_named_layers, BundleError, Validate};
-use crate::io::{self, IoError};
 use crate::limits;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -129,13 +129,6 @@ pub fn factor_layers(f: &Factorization, terms: usize) -> (usize, usize, Vec<f32>
     let k = terms.min(f.g.len()).min(f.h.len());
     let flat = |v: &[Vec<f64>]| -> Vec<f32> { v[..k].iter().flatten().map(|&x| x as f32).collect() };
     (n, k * n, flat(&f.g), flat(&f.h))
-}
-
-/// Writes the first `terms` factors of `f` to `path` (atomically) and returns the document entry.
-pub fn write_factors(path: &Path, f: &Factorization, terms: usize) -> Result<FactorsFile, IoError> {
-    let (w, h, g, hv) = factor_layers(f, terms);
-    io::exr::write_grey_layers(path, w, h, &[("g", &g), ("h", &hv)])?;
-    Ok(FactorsFile { file: path.display().to_string(), terms: h / w.max(1), layout: LAYOUT.into() })
 }
 
 /// Reads a `prtkit.factor` document and the factor file it names (relative to the document's

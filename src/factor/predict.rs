@@ -77,11 +77,6 @@ pub fn reflection_spectrum(lobe: impl Fn(f64) -> f64, lmax: usize) -> Vec<f64> {
     legendre_transform(|gamma| lobe(gamma.cos()), 0.0, PI, lmax, panels).into_iter().map(|v| 2.0 * PI * v).collect()
 }
 
-/// The zonal SH coefficient f_l of a lobe from its F_l: f_l = F_l √((2l+1)/(4π)).
-pub fn zonal_coefficient(big_f: f64, l: usize) -> f64 {
-    big_f * ((2 * l + 1) as f64 / (4.0 * PI)).sqrt()
-}
-
 /// Normalized Legendre transform (F_0 = 1) of an analytic half-angle curve on [0, π/2]
 /// (ρ = 0 beyond, half vectors lie in the upper hemisphere).
 pub fn half_angle_spectrum(curve: impl Fn(f64) -> f64, lmax: usize) -> Vec<f64> {

@@ -76,8 +76,8 @@ pub struct Summary {
 /// Errors of the stage.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// Maps or factors asked for with no term.
-    #[error("--terms must be at least 1 with --maps or --factors")]
+    /// Factor maps or a factor file asked for with no term.
+    #[error("factor maps and factor files need at least 1 term")]
     NoTerms,
     /// The factorization failed (method, memory budget, numerics).
     #[error(transparent)]

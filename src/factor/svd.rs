@@ -88,13 +88,15 @@ impl std::fmt::Display for Method {
     }
 }
 
-/// Errors of the factorization.
+/// Errors of the factorization. They speak of the matrix and its method, not of the flags that
+/// set them: the CLI (`cli/factor_brdf.rs`) words them with the flags' names.
 #[derive(Debug, thiserror::Error)]
 pub enum FactorError {
     /// The requested problem would not fit the memory budget.
     #[error(
         "resolution {n} on the {domain} ({dirs} directions per side) with the {method} method needs about {need} \
-         of memory (limit {limit}); lower --resolution{hint} or raise --max-memory"
+         of memory (limit {limit}); lower the resolution{} or raise the memory limit",
+        if *method == Method::Dense { ", use an isotropic BRDF with the fft method" } else { "" }
     )]
     TooLarge {
         /// Resolution.
@@ -109,12 +111,13 @@ pub enum FactorError {
         need: String,
         /// Human-readable limit.
         limit: String,
-        /// Extra advice.
-        hint: &'static str,
     },
-    /// A bad parameter.
-    #[error("{0}")]
-    Invalid(String),
+    /// The FFT method asked for an anisotropic BRDF (its matrix is not block-circulant in φ).
+    #[error("the fft method needs an isotropic BRDF; {0} is anisotropic (use the dense method)")]
+    Anisotropic(String),
+    /// The resolution is below 2.
+    #[error("resolution must be at least 2, got {0}")]
+    Resolution(usize),
     /// The SVD did not converge.
     #[error("the SVD did not converge ({0})")]
     NoConvergence(String),
@@ -181,10 +184,7 @@ pub fn resolve_method(brdf: &Brdf, method: Method) -> Result<Method, FactorError
     match method {
         Method::Auto if brdf.is_isotropic() => Ok(Method::Fft),
         Method::Auto => Ok(Method::Dense),
-        Method::Fft if !brdf.is_isotropic() => Err(FactorError::Invalid(format!(
-            "--method fft needs an isotropic BRDF; {} is anisotropic (use --method dense)",
-            brdf.spec()
-        ))),
+        Method::Fft if !brdf.is_isotropic() => Err(FactorError::Anisotropic(brdf.spec())),
         m => Ok(m),
     }
 }
@@ -192,7 +192,7 @@ pub fn resolve_method(brdf: &Brdf, method: Method) -> Result<Method, FactorError
 /// Checks the resolution and the memory budget before any work.
 pub fn check_budget(sampling: &Sampling, method: Method, terms: usize, max_memory: u128) -> Result<(), FactorError> {
     if sampling.resolution < 2 {
-        return Err(FactorError::Invalid(format!("resolution must be at least 2, got {}", sampling.resolution)));
+        return Err(FactorError::Resolution(sampling.resolution));
     }
     let need = memory_estimate(sampling, method, terms);
     if need > max_memory {
@@ -204,7 +204,6 @@ pub fn check_budget(sampling: &Sampling, method: Method, terms: usize, max_memor
             method,
             need: crate::limits::human_bytes(need),
             limit: crate::limits::human_bytes(max_memory),
-            hint: if method == Method::Dense { ", use an isotropic BRDF with --method fft" } else { "" },
         });
     }
     Ok(())
@@ -221,7 +220,7 @@ pub fn factor(
 ) -> Result<Factorization, FactorError> {
     let method = resolve_method(brdf, method)?;
     if sampling.resolution < 2 {
-        return Err(FactorError::Invalid(format!("resolution must be at least 2, got {}", sampling.resolution)));
+        return Err(FactorError::Resolution(sampling.resolution));
     }
     let terms = terms.min(sampling.grid().len());
     match method {

@@ -83,11 +83,6 @@ impl GridLayout {
         let (rest, b) = (code / self.b, code % self.b);
         ((rest / self.a).min(self.faces - 1), rest % self.a, b)
     }
-
-    /// Number of codes in use, `F · N_a · N_b`.
-    pub fn codes_used(&self) -> u128 {
-        self.faces as u128 * self.a as u128 * self.b as u128
-    }
 }
 
 /// Which radices a coordinate digit may have.
@@ -189,7 +184,7 @@ mod tests {
                 }
             }
         }
-        assert_eq!(l.codes_used(), 210);
+        assert_eq!(l.faces * l.a * l.b, 210);
         // 210..=255 are never written: face 5.
         assert_eq!(l.unpack(210).0, 5);
         assert_eq!(l.unpack(255), (5, (255 / 5) % 7, 0));

@@ -7,7 +7,7 @@
 //! normal properties rewritten (binary: patched in place; ascii: the three tokens replaced).
 
 use crate::io::{obj, ply, IoError, RgbImage};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Input format, chosen by extension (`.exr`, `.obj`, `.ply`; anything else is raw f32 xyz).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -139,6 +139,32 @@ fn fmt_f32(x: f32) -> String {
     format!("{x}")
 }
 
+/// Errors of writing decoded normals alone.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// Encoding the file failed.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// An EXR was asked for without the image's size.
+    #[error("{}: invalid OpenEXR file: writing an EXR needs the image's size", path.display())]
+    NoSize {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The image's size does not hold the normals.
+    #[error("{}: invalid OpenEXR file: a {width}x{height} image holds {} normals, the codes hold {normals}", path.display(), width * height)]
+    Size {
+        /// The file.
+        path: PathBuf,
+        /// W.
+        width: usize,
+        /// H.
+        height: usize,
+        /// The normals decoded.
+        normals: usize,
+    },
+}
+
 /// Writes normals alone in the format of `path`'s extension (used by `--decode`): `.obj` as
 /// `vn` lines, `.ply` as an ascii PLY with `nx ny nz`, `.exr` (needs `size`) as an RGB image,
 /// anything else raw f32.
@@ -147,7 +173,7 @@ pub fn write_normals(
     normals: &[[f32; 3]],
     size: Option<(usize, usize)>,
     unorm: bool,
-) -> Result<Vec<u8>, IoError> {
+) -> Result<Vec<u8>, WriteError> {
     Ok(match SourceFormat::from_path(path) {
         SourceFormat::Raw => raw_to_bytes(normals),
         SourceFormat::Obj => {
@@ -168,16 +194,12 @@ pub fn write_normals(
             s.into_bytes()
         }
         SourceFormat::Exr => {
-            let (w, h) = size.ok_or_else(|| IoError::invalid(path, "OpenEXR", "writing an EXR needs --size WxH"))?;
-            if w * h != normals.len() {
-                return Err(IoError::invalid(
-                    path,
-                    "OpenEXR",
-                    format!("--size {w}x{h} holds {} normals, the codes hold {}", w * h, normals.len()),
-                ));
+            let (width, height) = size.ok_or_else(|| WriteError::NoSize { path: path.into() })?;
+            if width * height != normals.len() {
+                return Err(WriteError::Size { path: path.into(), width, height, normals: normals.len() });
             }
             let pixels = normals.iter().map(|n| if unorm { n.map(|c| 0.5 * c + 0.5) } else { *n }).collect();
-            let image = RgbImage { width: w, height: h, pixels };
+            let image = RgbImage { width, height, pixels };
             crate::io::exr::encode_layers(&[("", &image)]).map_err(|e| IoError::invalid(path, "OpenEXR", e))?
         }
     })

@@ -29,11 +29,11 @@
 //! as l⁻⁵/² and ring far below the map's detail.
 
 use super::document::{OrderSelection, ShBody, SourceMap, Synthesis, FORMAT, VERSION};
-use super::project::{project_choosing_order, OrderChoice, SelectError};
+use super::project::{project_choosing_order, OrderChoice, Projection, SelectError};
 use super::synth::{synthesize_latlong, SynthError};
 use super::window::{self, Window};
 use super::{convolve, ShCoeffs};
-use crate::envmap::bright::{split, BrightRule};
+use crate::envmap::bright::{split, BrightRule, BrightSources};
 use crate::envmap::{EnvMap, Layout};
 use crate::io::{Document, Provenance, RgbImage};
 use crate::progress::Progress;
@@ -143,66 +143,18 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
         }
     }
     let start = Instant::now();
-    let select = |error| Error::Select { source_name: config.source.clone(), error };
-    // ε is measured on the map with its compact bright sources clipped (module docs): the order
-    // is then that of the map's smooth part, and the coefficients are those of the whole map.
     let (clipped, bright) = split(map, BrightRule::Auto);
-    let (projection, clipped_selection) = match config.order {
-        OrderChoice::Order(_) => (project_choosing_order(map, config.order, progress).map_err(select)?, None),
-        OrderChoice::Epsilon { .. } => {
-            let smooth = project_choosing_order(&clipped, config.order, progress).map_err(select)?;
-            let full =
-                project_choosing_order(map, OrderChoice::Order(smooth.coeffs.order), progress).map_err(select)?;
-            (full, Some((bright.threshold, smooth.epsilon_achieved)))
-        }
-    };
+    let (projection, selection) = project(config, map, &clipped, &bright, progress)?;
     let project_seconds = start.elapsed().as_secs_f64();
-    let coeffs = &projection.coeffs;
-
-    let (mut reconstruction, mut irradiance) = (None, None);
-    let mut synthesis = None;
-    if config.reconstruction || config.irradiance {
-        let (w, h) = image_size(map, coeffs.order, config.size);
-        synthesis = Some(Synthesis {
-            window: config.window,
-            irradiance_window: config.irradiance_window,
-            size: [w, h],
-            reconstruction_t: None,
-            irradiance_t: None,
-        });
-        if config.reconstruction {
-            let smooth = crate::sh::project::project(&clipped, coeffs.order, progress).map_err(|e| select(e.into()))?;
-            let (mut image, t) = windowed_synthesis(&smooth, &vec![1.0; coeffs.order + 1], config.window, w, h)?;
-            bright.add_to_latlong(&mut image);
-            reconstruction = Some((image, t));
-        }
-        if config.irradiance {
-            let cosine: Vec<f64> = (0..=coeffs.order).map(convolve::clamped_cosine).collect();
-            irradiance = Some(windowed_synthesis(coeffs, &cosine, config.irradiance_window, w, h)?);
-        }
-        if let Some(s) = &mut synthesis {
-            s.reconstruction_t = reconstruction.as_ref().and_then(|r| r.1);
-            s.irradiance_t = irradiance.as_ref().and_then(|r| r.1);
-        }
-    }
-
+    let order = projection.coeffs.order;
+    let images = synthesize(config, map, &projection.coeffs, &clipped, &bright, progress)?;
     let img = map.image();
-    let (method, epsilon) = match config.order {
-        OrderChoice::Order(_) => ("order", None),
-        OrderChoice::Epsilon { epsilon, .. } => ("epsilon", Some(epsilon)),
-    };
     let body = ShBody {
-        order: coeffs.order,
-        coefficients: coeffs.rgb.clone(),
-        band_energy: coeffs.band_energy(),
+        order,
+        coefficients: projection.coeffs.rgb.clone(),
+        band_energy: projection.coeffs.band_energy(),
         total_energy: projection.total_energy,
-        selection: OrderSelection {
-            method: method.into(),
-            epsilon,
-            epsilon_achieved: projection.epsilon_achieved,
-            clipped_at: clipped_selection.map(|c| c.0),
-            epsilon_achieved_clipped: clipped_selection.map(|c| c.1),
-        },
+        selection,
         source: SourceMap {
             path: config.source.clone(),
             layout: map.layout().name().to_string(),
@@ -210,23 +162,105 @@ pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Out
             height: img.height,
             max_order: map.max_order(),
         },
-        synthesis,
+        synthesis: images.synthesis,
     };
     let provenance = Provenance::new("sh-project", &config.args, vec![config.source.clone()]);
     let summary = Summary {
         input: config.source.clone(),
         layout: map.layout().name().into(),
-        order: coeffs.order,
-        coefficients: super::count(coeffs.order),
+        order,
+        coefficients: super::count(order),
         epsilon_achieved: projection.epsilon_achieved,
         band_energy: body.band_energy.clone(),
         total_energy: projection.total_energy,
         project_seconds,
     };
-    let (reconstruction, irradiance) = (reconstruction.map(|r| r.0), irradiance.map(|r| r.0));
     let document =
         Document::new(FORMAT, VERSION, provenance, body).with_input_orientation(map.orientation().describe());
-    Ok(Output { document, reconstruction, irradiance, summary })
+    Ok(Output { document, reconstruction: images.reconstruction, irradiance: images.irradiance, summary })
+}
+
+/// The whole map's coefficients at the order `config` gives or its ε chooses, and how the order
+/// was chosen. ε is measured on the `clipped` map (module docs): the order is then that of the
+/// map's smooth part, and the coefficients are those of the whole map.
+fn project(
+    config: &Config,
+    map: &EnvMap,
+    clipped: &EnvMap,
+    bright: &BrightSources,
+    progress: &dyn Progress,
+) -> Result<(Projection, OrderSelection), Error> {
+    let select = |error| Error::Select { source_name: config.source.clone(), error };
+    let (projection, epsilon, clipped_selection) = match config.order {
+        OrderChoice::Order(_) => (project_choosing_order(map, config.order, progress).map_err(select)?, None, None),
+        OrderChoice::Epsilon { epsilon, .. } => {
+            let smooth = project_choosing_order(clipped, config.order, progress).map_err(select)?;
+            let full =
+                project_choosing_order(map, OrderChoice::Order(smooth.coeffs.order), progress).map_err(select)?;
+            (full, Some(epsilon), Some((bright.threshold, smooth.epsilon_achieved)))
+        }
+    };
+    let selection = OrderSelection {
+        method: if epsilon.is_some() { "epsilon" } else { "order" }.into(),
+        epsilon,
+        epsilon_achieved: projection.epsilon_achieved,
+        clipped_at: clipped_selection.map(|c| c.0),
+        epsilon_achieved_clipped: clipped_selection.map(|c| c.1),
+    };
+    Ok((projection, selection))
+}
+
+/// The images `sh-project` synthesizes, and the document's account of them.
+struct Images {
+    /// The window, size and guard of the synthesis (absent when no image is asked).
+    synthesis: Option<Synthesis>,
+    /// The order-F reconstruction.
+    reconstruction: Option<RgbImage>,
+    /// The irradiance map.
+    irradiance: Option<RgbImage>,
+}
+
+/// The reconstruction (the `clipped` map's expansion with the `bright` sources put back, module
+/// docs) and the irradiance map of `coeffs`, as `config` asks.
+fn synthesize(
+    config: &Config,
+    map: &EnvMap,
+    coeffs: &ShCoeffs,
+    clipped: &EnvMap,
+    bright: &BrightSources,
+    progress: &dyn Progress,
+) -> Result<Images, Error> {
+    if !(config.reconstruction || config.irradiance) {
+        return Ok(Images { synthesis: None, reconstruction: None, irradiance: None });
+    }
+    let (w, h) = image_size(map, coeffs.order, config.size);
+    let reconstruction = if config.reconstruction {
+        let smooth = crate::sh::project::project(clipped, coeffs.order, progress)
+            .map_err(|e| Error::Select { source_name: config.source.clone(), error: e.into() })?;
+        let (mut image, t) = windowed_synthesis(&smooth, &vec![1.0; coeffs.order + 1], config.window, w, h)?;
+        bright.add_to_latlong(&mut image);
+        Some((image, t))
+    } else {
+        None
+    };
+    let irradiance = if config.irradiance {
+        let cosine: Vec<f64> = (0..=coeffs.order).map(convolve::clamped_cosine).collect();
+        Some(windowed_synthesis(coeffs, &cosine, config.irradiance_window, w, h)?)
+    } else {
+        None
+    };
+    let synthesis = Synthesis {
+        window: config.window,
+        irradiance_window: config.irradiance_window,
+        size: [w, h],
+        reconstruction_t: reconstruction.as_ref().and_then(|r| r.1),
+        irradiance_t: irradiance.as_ref().and_then(|r| r.1),
+    };
+    Ok(Images {
+        synthesis: Some(synthesis),
+        reconstruction: reconstruction.map(|r| r.0),
+        irradiance: irradiance.map(|r| r.0),
+    })
 }
 
 /// Synthesizes `coeffs` convolved with the zonal `kernel` (Â_l for irradiance, 1 for a

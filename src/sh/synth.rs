@@ -58,11 +58,6 @@ impl RowSynth {
         RowSynth { width, ifft: RealFftPlanner::<f64>::new().plan_fft_inverse(width), shift }
     }
 
-    /// The highest frequency a row can hold (W/2).
-    pub fn max_frequency(&self) -> usize {
-        self.width / 2
-    }
-
     /// Scratch buffers for [`RowSynth::synth`]: (spectrum, samples, fft scratch).
     pub fn buffers(&self) -> (Vec<Complex<f64>>, Vec<f64>, Vec<Complex<f64>>) {
         (self.ifft.make_input_vec(), self.ifft.make_output_vec(), self.ifft.make_scratch_vec())

@@ -133,12 +133,16 @@ pub struct CompareRow {
     pub guaranteed: bool,
 }
 
-/// Errors of the stage.
+/// Errors of the stage. They speak of the sampling, not of the flags that set it: the CLI
+/// (`cli/sample_shader.rs`) words them with the flag's name.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// A setting is out of range.
-    #[error("{0}")]
-    Config(String),
+    /// The tolerance is not a finite number ≥ 0.
+    #[error("the tolerance must be a finite number >= 0, got {0}")]
+    Tolerance(f64),
+    /// The subdivision would go deeper than [`MAX_DEPTH`].
+    #[error("a subdivision depth of {0} is too deep (at most {MAX_DEPTH}: 4^{MAX_DEPTH} nodes)")]
+    Depth(u32),
     /// Evaluating the shader failed.
     #[error(transparent)]
     Shader(#[from] ShaderError),
@@ -146,14 +150,13 @@ pub enum Error {
 
 /// Runs `sample-shader` on a compiled `shader` (parameters set).
 pub fn run(config: &Config, shader: &Shader, progress: &dyn Progress) -> Result<Output, Error> {
-    let bad = |m: String| Error::Config(m);
     if !(config.tolerance >= 0.0 && config.tolerance.is_finite()) {
-        return Err(bad(format!("--tolerance must be a finite number >= 0, got {}", config.tolerance)));
+        return Err(Error::Tolerance(config.tolerance));
     }
     let res = config.resolution;
     let max_depth = config.max_depth.unwrap_or_else(|| (res.0.max(res.1) as f64).log2().ceil() as u32);
     if max_depth > MAX_DEPTH {
-        return Err(bad(format!("--max-depth {max_depth} is too deep (at most {MAX_DEPTH}: 4^{MAX_DEPTH} nodes)")));
+        return Err(Error::Depth(max_depth));
     }
     let arithmetics = if config.arithmetics.is_empty() { vec![Arith::Affine] } else { config.arithmetics.clone() };
     let cfg = |arith: Arith| SampleConfig {

@@ -19,7 +19,7 @@
 //! cluster left empty takes the vertex reconstructed worst. Each step depends only on the data,
 //! never on the thread count (the SVDs are sequential; the assignment is per vertex).
 
-use crate::factor::svd::run_svd;
+use crate::factor::svd::{run_svd, FactorError};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 use rayon::prelude::*;
@@ -65,7 +65,7 @@ pub struct Reconstruction {
 impl Cpca {
     /// Compresses `data` (vertices × `dim`, vertex-major) into `clusters` clusters of
     /// `components` directions each. `clusters` is capped at the vertex count.
-    pub fn new(data: &[f64], dim: usize, clusters: usize, components: usize) -> Result<Cpca, String> {
+    pub fn new(data: &[f64], dim: usize, clusters: usize, components: usize) -> Result<Cpca, FactorError> {
         let vertices = data.len() / dim.max(1);
         let clusters = clusters.clamp(1, vertices.max(1));
         let mut cluster_of = initial_clusters(data, dim, clusters)?;
@@ -75,7 +75,7 @@ impl Cpca {
             iterations += 1;
             let fits = (0..clusters)
                 .map(|c| Fit::of(data, dim, components, &cluster_of, c as u32))
-                .collect::<Result<Vec<_>, String>>()?;
+                .collect::<Result<Vec<_>, FactorError>>()?;
             let (best, errors) = assign(data, dim, &fits);
             let moved = best != cluster_of;
             cluster_of = best;
@@ -92,7 +92,7 @@ impl Cpca {
         // round moved vertices (the fits must be of the final clusters).
         let fits = (0..clusters)
             .map(|c| Fit::of(data, dim, components, &cluster_of, c as u32))
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>, FactorError>>()?;
         let weights = data.chunks_exact(dim).zip(&cluster_of).flat_map(|(x, &c)| fits[c as usize].weights(x)).collect();
         let means = fits.iter().flat_map(|f| f.mean.iter().copied()).collect();
         let bases = fits.iter().flat_map(|f| f.basis.iter().copied()).collect();
@@ -141,7 +141,7 @@ struct Fit {
 }
 
 impl Fit {
-    fn of(data: &[f64], dim: usize, components: usize, cluster_of: &[u32], c: u32) -> Result<Fit, String> {
+    fn of(data: &[f64], dim: usize, components: usize, cluster_of: &[u32], c: u32) -> Result<Fit, FactorError> {
         let members: Vec<&[f64]> =
             data.chunks_exact(dim).zip(cluster_of).filter(|(_, &k)| k == c).map(|(x, _)| x).collect();
         let mut mean = vec![0.0; dim];
@@ -159,10 +159,10 @@ impl Fit {
             // singular vectors are the same directions): the smaller SVD either way.
             let centred = Mat::<f64>::from_fn(members.len(), dim, |i, j| members[i][j] - mean[j]);
             let v = if members.len() < dim {
-                run_svd(centred.as_ref(), true).map_err(|e| e.to_string())?.2
+                run_svd(centred.as_ref(), true)?.2
             } else {
                 let gram = centred.transpose() * &centred;
-                run_svd(gram.as_ref(), true).map_err(|e| e.to_string())?.2
+                run_svd(gram.as_ref(), true)?.2
             };
             if let Some(v) = v {
                 for p in 0..components.min(v.ncols()) {
@@ -252,7 +252,7 @@ fn assign(data: &[f64], dim: usize, fits: &[Fit]) -> (Vec<u32>, Vec<f64>) {
 }
 
 /// Clusters of equal counts along the data's first principal direction.
-fn initial_clusters(data: &[f64], dim: usize, clusters: usize) -> Result<Vec<u32>, String> {
+fn initial_clusters(data: &[f64], dim: usize, clusters: usize) -> Result<Vec<u32>, FactorError> {
     let vertices = data.len() / dim;
     let all = vec![0u32; vertices];
     let fit = Fit::of(data, dim, 1, &all, 0)?;

@@ -214,14 +214,11 @@ pub fn dilate(coverage: &Coverage, rounds: usize) -> Vec<Option<usize>> {
 pub fn check(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<(), Error> {
     let name = &config.source;
     if mesh.uvs.is_none() {
-        return Err(Error::Lightmap(format!(
-            "{name}: no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt): --lightmap needs a UV set on every vertex \
-             (PLY texture coordinates are not read yet)"
-        )));
+        return Err(Error::NoUvs(name.clone()));
     }
     let (w, h) = (lightmap.width, lightmap.height);
     if w == 0 || h == 0 {
-        return Err(Error::Lightmap(format!("{name}: --lightmap {w}x{h} has no texels")));
+        return Err(Error::NoTexels { source_name: name.clone(), width: w, height: h });
     }
     let limit = |error: LimitError| Error::Limit { source_name: name.clone(), error };
     for (side, what) in [(w, "width"), (h, "height")] {
@@ -245,12 +242,18 @@ pub fn check(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<
     debug_assert!((w * h) as u64 <= MAX_IMAGE_TEXELS);
     // f64 values while baking, f32 layers to write, the coverage samples.
     crate::limits::check_memory("the lightmap", values as u128 * 12 + (w * h) as u128 * 48).map_err(limit)?;
-    if config.glossy.is_some() || config.mode == Mode::Interreflected || config.compression.is_some() {
-        return Err(Error::Lightmap(format!(
-            "{name}: --lightmap bakes diffuse unshadowed or shadowed transfer; interreflected (its bounces gather \
-             the per-vertex transfer at the rays' hits), glossy (--factors) and compressed (--clusters) lightmaps \
-             are not built"
-        )));
+    let unbuilt = if config.glossy.is_some() {
+        Some("glossy")
+    } else if config.mode == Mode::Interreflected {
+        // Its bounces gather the per-vertex transfer at the rays' hits.
+        Some("interreflected")
+    } else if config.compression.is_some() {
+        Some("compressed")
+    } else {
+        None
+    };
+    if let Some(bake) = unbuilt {
+        return Err(Error::LightmapOf { source_name: name.clone(), bake });
     }
     Ok(())
 }
@@ -338,7 +341,7 @@ pub fn bake(
         .chain([coverage_layer.clone()])
         .collect();
     let named: Vec<(&str, &[f32])> = names.iter().map(String::as_str).zip(layers.iter().map(Vec::as_slice)).collect();
-    let exr = crate::io::exr::encode_grey_layers(width, height, &named).map_err(Error::Lightmap)?;
+    let exr = crate::io::exr::encode_grey_layers(width, height, &named).map_err(Error::LightmapEncoding)?;
     let info = LightmapInfo {
         file: lightmap.file.clone(),
         width,

@@ -365,21 +365,25 @@ pub struct Summary {
     pub bounce_seconds: f64,
 }
 
-/// Errors of the stage.
+/// Errors of the stage. They speak of the bake, not of the flags that asked for it: the CLI
+/// (`cli/transfer.rs`) words the ones a flag sets with that flag's name.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// The order is outside 1..=8.
-    #[error("--order {0} is outside 1..={MAX_ORDER}")]
+    /// The SH order is outside 1..=[`MAX_ORDER`].
+    #[error("SH order {0} is outside 1..={MAX_ORDER}")]
     Order(usize),
-    /// The ray count is outside 1..=MAX_RAYS.
-    #[error("--rays {0} is outside 1..={MAX_RAYS}")]
+    /// The ray count is outside 1..=[`MAX_RAYS`].
+    #[error("{0} rays per vertex is outside 1..={MAX_RAYS}")]
     Rays(usize),
-    /// The bounce count is outside 1..=MAX_BOUNCES.
-    #[error("--bounces {0} is outside 1..={MAX_BOUNCES}")]
+    /// The bounce count is outside 1..=[`MAX_BOUNCES`].
+    #[error("{0} interreflection bounces is outside 1..={MAX_BOUNCES}")]
     Bounces(usize),
-    /// The albedo or offset is not a finite number in range.
-    #[error("{0}")]
-    Parameter(String),
+    /// The albedo is not a finite number ≥ 0.
+    #[error("albedo {0} is not a finite number ≥ 0")]
+    Albedo(f64),
+    /// The ray offset is outside [0, 0.1) of the bounding-box diagonal.
+    #[error("ray offset {0} is outside [0, 0.1) of the bounding-box diagonal")]
+    Offset(f64),
     /// The mesh has no triangle of non-zero area.
     #[error("{0}: every triangle has zero area: nothing to bake")]
     ZeroArea(String),
@@ -391,296 +395,508 @@ pub enum Error {
         /// Which ceiling.
         error: LimitError,
     },
-    /// The `.glb` cannot be written.
-    #[error("{0}")]
-    Glb(String),
-    /// The lightmap cannot be baked as asked (no UVs, no texels, a mode it does not bake).
-    #[error("{0}")]
-    Lightmap(String),
+    /// Glossy transfer with interreflections, which is not built.
+    #[error("glossy transfer is unshadowed or shadowed; its interreflections are not built")]
+    GlossyInterreflected,
+    /// The glossy bake keeps more terms than the factor file holds, or none.
+    #[error("{factors}: {terms} terms is outside 1..={stored}, the terms the factor file holds")]
+    Terms {
+        /// The factor document.
+        factors: String,
+        /// Terms K asked for.
+        terms: usize,
+        /// Terms the factor file holds.
+        stored: usize,
+    },
+    /// The basis samples per factor cell are outside 1..=[`MAX_CELL_SAMPLES`].
+    #[error("{0} basis samples per cell is outside 1..={MAX_CELL_SAMPLES}")]
+    CellSamples(usize),
+    /// The clusters or directions of a compression are out of range.
+    #[error(
+        "{clusters} clusters of {components} directions: clusters must be in 1..={MAX_CLUSTERS}, directions in \
+         1..={most_components} (the values per vertex, at most {MAX_PCA})"
+    )]
+    Compression {
+        /// Clusters C asked for.
+        clusters: usize,
+        /// Directions P asked for.
+        components: usize,
+        /// The most directions this bake allows.
+        most_components: usize,
+    },
+    /// A round of clustered PCA would take more than [`MAX_CPCA_ROUND_WORK`].
+    #[error(
+        "{clusters} clusters of {components} directions on {vertices} vertices of {per_vertex} values: a round of \
+         clustered PCA would take {work:.2e} multiply-adds, above the ceiling of {MAX_CPCA_ROUND_WORK:.0e} \
+         (minutes per round); use fewer clusters or directions"
+    )]
+    CompressionWork {
+        /// Clusters C asked for.
+        clusters: usize,
+        /// Directions P asked for.
+        components: usize,
+        /// Vertices of the mesh.
+        vertices: usize,
+        /// Values per vertex.
+        per_vertex: usize,
+        /// Multiply-adds of one round.
+        work: u128,
+    },
+    /// Clustered PCA's SVD failed.
+    #[error("clustered PCA failed")]
+    Cpca(#[source] crate::factor::svd::FactorError),
+    /// The mesh has no UV set for a lightmap.
+    #[error(
+        "{0}: no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt): a lightmap needs a UV set on every vertex (PLY \
+         texture coordinates are not read yet)"
+    )]
+    NoUvs(String),
+    /// The lightmap's grid has no texels.
+    #[error("{source_name}: a {width}x{height} lightmap has no texels")]
+    NoTexels {
+        /// The mesh.
+        source_name: String,
+        /// W.
+        width: usize,
+        /// H.
+        height: usize,
+    },
+    /// A lightmap of a bake the lightmap does not build.
+    #[error("{source_name}: a lightmap bakes diffuse unshadowed or shadowed transfer; {bake} lightmaps are not built")]
+    LightmapOf {
+        /// The mesh.
+        source_name: String,
+        /// `interreflected`, `glossy` or `compressed`.
+        bake: &'static str,
+    },
+    /// The lightmap's EXR cannot be encoded.
+    #[error("cannot encode the lightmap's EXR: {0}")]
+    LightmapEncoding(String),
+    /// The `.glb` cannot be encoded.
+    #[error("cannot encode the .glb: {0}")]
+    GlbEncoding(String),
+}
+
+/// The bake a [`Config`] asks for, decided once, after every check.
+enum Bake {
+    /// Diffuse, V ≡ 1, by the exact quadrature (Sloan et al. 2002, eq. 7).
+    Unshadowed,
+    /// Diffuse with visibility by stratified rays (Sloan et al. 2002, eq. 8).
+    Shadowed,
+    /// Diffuse shadowed plus B bounces off the mesh itself (Sloan et al. 2002, eq. 9 and §5).
+    Interreflected {
+        /// Bounces B.
+        bounces: usize,
+    },
+    /// Glossy through the factorization (Mahajan et al. 2008, eq. 4): a K × n² matrix per vertex,
+    /// one ray per cell of the factors' grid when shadowed.
+    Glossy {
+        /// The integrator over the factors' grid.
+        integrator: Glossy,
+        /// Whether visibility is traced.
+        shadowed: bool,
+    },
+}
+
+/// What one run does: the bake, then, if asked, its clustered PCA and its lightmap.
+struct Plan<'a> {
+    /// Which transfer is integrated.
+    bake: Bake,
+    /// Values per vertex: n², or K·n² for a glossy bake.
+    per_vertex: usize,
+    /// Clustered PCA of the transfer (Sloan et al. 2003).
+    compression: Option<Compression>,
+    /// The per-texel bake of the same diffuse transfer.
+    lightmap: Option<&'a LightmapConfig>,
+    /// Triangles of zero area (kept in the `.glb`, left out of the BVH).
+    zero_area: usize,
+    /// The ray origin offset in the mesh's units.
+    offset: f64,
+}
+
+impl<'a> Plan<'a> {
+    /// Checks `config` against `mesh` and decides the bake: every refusal comes here, before
+    /// anything is baked.
+    fn new(config: &'a Config, mesh: &Mesh) -> Result<Plan<'a>, Error> {
+        let n = config.order;
+        if !(1..=MAX_ORDER).contains(&n) {
+            return Err(Error::Order(n));
+        }
+        if !(1..=MAX_RAYS).contains(&config.rays) {
+            return Err(Error::Rays(config.rays));
+        }
+        if config.mode == Mode::Interreflected && !(1..=MAX_BOUNCES).contains(&config.bounces) {
+            return Err(Error::Bounces(config.bounces));
+        }
+        if !(config.albedo.is_finite() && config.albedo >= 0.0) {
+            return Err(Error::Albedo(config.albedo));
+        }
+        if !(config.offset.is_finite() && (0.0..0.1).contains(&config.offset)) {
+            return Err(Error::Offset(config.offset));
+        }
+        let name = &config.source;
+        crate::limits::check_transfer_mesh(name, mesh.positions.len(), mesh.triangles.len())
+            .map_err(|error| Error::Limit { source_name: name.clone(), error })?;
+        let zero_area = mesh.triangles.iter().filter(|t| triangle_area(&mesh.positions, t) <= 0.0).count();
+        if zero_area == mesh.triangles.len() {
+            return Err(Error::ZeroArea(name.clone()));
+        }
+        if let Some(l) = &config.lightmap {
+            lightmap::check(l, config, mesh)?;
+        }
+        let bake = match (&config.glossy, config.mode) {
+            (Some(g), mode) => {
+                Bake::Glossy { integrator: glossy_integrator(config, g)?, shadowed: mode == Mode::Shadowed }
+            }
+            (None, Mode::Unshadowed) => Bake::Unshadowed,
+            (None, Mode::Shadowed) => Bake::Shadowed,
+            (None, Mode::Interreflected) => Bake::Interreflected { bounces: config.bounces },
+        };
+        let per_vertex = match &bake {
+            Bake::Glossy { integrator, .. } => integrator.values_per_vertex(),
+            _ => n * n,
+        };
+        if let Some(c) = &config.compression {
+            check_compression(c, mesh.positions.len(), per_vertex)?;
+        }
+        Ok(Plan {
+            bake,
+            per_vertex,
+            compression: config.compression,
+            lightmap: config.lightmap.as_ref(),
+            zero_area,
+            offset: config.offset * mesh.extent(),
+        })
+    }
+}
+
+/// A bake's transfer and the manifest's account of how it was integrated.
+struct Baked {
+    /// `per_vertex` values per vertex.
+    transfer: Vec<f64>,
+    /// How T was integrated.
+    integration: Integration,
+    /// The direct part's integration error (diffuse shadowed and interreflected).
+    error: Option<ErrorFigures>,
+    /// The bounces (interreflected).
+    interreflection: Option<Interreflection>,
+    /// Seconds of the BVH build and the visibility pass.
+    trace_seconds: f64,
+    /// Seconds of the bounces.
+    bounce_seconds: f64,
 }
 
 /// Runs `transfer` on `mesh`.
 pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Output, Error> {
-    let n = config.order;
-    if !(1..=MAX_ORDER).contains(&n) {
-        return Err(Error::Order(n));
-    }
-    if !(1..=MAX_RAYS).contains(&config.rays) {
-        return Err(Error::Rays(config.rays));
-    }
-    if config.mode == Mode::Interreflected && !(1..=MAX_BOUNCES).contains(&config.bounces) {
-        return Err(Error::Bounces(config.bounces));
-    }
-    if !(config.albedo.is_finite() && config.albedo >= 0.0) {
-        return Err(Error::Parameter(format!("--albedo {} must be a finite number ≥ 0", config.albedo)));
-    }
-    if !(config.offset.is_finite() && (0.0..0.1).contains(&config.offset)) {
-        return Err(Error::Parameter(format!("--offset {} must be in [0, 0.1)", config.offset)));
-    }
-    let name = &config.source;
-    crate::limits::check_transfer_mesh(name, mesh.positions.len(), mesh.triangles.len())
-        .map_err(|error| Error::Limit { source_name: name.clone(), error })?;
-    let zero_area = mesh.triangles.iter().filter(|t| triangle_area(&mesh.positions, t) <= 0.0).count();
-    if zero_area == mesh.triangles.len() {
-        return Err(Error::ZeroArea(name.clone()));
-    }
-    if let Some(l) = &config.lightmap {
-        lightmap::check(l, config, mesh)?;
-    }
-
-    let glossy = match &config.glossy {
-        Some(g) => Some(glossy_integrator(config, g)?),
-        None => None,
-    };
-
-    let coeffs = n * n;
-    let per_vertex = glossy.as_ref().map_or(coeffs, Glossy::values_per_vertex);
-    let vertices = mesh.positions.len();
-    if let Some(c) = &config.compression {
-        check_compression(c, vertices, per_vertex)?;
-    }
-    let offset = config.offset * mesh.extent();
+    let plan = Plan::new(config, mesh)?;
     let start = Instant::now();
-    let mut transfer = vec![0.0; vertices * per_vertex];
-    let mut error = None;
-    let mut interreflection = None;
-    let mut trace_seconds = 0.0;
-    let mut bounce_seconds = 0.0;
-    let mut rays_per_vertex = config.rays;
-    match (config.mode, &glossy) {
-        (_, Some(glossy)) => {
-            let occluders = (config.mode == Mode::Shadowed).then(|| Occluders::new(&mesh.positions, &mesh.triangles));
-            rays_per_vertex = if occluders.is_some() { glossy.rays() } else { 0 };
-            progress.start(if occluders.is_some() { "visibility" } else { "transfer (unshadowed)" }, vertices as u64);
-            // Chunks of vertices side by side; each vertex's sums run in the cells' fixed order.
-            transfer.par_chunks_mut(CHUNK * per_vertex).enumerate().for_each(|(c, out)| {
-                for (k, t) in out.chunks_exact_mut(per_vertex).enumerate() {
-                    let v = c * CHUNK + k;
-                    let occluders = occluders.as_ref().map(|o| (o, offset));
-                    glossy.integrate(mesh.positions[v], mesh.normals[v], occluders, t);
-                }
-                progress.advance((out.len() / per_vertex) as u64);
-            });
-            progress.finish();
-            trace_seconds = start.elapsed().as_secs_f64();
+    let baked = match &plan.bake {
+        Bake::Unshadowed => unshadowed(config, mesh, progress),
+        Bake::Shadowed => shadowed(config, mesh, plan.offset, progress),
+        Bake::Interreflected { bounces } => interreflected(config, mesh, *bounces, plan.offset, progress),
+        Bake::Glossy { integrator, shadowed } => {
+            glossy(config, mesh, integrator, shadowed.then_some(plan.offset), progress)
         }
-        (Mode::Unshadowed, None) => {
-            progress.start("transfer (unshadowed)", vertices as u64);
-            transfer.par_chunks_mut(CHUNK * coeffs).enumerate().for_each(|(c, out)| {
-                for (k, t) in out.chunks_exact_mut(coeffs).enumerate() {
-                    unshadowed_exact(mesh.normals[c * CHUNK + k], n, config.albedo, t);
-                }
-                progress.advance((out.len() / coeffs) as u64);
-            });
-            progress.finish();
-        }
-        (Mode::Shadowed, None) => {
-            let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
-            let directions = Stratified::new(config.rays, config.seed);
-            let integrator = Shadowed::new(&directions, n, &occluders);
-            progress.start("visibility", vertices as u64);
-            // One work item per chunk of vertices; each vertex's sums run in the directions'
-            // fixed order, so the bits do not depend on which thread ran which chunk.
-            let points: Vec<PointTransfer> = (0..vertices.div_ceil(CHUNK))
-                .into_par_iter()
-                .flat_map_iter(|c| {
-                    let range = c * CHUNK..((c + 1) * CHUNK).min(vertices);
-                    let done: Vec<PointTransfer> = range
-                        .map(|v| integrator.integrate(mesh.positions[v], mesh.normals[v], offset, config.albedo))
-                        .collect();
-                    progress.advance(done.len() as u64);
-                    done
-                })
-                .collect();
-            progress.finish();
-            trace_seconds = start.elapsed().as_secs_f64();
-            for (v, p) in points.iter().enumerate() {
-                transfer[v * coeffs..(v + 1) * coeffs].copy_from_slice(&p.shadowed);
-            }
-            error = Some(integration_error(mesh, &points, n, config.rays, config.albedo));
-        }
-        (Mode::Interreflected, None) => {
-            let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
-            let directions = Stratified::new(config.rays, config.seed);
-            let tracer = Tracer::new(mesh, &occluders, &directions, n, offset);
-            let first = tracer.first_pass(config.albedo, Storage::Auto, progress);
-            trace_seconds = start.elapsed().as_secs_f64();
-            for (v, p) in first.points.iter().enumerate() {
-                transfer[v * coeffs..(v + 1) * coeffs].copy_from_slice(&p.shadowed);
-            }
-            let bounces = tracer.bounces(&transfer, config.bounces, config.albedo, &first.hits, progress);
-            bounce_seconds = start.elapsed().as_secs_f64() - trace_seconds;
-            let white = |t: &[f64]| {
-                (4.0 * std::f64::consts::PI).sqrt() * t.iter().step_by(coeffs).sum::<f64>() / vertices as f64
-            };
-            let mut white_sky_response = vec![white(&transfer)];
-            // Total = T^0 + Σ_b T^b, added bounce after bounce in a fixed order.
-            for bounce in &bounces {
-                white_sky_response.push(white(bounce));
-                for (t, b) in transfer.iter_mut().zip(bounce) {
-                    *t += b;
-                }
-            }
-            interreflection = Some(Interreflection {
-                bounces: config.bounces,
-                back_faces: "a ray that reaches the back of a surface (the hit triangle's geometric normal, turned to \
-                             the side of its vertex normals, points along the ray) is blocked and carries no bounce"
-                    .into(),
-                hits: match first.hits {
-                    Hits::Recorded(_) => "recorded",
-                    Hits::Retraced => "re-traced",
-                }
-                .into(),
-                front_hit_fraction: first.front_fraction,
-                back_hit_fraction: first.back_fraction,
-                white_sky_response,
-            });
-            error = Some(integration_error(mesh, &first.points, n, config.rays, config.albedo));
-        }
-    }
+    };
     let seconds = start.elapsed().as_secs_f64();
-
-    let cpca = match config.compression {
+    let cpca = match plan.compression {
         Some(c) => {
             progress.start("clustered PCA", 1);
-            let cpca = Cpca::new(&transfer, per_vertex, c.clusters, c.components).map_err(Error::Parameter)?;
+            let cpca = Cpca::new(&baked.transfer, plan.per_vertex, c.clusters, c.components).map_err(Error::Cpca)?;
             progress.finish();
             Some(cpca)
         }
         None => None,
     };
-    let compression = cpca.as_ref().map(|cpca| compression_info(cpca, &transfer));
-    let attributes: Vec<String> = match &cpca {
-        None => (0..per_vertex.div_ceil(4)).map(|k| format!("_PRT_{k}")).collect(),
+    let lightmap = match plan.lightmap {
+        Some(l) => Some(lightmap::bake(l, config, mesh, progress)?),
+        None => None,
+    };
+    let body = manifest(config, mesh, &plan, &baked, cpca.as_ref(), lightmap.as_ref().map(|l| l.info.clone()));
+    let h = config
+        .glossy
+        .as_ref()
+        .map(|g| g.factorization.h[..g.terms].iter().flatten().map(|&v| v as f32).collect::<Vec<f32>>());
+    let glb = glb::encode(&glb_mesh(mesh, &baked.transfer, plan.per_vertex, &body, h, cpca.as_ref()))
+        .map_err(Error::GlbEncoding)?;
+    let vertices = mesh.positions.len();
+    let summary = Summary {
+        vertices,
+        rays: baked.integration.rays,
+        bounces: if let Bake::Interreflected { bounces } = plan.bake { bounces } else { 0 },
+        seconds,
+        rays_per_second: if baked.trace_seconds > 0.0 {
+            (vertices * baked.integration.rays) as f64 / baked.trace_seconds
+        } else {
+            0.0
+        },
+        bounce_seconds: baked.bounce_seconds,
+    };
+    let provenance = Provenance::new("transfer", &config.args, vec![config.source.clone()]);
+    Ok(Output {
+        document: Document::new(FORMAT, VERSION, provenance, body),
+        glb,
+        glsl: run_time_snippet(config, Language::Glsl),
+        hlsl: run_time_snippet(config, Language::Hlsl),
+        wgsl: run_time_snippet(config, Language::Wgsl),
+        transfer: baked.transfer,
+        summary,
+        lightmap,
+    })
+}
+
+/// Diffuse transfer without visibility, by the exact quadrature ([`unshadowed_exact`]).
+fn unshadowed(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Baked {
+    let (n, vertices) = (config.order, mesh.positions.len());
+    let coeffs = n * n;
+    let mut transfer = vec![0.0; vertices * coeffs];
+    progress.start("transfer (unshadowed)", vertices as u64);
+    transfer.par_chunks_mut(CHUNK * coeffs).enumerate().for_each(|(c, out)| {
+        for (k, t) in out.chunks_exact_mut(coeffs).enumerate() {
+            unshadowed_exact(mesh.normals[c * CHUNK + k], n, config.albedo, t);
+        }
+        progress.advance((out.len() / coeffs) as u64);
+    });
+    progress.finish();
+    let integration = Integration {
+        method: "exact quadrature".into(),
+        rays: 0,
+        seed: config.seed,
+        description: "8 Gauss-Legendre nodes in n.w times 18 equally spaced azimuths about the normal: exact for the \
+                      band-limited integrand, so T_lm = (albedo/pi) A_l Y_lm(n) to rounding"
+            .into(),
+    };
+    Baked { transfer, integration, error: None, interreflection: None, trace_seconds: 0.0, bounce_seconds: 0.0 }
+}
+
+/// Diffuse transfer with visibility, by stratified rays ([`Shadowed`]).
+fn shadowed(config: &Config, mesh: &Mesh, offset: f64, progress: &dyn Progress) -> Baked {
+    let start = Instant::now();
+    let (n, vertices) = (config.order, mesh.positions.len());
+    let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
+    let directions = Stratified::new(config.rays, config.seed);
+    let integrator = Shadowed::new(&directions, n, &occluders);
+    progress.start("visibility", vertices as u64);
+    // One work item per chunk of vertices; each vertex's sums run in the directions' fixed order,
+    // so the bits do not depend on which thread ran which chunk.
+    let points: Vec<PointTransfer> = (0..vertices.div_ceil(CHUNK))
+        .into_par_iter()
+        .flat_map_iter(|c| {
+            let range = c * CHUNK..((c + 1) * CHUNK).min(vertices);
+            let done: Vec<PointTransfer> = range
+                .map(|v| integrator.integrate(mesh.positions[v], mesh.normals[v], offset, config.albedo))
+                .collect();
+            progress.advance(done.len() as u64);
+            done
+        })
+        .collect();
+    progress.finish();
+    let trace_seconds = start.elapsed().as_secs_f64();
+    let transfer = points.iter().flat_map(|p| p.shadowed.iter().copied()).collect();
+    Baked {
+        transfer,
+        integration: stratified_rays(config),
+        error: Some(integration_error(mesh, &points, n, config.rays, config.albedo)),
+        interreflection: None,
+        trace_seconds,
+        bounce_seconds: 0.0,
+    }
+}
+
+/// Diffuse shadowed transfer plus `bounces` interreflections gathered over the same rays
+/// ([`Tracer`]): T = T^0 + T^1 + … + T^B.
+fn interreflected(config: &Config, mesh: &Mesh, bounces: usize, offset: f64, progress: &dyn Progress) -> Baked {
+    let start = Instant::now();
+    let (n, vertices) = (config.order, mesh.positions.len());
+    let coeffs = n * n;
+    let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
+    let directions = Stratified::new(config.rays, config.seed);
+    let tracer = Tracer::new(mesh, &occluders, &directions, n, offset);
+    let first = tracer.first_pass(config.albedo, Storage::Auto, progress);
+    let trace_seconds = start.elapsed().as_secs_f64();
+    let mut transfer: Vec<f64> = first.points.iter().flat_map(|p| p.shadowed.iter().copied()).collect();
+    let passes = tracer.bounces(&transfer, bounces, config.albedo, &first.hits, progress);
+    let bounce_seconds = start.elapsed().as_secs_f64() - trace_seconds;
+    let white =
+        |t: &[f64]| (4.0 * std::f64::consts::PI).sqrt() * t.iter().step_by(coeffs).sum::<f64>() / vertices as f64;
+    let mut white_sky_response = vec![white(&transfer)];
+    // Total = T^0 + Σ_b T^b, added bounce after bounce in a fixed order.
+    for pass in &passes {
+        white_sky_response.push(white(pass));
+        for (t, b) in transfer.iter_mut().zip(pass) {
+            *t += b;
+        }
+    }
+    let interreflection = Interreflection {
+        bounces,
+        back_faces: "a ray that reaches the back of a surface (the hit triangle's geometric normal, turned to the \
+                     side of its vertex normals, points along the ray) is blocked and carries no bounce"
+            .into(),
+        hits: match first.hits {
+            Hits::Recorded(_) => "recorded",
+            Hits::Retraced => "re-traced",
+        }
+        .into(),
+        front_hit_fraction: first.front_fraction,
+        back_hit_fraction: first.back_fraction,
+        white_sky_response,
+    };
+    Baked {
+        transfer,
+        integration: stratified_rays(config),
+        error: Some(integration_error(mesh, &first.points, n, config.rays, config.albedo)),
+        interreflection: Some(interreflection),
+        trace_seconds,
+        bounce_seconds,
+    }
+}
+
+/// How the diffuse shadowed and interreflected bakes integrate.
+fn stratified_rays(config: &Config) -> Integration {
+    let rays = config.rays;
+    Integration {
+        method: "stratified rays".into(),
+        rays,
+        seed: config.seed,
+        description: format!(
+            "{rays} rays per vertex over the hemisphere about its normal, cosine-weighted and stratified: one \
+             jittered in each of {rays} cells of equal projected solid angle pi/{rays} (bands in sin^2 theta, cells \
+             in phi), the same local set turned onto every vertex's normal; T_i = (albedo/N) sum_k V(w_k) Y_i(w_k)"
+        ),
+    }
+}
+
+/// Glossy transfer over the factors' grid ([`Glossy`]); shadowed when `offset` is given (the ray
+/// origin offset in the mesh's units).
+fn glossy(config: &Config, mesh: &Mesh, integrator: &Glossy, offset: Option<f64>, progress: &dyn Progress) -> Baked {
+    let start = Instant::now();
+    let vertices = mesh.positions.len();
+    let per_vertex = integrator.values_per_vertex();
+    let occluders = offset.map(|offset| (Occluders::new(&mesh.positions, &mesh.triangles), offset));
+    let mut transfer = vec![0.0; vertices * per_vertex];
+    progress.start(if occluders.is_some() { "visibility" } else { "transfer (unshadowed)" }, vertices as u64);
+    // Chunks of vertices side by side; each vertex's sums run in the cells' fixed order.
+    transfer.par_chunks_mut(CHUNK * per_vertex).enumerate().for_each(|(c, out)| {
+        for (k, t) in out.chunks_exact_mut(per_vertex).enumerate() {
+            let v = c * CHUNK + k;
+            let occluders = occluders.as_ref().map(|(o, offset)| (o, *offset));
+            integrator.integrate(mesh.positions[v], mesh.normals[v], occluders, t);
+        }
+        progress.advance((out.len() / per_vertex) as u64);
+    });
+    progress.finish();
+    let g = config.glossy.as_ref().expect("a glossy bake has a glossy config");
+    let integration = Integration {
+        method: "factor grid cells".into(),
+        rays: if occluders.is_some() { integrator.rays() } else { 0 },
+        seed: config.seed,
+        description: glossy_description(g, config.mode, integrator.rays()),
+    };
+    Baked {
+        transfer,
+        integration,
+        error: None,
+        interreflection: None,
+        trace_seconds: start.elapsed().as_secs_f64(),
+        bounce_seconds: 0.0,
+    }
+}
+
+/// The manifest's body of a bake (`docs/formats/transfer.md`).
+fn manifest(
+    config: &Config,
+    mesh: &Mesh,
+    plan: &Plan,
+    baked: &Baked,
+    cpca: Option<&Cpca>,
+    lightmap: Option<LightmapInfo>,
+) -> TransferBody {
+    let n = config.order;
+    let glossy = config.glossy.as_ref().map(|g| glossy_info(g, n));
+    let attributes: Vec<String> = match cpca {
+        None => (0..plan.per_vertex.div_ceil(4)).map(|k| format!("_PRT_{k}")).collect(),
         Some(c) => std::iter::once("_PRT_CLUSTER".to_string())
             .chain((0..c.components.div_ceil(4)).map(|k| format!("_PRT_W_{k}")))
             .collect(),
     };
-    let (method, rays, description) = match (config.mode, &glossy) {
-        (mode, Some(glossy)) => (
-            "factor grid cells",
-            rays_per_vertex,
-            config.glossy.as_ref().map(|g| glossy_description(g, mode, glossy.rays())).unwrap_or_default(),
-        ),
-        (Mode::Unshadowed, None) => (
-            "exact quadrature",
-            0,
-            "8 Gauss-Legendre nodes in n.w times 18 equally spaced azimuths about the normal: exact for the \
-             band-limited integrand, so T_lm = (albedo/pi) A_l Y_lm(n) to rounding"
-                .to_string(),
-        ),
-        (Mode::Shadowed | Mode::Interreflected, None) => (
-            "stratified rays",
-            config.rays,
-            format!(
-                "{} rays per vertex over the hemisphere about its normal, cosine-weighted and stratified: one \
-                 jittered in each of {} cells of equal projected solid angle pi/{} (bands in sin^2 theta, cells in \
-                 phi), the same local set turned onto every vertex's normal; T_i = (albedo/N) sum_k V(w_k) Y_i(w_k)",
-                config.rays, config.rays, config.rays
-            ),
-        ),
-    };
-    let glossy_info = config.glossy.as_ref().map(|g| glossy_info(g, n));
-    let lightmap = match &config.lightmap {
-        Some(l) => Some(lightmap::bake(l, config, mesh, progress)?),
-        None => None,
-    };
-    let body = TransferBody {
+    TransferBody {
         order: n,
-        coefficients: per_vertex,
+        coefficients: plan.per_vertex,
         mode: config.mode,
-        interreflection,
+        interreflection: baked.interreflection.clone(),
         albedo: config.albedo,
-        integration: Integration { method: method.into(), rays, seed: config.seed, description },
+        integration: baked.integration.clone(),
         offset: Offset {
             relative: config.offset,
-            absolute: offset,
+            absolute: plan.offset,
             along: "the vertex normal: shadow rays leave from x + offset * n".into(),
         },
         mesh: MeshInfo {
             source: config.source.clone(),
-            vertices,
+            vertices: mesh.positions.len(),
             triangles: mesh.triangles.len(),
-            zero_area_triangles: zero_area,
+            zero_area_triangles: plan.zero_area,
             normals: if mesh.normals_computed { "computed" } else { "file" }.into(),
             extent: mesh.extent(),
         },
         glb: GlbInfo {
             file: config.glb_name.clone(),
-            attributes: attributes.clone(),
-            packing: match (&glossy_info, &compression) {
-                (_, Some(c)) => format!(
-                    "clustered PCA: _PRT_CLUSTER is a float SCALAR holding the vertex's cluster c (an integer), \
-                     _PRT_W_k a float VEC4 holding weights 4k..4k+3 of its {} (zeros pad the last); the blobs \
-                     cpca.means ({} x {per_vertex}) and cpca.bases ({} x {} x {per_vertex}) hold each cluster's mean and \
-                     directions, so T = means[c] + sum_p w_p bases[c][p], T laid out as below when uncompressed",
-                    c.components, c.clusters, c.clusters, c.components
-                ),
-                (None, None) => format!(
-                    "_PRT_k is a float VEC4 holding coefficients 4k..4k+3 in index order i = l(l+1)+m; \
-                     {coeffs} coefficients, zeros pad the last attribute"
-                ),
-                (Some(g), None) => format!(
-                    "_PRT_k is a float VEC4 holding values 4k..4k+3 of the {} x {coeffs} matrix, term-major: value \
-                     t*{coeffs} + i is term t's coefficient i = l(l+1)+m (sigma_t folded in); {per_vertex} values, \
-                     zeros pad the last attribute",
-                    g.terms
-                ),
-            },
+            attributes,
+            packing: packing(n * n, plan.per_vertex, glossy.as_ref(), cpca),
         },
         frame: "the mesh file's own axes (positions as stored): the SH basis is evaluated with x, y, z as \
                 stored, so lighting SH must be expressed in those axes (prtkit's +Z-up documents apply as they are \
                 when the mesh's +Z is up; a +Y-up glTF asset needs the lighting rotated)"
             .into(),
-        error,
-        glossy: glossy_info,
-        compression,
-        lightmap: lightmap.as_ref().map(|l| l.info.clone()),
-    };
-    let h = config
-        .glossy
-        .as_ref()
-        .map(|g| g.factorization.h[..g.terms].iter().flatten().map(|&v| v as f32).collect::<Vec<f32>>());
-    let glb = glb::encode(&glb_mesh(mesh, &transfer, per_vertex, &body, h, cpca.as_ref())).map_err(Error::Glb)?;
-    let document = Document::new(FORMAT, VERSION, Provenance::new("transfer", &config.args, vec![name.clone()]), body);
-    let cast = if config.mode == Mode::Unshadowed { 0 } else { vertices * rays_per_vertex };
-    let summary = Summary {
-        vertices,
-        rays,
-        bounces: if config.mode == Mode::Interreflected { config.bounces } else { 0 },
-        seconds,
-        rays_per_second: if trace_seconds > 0.0 { cast as f64 / trace_seconds } else { 0.0 },
-        bounce_seconds,
-    };
-    // A glossy bake's snippet adds the view-dependent half: the frame F and the h_k lookup. A
-    // compressed bake's .glb has no _PRT_k: its header says how to get T (or c_k) first.
-    let run_time = |lang| {
-        let text = match &config.glossy {
-            Some(g) => glossy_snippet(n, g.terms, g.factorization.grid, lang),
-            None => snippet(n, lang),
-        };
-        match &config.compression {
-            None => text,
-            Some(c) => format!(
-                "// This bake's .glb stores the transfer by clustered PCA (transfer --clusters {} --pca {}): it has no\n\
-                 // _PRT_k attributes but _PRT_CLUSTER, _PRT_W_k and the cpca.means / cpca.bases blobs. Per frame,\n\
-                 // dot the (turned) lighting with each cluster's mean and directions, then per vertex add P\n\
-                 // weighted terms (Sloan et al. 2003, eq. 3; docs/formats/transfer.md); the dot product below is\n\
-                 // that of an uncompressed T, T = mean[c] + sum_p w_p basis[c][p].\n{text}",
-                c.clusters, c.components
-            ),
-        }
-    };
-    Ok(Output {
-        document,
-        glb,
-        glsl: run_time(Language::Glsl),
-        hlsl: run_time(Language::Hlsl),
-        wgsl: run_time(Language::Wgsl),
-        transfer,
-        summary,
+        error: baked.error.clone(),
+        glossy,
+        compression: cpca.map(|cpca| compression_info(cpca, &baked.transfer)),
         lightmap,
-    })
+    }
+}
+
+/// How the `.glb` packs the transfer, in words: `coeffs` = n² coefficients, `per_vertex` values.
+fn packing(coeffs: usize, per_vertex: usize, glossy: Option<&GlossyInfo>, cpca: Option<&Cpca>) -> String {
+    match (glossy, cpca) {
+        (_, Some(c)) => format!(
+            "clustered PCA: _PRT_CLUSTER is a float SCALAR holding the vertex's cluster c (an integer), _PRT_W_k a \
+             float VEC4 holding weights 4k..4k+3 of its {} (zeros pad the last); the blobs cpca.means ({} x \
+             {per_vertex}) and cpca.bases ({} x {} x {per_vertex}) hold each cluster's mean and directions, so T = \
+             means[c] + sum_p w_p bases[c][p], T laid out as below when uncompressed",
+            c.components, c.clusters, c.clusters, c.components
+        ),
+        (None, None) => format!(
+            "_PRT_k is a float VEC4 holding coefficients 4k..4k+3 in index order i = l(l+1)+m; {coeffs} \
+             coefficients, zeros pad the last attribute"
+        ),
+        (Some(g), None) => format!(
+            "_PRT_k is a float VEC4 holding values 4k..4k+3 of the {} x {coeffs} matrix, term-major: value \
+             t*{coeffs} + i is term t's coefficient i = l(l+1)+m (sigma_t folded in); {per_vertex} values, zeros \
+             pad the last attribute",
+            g.terms
+        ),
+    }
+}
+
+/// The run-time snippet in `lang`. A glossy bake's adds the view-dependent half: the frame F and
+/// the h_k lookup. A compressed bake's `.glb` has no `_PRT_k`: its header says how to get T (or
+/// c_k) first.
+fn run_time_snippet(config: &Config, lang: Language) -> String {
+    let text = match &config.glossy {
+        Some(g) => glossy_snippet(config.order, g.terms, g.factorization.grid, lang),
+        None => snippet(config.order, lang),
+    };
+    match &config.compression {
+        None => text,
+        Some(c) => format!(
+            "// This bake's .glb stores the transfer by clustered PCA (transfer --clusters {} --pca {}): it has no\n\
+             // _PRT_k attributes but _PRT_CLUSTER, _PRT_W_k and the cpca.means / cpca.bases blobs. Per frame,\n\
+             // dot the (turned) lighting with each cluster's mean and directions, then per vertex add P\n\
+             // weighted terms (Sloan et al. 2003, eq. 3; docs/formats/transfer.md); the dot product below is\n\
+             // that of an uncompressed T, T = mean[c] + sum_p w_p basis[c][p].\n{text}",
+            c.clusters, c.components
+        ),
+    }
 }
 
 /// The `.glb`: positions, unit normals, the transfer packed four coefficients per `_PRT_k`, and
@@ -786,24 +1002,15 @@ pub const GLOSSY_H_BLOB: &str = "glossy.h";
 /// Refuses a compression whose clusters or directions are out of range, or whose rounds would
 /// take longer than [`MAX_CPCA_ROUND_WORK`] allows, before anything is baked.
 fn check_compression(c: &Compression, vertices: usize, per_vertex: usize) -> Result<(), Error> {
-    if !(1..=MAX_CLUSTERS).contains(&c.clusters) || !(1..=MAX_PCA.min(per_vertex)).contains(&c.components) {
-        return Err(Error::Parameter(format!(
-            "--clusters {} --pca {}: clusters must be in 1..={MAX_CLUSTERS}, directions in 1..={} (the values \
-             per vertex, at most {MAX_PCA})",
-            c.clusters,
-            c.components,
-            MAX_PCA.min(per_vertex)
-        )));
+    let (clusters, components) = (c.clusters, c.components);
+    let most_components = MAX_PCA.min(per_vertex);
+    if !(1..=MAX_CLUSTERS).contains(&clusters) || !(1..=most_components).contains(&components) {
+        return Err(Error::Compression { clusters, components, most_components });
     }
     // Each round compares every vertex with every cluster: bound its work up front.
-    let work = vertices as u128 * c.clusters.min(vertices) as u128 * (c.components as u128 + 1) * per_vertex as u128;
+    let work = vertices as u128 * clusters.min(vertices) as u128 * (components as u128 + 1) * per_vertex as u128;
     if work > MAX_CPCA_ROUND_WORK {
-        return Err(Error::Parameter(format!(
-            "--clusters {} --pca {} on {vertices} vertices of {per_vertex} values: a round of clustered PCA \
-             would take {work:.2e} multiply-adds, above the ceiling of {MAX_CPCA_ROUND_WORK:.0e} (minutes \
-             per round); use fewer clusters or directions",
-            c.clusters, c.components
-        )));
+        return Err(Error::CompressionWork { clusters, components, vertices, per_vertex, work });
     }
     Ok(())
 }
@@ -811,19 +1018,14 @@ fn check_compression(c: &Compression, vertices: usize, per_vertex: usize) -> Res
 /// The integrator of a glossy bake, after checking what the factorization can give.
 fn glossy_integrator(config: &Config, g: &GlossyConfig) -> Result<Glossy, Error> {
     if config.mode == Mode::Interreflected {
-        return Err(Error::Parameter(
-            "glossy transfer (--factors) is unshadowed or shadowed; its interreflections are not built".into(),
-        ));
+        return Err(Error::GlossyInterreflected);
     }
     let stored = g.factorization.g.len().min(g.factorization.h.len());
     if g.terms == 0 || g.terms > stored {
-        return Err(Error::Parameter(format!(
-            "{}: --terms {} is outside 1..={stored}, the terms the factor file holds",
-            g.factors, g.terms
-        )));
+        return Err(Error::Terms { factors: g.factors.clone(), terms: g.terms, stored });
     }
     if !(1..=MAX_CELL_SAMPLES).contains(&g.cell_samples) {
-        return Err(Error::Parameter(format!("--cell-samples {} is outside 1..={MAX_CELL_SAMPLES}", g.cell_samples)));
+        return Err(Error::CellSamples(g.cell_samples));
     }
     Ok(Glossy::new(&g.factorization, g.terms, g.cosine, config.order, g.cell_samples))
 }
