@@ -2,6 +2,7 @@
 //!
 //! Each module is one domain concept; binaries in `src/bin` are thin wrappers over `cli`.
 #![forbid(unsafe_code)]
+#![warn(missing_docs, unreachable_pub)]
 
 pub mod affine;
 pub mod brdf;

@@ -136,7 +136,7 @@ pub(super) enum Report {
 
 impl<'a> Plan<'a> {
     /// Checks `config` against `scene` and `env` and decides the path.
-    pub fn new(config: &'a Config, env: &EnvMap, scene: &'a Scene) -> Result<Self, Error> {
+    pub(crate) fn new(config: &'a Config, env: &EnvMap, scene: &'a Scene) -> Result<Self, Error> {
         let turn = environment_turn(config)?;
         let brdf = &config.brdf;
         Ok(match &config.shading {
@@ -214,7 +214,7 @@ impl<'a> Plan<'a> {
     }
 
     /// Draws `shot` as planned.
-    pub fn execute(&self, shot: &Shot, progress: &dyn Progress) -> Result<Shaded, Error> {
+    pub(crate) fn execute(&self, shot: &Shot, progress: &dyn Progress) -> Result<Shaded, Error> {
         match self {
             Plan::Irradiance { albedo, order, given, window } => {
                 irradiance(shot, *albedo, *order, *given, *window, progress)

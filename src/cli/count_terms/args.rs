@@ -19,6 +19,7 @@ pub struct Args {
     #[arg(long = "brdf", value_name = "SPEC", value_parser = parse_brdf)]
     pub brdfs: Vec<Brdf>,
 
+    /// How the BRDF matrix is sampled and factored (shared by `factor-brdf` and `count-terms`).
     #[command(flatten)]
     pub matrix: MatrixArgs,
 
@@ -61,6 +62,7 @@ pub struct Args {
     #[arg(long, default_value = "25%", value_parser = parse_tolerance)]
     pub tolerance: f64,
 
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }

@@ -20,17 +20,23 @@ pub struct Args {
     /// Bits per normal, 8..=64 [default: 32; with --table: 48, the paper's Table 1].
     #[arg(long, value_parser = clap::value_parser!(u32).range(8..=64))]
     pub bits: Option<u32>,
-    #[arg(short, long, help = "Codes output (encode) or normals output (--decode); `-` is stdout.")]
+    /// Codes output (encode) or normals output (--decode); `-` is stdout.
+    #[arg(short, long)]
     pub output: Option<String>,
-    #[arg(long, help = "Codes are a bit-packed little-endian stream instead of one u16/u32/u64 word per normal.")]
+    /// Codes are a bit-packed little-endian stream instead of one u16/u32/u64 word per normal.
+    #[arg(long)]
     pub packed: bool,
-    #[arg(long, help = "Write the JSON report (prtkit.normal-codes) to this file; `-` is stdout.")]
+    /// Write the JSON report (prtkit.normal-codes) to this file; `-` is stdout.
+    #[arg(long)]
     pub report: Option<String>,
-    #[arg(long, help = "Print the JSON report (or the --table rows as a JSON array) on stdout.")]
+    /// Print the JSON report (or the --table rows as a JSON array) on stdout.
+    #[arg(long)]
     pub json: bool,
-    #[arg(long, help = "Write the decoded normals here, in the input's format (EXR/OBJ/PLY/raw).")]
+    /// Write the decoded normals here, in the input's format (EXR/OBJ/PLY/raw).
+    #[arg(long)]
     pub decoded: Option<PathBuf>,
-    #[arg(long, help = "EXR values are in [0, 1] (n = 2c - 1) instead of [-1, 1]; applies to reading and writing.")]
+    /// EXR values are in [0, 1] (n = 2c - 1) instead of [-1, 1]; applies to reading and writing.
+    #[arg(long)]
     pub unorm: bool,
     /// Zero-length, NaN or infinite normals: `error` (exit 2 naming the first) or `replace` (+Z).
     #[arg(long, default_value = "error", value_parser = |s: &str| s.parse::<InvalidPolicy>())]
@@ -41,26 +47,28 @@ pub struct Args {
     /// With --decode: scheme, bits and stream layout from this report of the encode run.
     #[arg(long, requires = "decode")]
     pub header: Option<PathBuf>,
-    #[arg(long, value_parser = parse_size, help = "Image size for --decode to .exr.")]
+    /// Image size for --decode to .exr.
+    #[arg(long, value_parser = parse_size)]
     pub size: Option<(usize, usize)>,
     /// Print a shader decode function for --scheme/--bits: glsl, hlsl or wgsl.
     #[arg(long, value_parser = |s: &str| s.parse::<shader::Language>(), conflicts_with_all = ["table", "decode"])]
     pub emit_decoder: Option<shader::Language>,
-    #[arg(long, help = "Reproduce Meyer et al. 2010, Table 1 at --bits: random + adversarial directions.")]
+    /// Reproduce Meyer et al. 2010, Table 1 at --bits: random + adversarial directions.
+    #[arg(long)]
     pub table: bool,
     // At most 10^9: the default 10^7 take ~12 s on 2 cores, so 10^9 about 20 minutes.
-    #[arg(
-        long,
+    /// Random directions for --table (at most 10^9).
+    #[arg(long,
         default_value_t = 10_000_000,
-        value_parser = clap::value_parser!(u64).range(1..=1_000_000_000),
-        help = "Random directions for --table (at most 10^9)."
-    )]
+        value_parser = clap::value_parser!(u64).range(1..=1_000_000_000))]
     pub samples: u64,
-    #[arg(long, default_value_t = 1, help = "Seed of the random directions for --table.")]
+    /// Seed of the random directions for --table.
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Histogram bins in the report (over [0, max(bound, max error)]).
     #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub bins: u32,
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }

@@ -19,6 +19,7 @@ pub struct Args {
     #[arg(value_name = "SPEC", value_parser = parse_brdf)]
     pub brdf: Brdf,
 
+    /// How the BRDF matrix is sampled and factored (shared by `factor-brdf` and `count-terms`).
     #[command(flatten)]
     pub matrix: MatrixArgs,
 
@@ -44,6 +45,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }

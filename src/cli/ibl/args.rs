@@ -78,6 +78,7 @@ impl DfgArg {
 #[derive(Debug, Parser)]
 #[command(name = "ibl", version)]
 pub struct Args {
+    /// The environment map read and how (shared by every stage that reads one).
     #[command(flatten)]
     pub input: EnvArgs,
 
@@ -135,6 +136,7 @@ pub struct Args {
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(0..=MAX_IBL_MEASURED_TEXELS as u64))]
     pub samples: u64,
 
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }

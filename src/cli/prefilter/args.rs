@@ -55,6 +55,7 @@ pub struct Args {
     #[arg(long, default_value = "error")]
     pub negative: crate::envmap::NegativePolicy,
 
+    /// How the map is turned on reading.
     #[command(flatten)]
     pub orient: crate::cli::options::OrientArgs,
 
@@ -176,6 +177,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = Method::Frequency)]
     pub method: Method,
 
+    /// The exposure of PNG previews.
     #[command(flatten)]
     pub exposure: Exposure,
 
@@ -183,6 +185,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }

@@ -32,6 +32,7 @@ pub enum ShadingArg {
 #[derive(Debug, Parser)]
 #[command(name = "render", version)]
 pub struct Args {
+    /// The environment map read and how (shared by every stage that reads one).
     #[command(flatten)]
     pub input: EnvArgs,
 
@@ -165,6 +166,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE.png", value_parser = parse_output)]
     pub png: Option<Output>,
 
+    /// The exposure of PNG previews.
     #[command(flatten)]
     pub exposure: Exposure,
 
@@ -198,6 +200,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }

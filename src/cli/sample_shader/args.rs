@@ -92,9 +92,11 @@ pub struct Args {
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=100))]
     pub repeat: u64,
 
+    /// The exposure of PNG previews.
     #[command(flatten)]
     pub exposure: Exposure,
 
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }

@@ -13,6 +13,7 @@ use clap::Parser;
 #[derive(Debug, Parser)]
 #[command(name = "sh-project", version)]
 pub struct Args {
+    /// The environment map read and how (shared by every stage that reads one).
     #[command(flatten)]
     pub input: EnvArgs,
 
@@ -54,6 +55,7 @@ pub struct Args {
     #[arg(long, value_parser = parse_size)]
     pub size: Option<(usize, usize)>,
 
+    /// The exposure of PNG previews.
     #[command(flatten)]
     pub exposure: Exposure,
 
@@ -61,6 +63,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }

@@ -119,6 +119,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 
+    /// Threads, quiet, progress.
     #[command(flatten)]
     pub run: Execution,
 }
