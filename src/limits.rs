@@ -285,6 +285,41 @@ pub fn human_bytes(b: u128) -> String {
 /// vertices are 4.7 GB, already beyond it; the check of the `.glb`'s length comes on top.
 pub const MAX_TRANSFER_VERTICES: usize = 1 << 24;
 
+/// Highest SH order n (bands; n² coefficients) of a transfer bake: 8, so 64 coefficients per
+/// vertex.
+pub const MAX_TRANSFER_ORDER: usize = 8;
+
+/// Most ray directions per vertex of a transfer bake: 2²⁰.
+pub const MAX_TRANSFER_RAYS: usize = 1 << 20;
+
+/// Most interreflection bounces: each bounce keeps a copy of the transfer and costs a gather over
+/// every hit; a white furnace of albedo 0.9 keeps 0.9¹⁶ ≈ 19 % of the first bounce's energy at
+/// the 16th, so more bounces only matter for albedos near 1.
+pub const MAX_TRANSFER_BOUNCES: usize = 16;
+
+/// Most basis samples per factor cell along each axis, for the factored render and glossy
+/// transfer alike (`--cell-samples`): 8, 64 per cell.
+pub const MAX_CELL_SAMPLES: usize = 8;
+
+/// Most clusters of clustered PCA.
+pub const MAX_CPCA_CLUSTERS: usize = 4096;
+
+/// Most principal directions per cluster of clustered PCA.
+pub const MAX_CPCA_DIRECTIONS: usize = 64;
+
+/// Most multiply-adds one round of clustered PCA may take (vertices × clusters × (P + 1) ×
+/// values per vertex): about a minute per round on two cores, so that no option value runs for
+/// hours.
+pub const MAX_CPCA_ROUND_WORK: u128 = 100_000_000_000;
+
+/// Most texels along either side of a lightmap: 16384, so that W×H stays within the largest
+/// image prtkit reads back ([`MAX_IMAGE_TEXELS`]).
+pub const MAX_LIGHTMAP_SIDE: usize = 16384;
+
+/// Most values (W·H·n²) of a lightmap: 2²⁸, 1 GiB as the f32 the EXR holds (and 2 GiB as the
+/// f64 the bake computes).
+pub const MAX_LIGHTMAP_VALUES: u64 = 1 << 28;
+
 /// Longest list a PLY face may hold: 1024 vertices. A polygon of more is a garbled count, and a
 /// count read as garbage must not make the reader allocate or loop.
 pub const MAX_PLY_LIST_LEN: usize = 1024;

@@ -6,12 +6,13 @@ use super::common::{Context, Outcome, Stage};
 use super::options::{check_json_output, Execution};
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::Output;
+use crate::limits::{
+    MAX_CELL_SAMPLES, MAX_CPCA_CLUSTERS, MAX_CPCA_DIRECTIONS, MAX_CPCA_ROUND_WORK, MAX_TRANSFER_BOUNCES,
+    MAX_TRANSFER_ORDER, MAX_TRANSFER_RAYS,
+};
 use crate::mesh::Mesh;
 use crate::transfer::lightmap::LightmapConfig;
-use crate::transfer::stage::{
-    self, Compression, Config, Error, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES, MAX_BOUNCES, MAX_CELL_SAMPLES,
-    MAX_CLUSTERS, MAX_CPCA_ROUND_WORK, MAX_ORDER, MAX_PCA, MAX_RAYS,
-};
+use crate::transfer::stage::{self, Compression, Config, Error, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES};
 use anyhow::{Context as _, Result};
 pub use args::*;
 
@@ -122,9 +123,9 @@ fn glossy_config(args: &Args, doc: &std::path::Path) -> Result<GlossyConfig> {
 /// the bake); the others as they are.
 fn flagged(error: Error) -> anyhow::Error {
     let message = match &error {
-        Error::Order(n) => format!("--order {n} is outside 1..={MAX_ORDER}"),
-        Error::Rays(n) => format!("--rays {n} is outside 1..={MAX_RAYS}"),
-        Error::Bounces(n) => format!("--bounces {n} is outside 1..={MAX_BOUNCES}"),
+        Error::Order(n) => format!("--order {n} is outside 1..={MAX_TRANSFER_ORDER}"),
+        Error::Rays(n) => format!("--rays {n} is outside 1..={MAX_TRANSFER_RAYS}"),
+        Error::Bounces(n) => format!("--bounces {n} is outside 1..={MAX_TRANSFER_BOUNCES}"),
         Error::Albedo(albedo) => format!("--albedo {albedo} must be a finite number ≥ 0"),
         Error::Offset(offset) => format!("--offset {offset} must be in [0, 0.1)"),
         Error::GlossyInterreflected => {
@@ -135,8 +136,8 @@ fn flagged(error: Error) -> anyhow::Error {
         }
         Error::CellSamples(s) => format!("--cell-samples {s} is outside 1..={MAX_CELL_SAMPLES}"),
         Error::Compression { clusters, components, most_components } => format!(
-            "--clusters {clusters} --pca {components}: clusters must be in 1..={MAX_CLUSTERS}, directions in \
-             1..={most_components} (the values per vertex, at most {MAX_PCA})"
+            "--clusters {clusters} --pca {components}: clusters must be in 1..={MAX_CPCA_CLUSTERS}, directions in \
+             1..={most_components} (the values per vertex, at most {MAX_CPCA_DIRECTIONS})"
         ),
         Error::CompressionWork { clusters, components, vertices, per_vertex, work } => format!(
             "--clusters {clusters} --pca {components} on {vertices} vertices of {per_vertex} values: a round of \

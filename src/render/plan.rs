@@ -21,6 +21,7 @@ use crate::brdf::Brdf;
 use crate::envmap::bright::{split, BrightRule};
 use crate::envmap::EnvMap;
 use crate::factor::{Channel, Domain, Factorization, Method, Sampling};
+use crate::limits::MAX_CELL_SAMPLES;
 use crate::mesh::Mesh;
 use crate::prefilter::document::ShrmBody;
 use crate::prefilter::shrm::Shrm;
@@ -35,8 +36,6 @@ use std::time::Instant;
 
 /// Frames of relighting timed for [`RelightSummary`].
 const RELIGHT_FRAMES: usize = 31;
-/// Lighting samples per grid cell along each axis a factored render takes at most.
-const MAX_CELL_SAMPLES: usize = 8;
 /// Grid bins n of a factorization made here: at least 2, at most 256 (an n² × n² matrix).
 const FACTOR_RESOLUTIONS: std::ops::RangeInclusive<usize> = 2..=256;
 

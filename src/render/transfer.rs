@@ -324,8 +324,8 @@ impl<'a> Glb<'a> {
     ) -> Result<Compressed, NotATransfer> {
         let clusters = record["clusters"].as_u64().unwrap_or(0) as usize;
         let components = record["components"].as_u64().unwrap_or(0) as usize;
-        if !(1..=crate::transfer::stage::MAX_CLUSTERS).contains(&clusters)
-            || !(1..=crate::transfer::stage::MAX_PCA).contains(&components)
+        if !(1..=crate::limits::MAX_CPCA_CLUSTERS).contains(&clusters)
+            || !(1..=crate::limits::MAX_CPCA_DIRECTIONS).contains(&components)
         {
             return Err(self.bad(format!("cpca: {clusters} clusters of {components} directions")));
         }
@@ -365,8 +365,8 @@ impl TransferBake {
         let mesh = &glb.gltf["meshes"][0];
         let extras = &mesh["extras"]["prtkit.transfer"];
         let order = extras["order"].as_u64().ok_or_else(|| bad("no extras.prtkit.transfer.order"))? as usize;
-        if !(1..=crate::transfer::stage::MAX_ORDER).contains(&order) {
-            return Err(bad(&format!("order {order} is outside 1..={}", crate::transfer::stage::MAX_ORDER)));
+        if !(1..=crate::limits::MAX_TRANSFER_ORDER).contains(&order) {
+            return Err(bad(&format!("order {order} is outside 1..={}", crate::limits::MAX_TRANSFER_ORDER)));
         }
         let mode = extras["mode"].as_str().ok_or_else(|| bad("no extras.prtkit.transfer.mode"))?.to_string();
         let glossy = extras.get("glossy").map(|g| glb.glossy(g)).transpose()?;

@@ -36,14 +36,13 @@ use super::{convolve, ShCoeffs};
 use crate::envmap::bright::{split, BrightRule, BrightSources};
 use crate::envmap::{EnvMap, Layout};
 use crate::io::{Document, Provenance, RgbImage};
+use crate::limits::MAX_SH_ORDER;
 use crate::progress::Progress;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// Highest order an ε search considers.
 pub const MAX_EPSILON_ORDER: usize = 256;
-/// Highest order that may be asked for at all.
-pub const MAX_ORDER: usize = 2000;
 
 /// What `sh-project` computes.
 #[derive(Clone, Debug, PartialEq)]
@@ -119,8 +118,8 @@ pub struct Summary {
 /// Errors of the stage.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// The order is beyond [`MAX_ORDER`].
-    #[error("order {0} is absurd (at most {MAX_ORDER})")]
+    /// The order is beyond [`MAX_SH_ORDER`].
+    #[error("order {0} is absurd (at most {MAX_SH_ORDER})")]
     Order(usize),
     /// Projection or order selection failed.
     #[error("{source_name}: cannot project: {error}")]
@@ -138,7 +137,7 @@ pub enum Error {
 /// Runs `sh-project` on `map`.
 pub fn run(config: &Config, map: &EnvMap, progress: &dyn Progress) -> Result<Output, Error> {
     if let OrderChoice::Order(order) = config.order {
-        if order > MAX_ORDER {
+        if order > MAX_SH_ORDER {
             return Err(Error::Order(order));
         }
     }

@@ -29,7 +29,7 @@ use super::diffuse::{unshadowed_exact, Shadowed};
 use super::directions::Stratified;
 use super::stage::{Config, Error, Mode};
 use super::visibility::Occluders;
-use crate::limits::{LimitError, MAX_IMAGE_TEXELS};
+use crate::limits::{LimitError, MAX_IMAGE_TEXELS, MAX_LIGHTMAP_SIDE, MAX_LIGHTMAP_VALUES};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use glam::DVec3;
@@ -40,12 +40,6 @@ use serde::{Deserialize, Serialize};
 /// a bilinear lookup reads beyond the chart's last covered centre, and one more of margin for a
 /// mip level's box filter.
 pub const DILATION: usize = 2;
-/// Most texels along either side: 16384, so that W×H stays within the largest image prtkit
-/// reads back ([`MAX_IMAGE_TEXELS`]).
-pub const MAX_SIDE: usize = 16384;
-/// Most values (W·H·n²) of a lightmap: 2²⁸, 1 GiB as the f32 the EXR holds (and 2 GiB as the
-/// f64 the bake computes).
-pub const MAX_VALUES: u64 = 1 << 28;
 /// Texels per parallel work item and per unit of progress.
 const CHUNK: usize = 256;
 /// The value of a dilated texel in the `coverage` layer (covered 1, empty 0).
@@ -210,7 +204,7 @@ pub fn dilate(coverage: &Coverage, rounds: usize) -> Vec<Option<usize>> {
 }
 
 /// Checks a lightmap request before anything is baked: the mesh has UVs, the grid is within
-/// [`MAX_SIDE`] and [`MAX_VALUES`], and the mode is one the lightmap bakes.
+/// [`MAX_LIGHTMAP_SIDE`] and [`MAX_LIGHTMAP_VALUES`], and the mode is one the lightmap bakes.
 pub fn check(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<(), Error> {
     let name = &config.source;
     if mesh.uvs.is_none() {
@@ -225,17 +219,17 @@ pub fn check(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<
         crate::limits::check_count(
             &format!("the lightmap's {what}"),
             side,
-            MAX_SIDE,
+            MAX_LIGHTMAP_SIDE,
             "W x H stays within the largest image prtkit reads",
         )
         .map_err(limit)?;
     }
     let values = w as u64 * h as u64 * (config.order * config.order) as u64;
-    if values > MAX_VALUES {
+    if values > MAX_LIGHTMAP_VALUES {
         return Err(limit(LimitError {
             what: format!("the value count of a {w}x{h} lightmap of order {}", config.order),
             value: values.to_string(),
-            ceiling: MAX_VALUES.to_string(),
+            ceiling: MAX_LIGHTMAP_VALUES.to_string(),
             reason: "W x H x n^2 as f32 in one EXR",
         }));
     }

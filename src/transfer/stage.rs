@@ -20,6 +20,10 @@ use crate::factor::Factorization;
 use crate::io::glb::{self, Attribute, Blob, GlbMesh};
 use crate::io::{Document, Provenance};
 use crate::limits::LimitError;
+use crate::limits::{
+    MAX_CELL_SAMPLES, MAX_CPCA_CLUSTERS, MAX_CPCA_DIRECTIONS, MAX_CPCA_ROUND_WORK, MAX_TRANSFER_BOUNCES,
+    MAX_TRANSFER_ORDER, MAX_TRANSFER_RAYS,
+};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use rayon::prelude::*;
@@ -30,16 +34,6 @@ use std::time::Instant;
 pub const FORMAT: &str = "prtkit.transfer";
 /// Its schema version.
 pub const VERSION: u32 = 1;
-/// Highest SH order n (bands; n² coefficients) of the transfer.
-pub const MAX_ORDER: usize = 8;
-/// Most ray directions per vertex.
-pub const MAX_RAYS: usize = 1 << 20;
-/// Most interreflection bounces: each bounce keeps a copy of the transfer and costs a gather over
-/// every hit; a white furnace of albedo 0.9 keeps 0.9¹⁶ ≈ 19 % of the first bounce's energy at
-/// the 16th, so more bounces only matter for albedos near 1.
-pub const MAX_BOUNCES: usize = 16;
-/// Most basis samples per factor cell along each axis (as `render --cell-samples`).
-pub const MAX_CELL_SAMPLES: usize = 8;
 /// Basis samples per factor cell along each axis by default (as `render --cell-samples`).
 pub const DEFAULT_CELL_SAMPLES: usize = 2;
 /// Vertices per unit of progress and per parallel work item.
@@ -62,13 +56,13 @@ pub enum Mode {
 /// What `transfer` computes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Config {
-    /// SH order n: bands 0..n−1, n² coefficients (1 ≤ n ≤ [`MAX_ORDER`]).
+    /// SH order n: bands 0..n−1, n² coefficients (1 ≤ n ≤ [`MAX_TRANSFER_ORDER`]).
     pub order: usize,
     /// Unshadowed or shadowed.
     pub mode: Mode,
     /// Ray directions per vertex (shadowed and interreflected modes).
     pub rays: usize,
-    /// Interreflection bounces B (interreflected mode; 1 ≤ B ≤ [`MAX_BOUNCES`]).
+    /// Interreflection bounces B (interreflected mode; 1 ≤ B ≤ [`MAX_TRANSFER_BOUNCES`]).
     pub bounces: usize,
     /// Seed of the directions' jitter.
     pub seed: u64,
@@ -93,20 +87,11 @@ pub struct Config {
 /// How many clusters and directions CPCA keeps (Sloan et al. 2003).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Compression {
-    /// Clusters C (at most [`MAX_CLUSTERS`]; capped at the vertex count).
+    /// Clusters C (at most [`MAX_CPCA_CLUSTERS`]; capped at the vertex count).
     pub clusters: usize,
-    /// Principal directions per cluster P (at most [`MAX_PCA`] and the values per vertex).
+    /// Principal directions per cluster P (at most [`MAX_CPCA_DIRECTIONS`] and the values per vertex).
     pub components: usize,
 }
-
-/// Most CPCA clusters.
-pub const MAX_CLUSTERS: usize = 4096;
-/// Most principal directions per cluster.
-pub const MAX_PCA: usize = 64;
-/// Most multiply-adds one round of clustered PCA may take (vertices × clusters × (P + 1) ×
-/// values per vertex): about a minute per round on two cores, so that no option value runs for
-/// hours.
-pub const MAX_CPCA_ROUND_WORK: u128 = 100_000_000_000;
 
 /// What a glossy bake is made from: `factor-brdf`'s factorization, read back as `render
 /// --factors` reads it, and how many of its terms to keep.
@@ -369,14 +354,14 @@ pub struct Summary {
 /// (`cli/transfer.rs`) words the ones a flag sets with that flag's name.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// The SH order is outside 1..=[`MAX_ORDER`].
-    #[error("SH order {0} is outside 1..={MAX_ORDER}")]
+    /// The SH order is outside 1..=[`MAX_TRANSFER_ORDER`].
+    #[error("SH order {0} is outside 1..={MAX_TRANSFER_ORDER}")]
     Order(usize),
-    /// The ray count is outside 1..=[`MAX_RAYS`].
-    #[error("{0} rays per vertex is outside 1..={MAX_RAYS}")]
+    /// The ray count is outside 1..=[`MAX_TRANSFER_RAYS`].
+    #[error("{0} rays per vertex is outside 1..={MAX_TRANSFER_RAYS}")]
     Rays(usize),
-    /// The bounce count is outside 1..=[`MAX_BOUNCES`].
-    #[error("{0} interreflection bounces is outside 1..={MAX_BOUNCES}")]
+    /// The bounce count is outside 1..=[`MAX_TRANSFER_BOUNCES`].
+    #[error("{0} interreflection bounces is outside 1..={MAX_TRANSFER_BOUNCES}")]
     Bounces(usize),
     /// The albedo is not a finite number ≥ 0.
     #[error("albedo {0} is not a finite number ≥ 0")]
@@ -413,8 +398,8 @@ pub enum Error {
     CellSamples(usize),
     /// The clusters or directions of a compression are out of range.
     #[error(
-        "{clusters} clusters of {components} directions: clusters must be in 1..={MAX_CLUSTERS}, directions in \
-         1..={most_components} (the values per vertex, at most {MAX_PCA})"
+        "{clusters} clusters of {components} directions: clusters must be in 1..={MAX_CPCA_CLUSTERS}, directions in \
+         1..={most_components} (the values per vertex, at most {MAX_CPCA_DIRECTIONS})"
     )]
     Compression {
         /// Clusters C asked for.
@@ -519,13 +504,13 @@ impl<'a> Plan<'a> {
     /// anything is baked.
     fn new(config: &'a Config, mesh: &Mesh) -> Result<Plan<'a>, Error> {
         let n = config.order;
-        if !(1..=MAX_ORDER).contains(&n) {
+        if !(1..=MAX_TRANSFER_ORDER).contains(&n) {
             return Err(Error::Order(n));
         }
-        if !(1..=MAX_RAYS).contains(&config.rays) {
+        if !(1..=MAX_TRANSFER_RAYS).contains(&config.rays) {
             return Err(Error::Rays(config.rays));
         }
-        if config.mode == Mode::Interreflected && !(1..=MAX_BOUNCES).contains(&config.bounces) {
+        if config.mode == Mode::Interreflected && !(1..=MAX_TRANSFER_BOUNCES).contains(&config.bounces) {
             return Err(Error::Bounces(config.bounces));
         }
         if !(config.albedo.is_finite() && config.albedo >= 0.0) {
@@ -1003,8 +988,8 @@ pub const GLOSSY_H_BLOB: &str = "glossy.h";
 /// take longer than [`MAX_CPCA_ROUND_WORK`] allows, before anything is baked.
 fn check_compression(c: &Compression, vertices: usize, per_vertex: usize) -> Result<(), Error> {
     let (clusters, components) = (c.clusters, c.components);
-    let most_components = MAX_PCA.min(per_vertex);
-    if !(1..=MAX_CLUSTERS).contains(&clusters) || !(1..=most_components).contains(&components) {
+    let most_components = MAX_CPCA_DIRECTIONS.min(per_vertex);
+    if !(1..=MAX_CPCA_CLUSTERS).contains(&clusters) || !(1..=most_components).contains(&components) {
         return Err(Error::Compression { clusters, components, most_components });
     }
     // Each round compares every vertex with every cluster: bound its work up front.
