@@ -5,7 +5,7 @@ mod args;
 use super::common::{Context, Outcome, Stage};
 use super::options::{parse_output, Execution};
 use super::outputs::{check_output_dir, check_outputs, Holds, Outputs};
-use crate::envmap::stage::{self, Config};
+use crate::envmap::stage::{self, Config, MAX_SUPERSAMPLE};
 use crate::envmap::{Layout, FACES};
 use crate::io::Output;
 use anyhow::Result;
@@ -32,7 +32,10 @@ impl Stage for Args {
             check_output_dir(&self.output)?;
         }
         let map = self.input.load(ctx)?;
-        let out = stage::run(&config, &map)?;
+        let out = stage::run(&config, &map).map_err(|error| match error {
+            stage::Error::Supersample(n) => anyhow::anyhow!("--supersample {n} must be in 1..={MAX_SUPERSAMPLE}"),
+            error => error.into(),
+        })?;
 
         let mut outputs = Outputs::new();
         if self.to == Layout::Faces {

@@ -5,7 +5,7 @@
 
 use super::common::Context;
 use crate::brdf::Brdf;
-use crate::envmap::{EnvMap, Layout, LoadError, LoadOptions, NegativePolicy, Orientation, PixelFault};
+use crate::envmap::{EnvMap, EnvMapError, Layout, LoadError, LoadOptions, NegativePolicy, Orientation, PixelFault};
 use crate::factor::{Channel, Domain, Method, Sampling};
 use crate::io::Output;
 use anyhow::{Context as _, Result};
@@ -108,8 +108,8 @@ impl EnvArgs {
     }
 }
 
-/// A reading error in the words of `--negative` when that policy refused a pixel; the others as
-/// they are.
+/// A reading error in the words of `--negative` when that policy refused a pixel, and of
+/// `--layout` when the layout cannot be told; the others as they are.
 fn flagged(error: LoadError) -> anyhow::Error {
     match error {
         LoadError::BadPixel { path, x, y, channel, value, fault: PixelFault::Negative } => anyhow::anyhow!(
@@ -117,6 +117,9 @@ fn flagged(error: LoadError) -> anyhow::Error {
              --negative keep",
             path.display()
         ),
+        error @ LoadError::Geometry { error: EnvMapError::Undetectable { .. }, .. } => {
+            anyhow::anyhow!("{error}; pass --layout")
+        }
         error => error.into(),
     }
 }

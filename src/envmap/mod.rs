@@ -39,7 +39,7 @@ pub enum EnvMapError {
         reason: String,
     },
     /// The aspect ratio matches no layout.
-    #[error("cannot tell the layout of a {width}x{height} image from its aspect ratio (2:1 lat-long, 1:1 angular probe, 4:3 or 3:4 cube cross); pass --layout")]
+    #[error("cannot tell the layout of a {width}x{height} image from its aspect ratio (2:1 lat-long, 1:1 angular probe, 4:3 or 3:4 cube cross)")]
     Undetectable {
         /// Width.
         width: usize,

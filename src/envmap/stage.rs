@@ -21,7 +21,7 @@ pub struct Config {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// The supersampling factor is out of range.
-    #[error("--supersample {0} must be in 1..={MAX_SUPERSAMPLE}")]
+    #[error("{0} sub-samples per texel edge is outside 1..={MAX_SUPERSAMPLE}")]
     Supersample(usize),
     /// The size does not fit the layout.
     #[error("cannot make a {layout} map of {width}x{height}: {error}")]
