@@ -1,6 +1,6 @@
 //! The prefilter's tuning constants, in one place. Each trades accuracy against time or memory;
 //! the sentence beside it says what it trades and which measurement set it. The measured figures
-//! are in `docs/results/prefilter-tuning.md` and `docs/prefilter.md`.
+//! are in `docs/prefilter-tuning.md` and `docs/prefilter.md`.
 
 use std::f64::consts::PI;
 
@@ -16,7 +16,7 @@ pub const ANGULAR_EPSILON: f64 = 1e-5;
 /// frequency space costs more as the lobe narrows, angle less); a radially symmetric lobe's
 /// bright texels go through the zonal filter rather than spherical harmonics; and the view
 /// frame's grid is refined. Set by the cost crossover of the first and the per-texel error of the
-/// last, measured on Grace at 256×128 (`docs/results/prefilter-tuning.md`).
+/// last, measured on Grace at 256×128 (`docs/prefilter-tuning.md`).
 pub const NARROW_LOBE_TEXELS: f64 = 8.0;
 
 /// True when a lobe `width` radians wide spans fewer than [`NARROW_LOBE_TEXELS`] texels of a
@@ -37,7 +37,7 @@ pub const RULE_TOLERANCE: f64 = 1e-3;
 /// Gauss–Legendre nodes in z per texel when the bright texels are projected onto spherical
 /// harmonics. The lobes on that path span at least [`NARROW_LOBE_TEXELS`] texels, over which two
 /// nodes integrate a texel within 10⁻⁵ of itself; a third node cost a third more of the path for
-/// no visible change (`docs/results/prefilter-tuning.md`).
+/// no visible change (`docs/prefilter-tuning.md`).
 pub const BRIGHT_Z_NODES: usize = 2;
 
 /// Bins in θ_o of the cone table ([`super::truncation::CutoffTable`]) of the ring-free bake's
@@ -66,13 +66,13 @@ pub const CONE_SAMPLES: usize = 256;
 
 /// View-frame integral: point lookups per axis and per texel of the lighting in the box filter
 /// that rotates it into the view's frame. Past 6 the p99 error against the reference no longer
-/// fell (Grace, σ = 0.1, grazing view; `docs/results/prefilter-tuning.md`).
+/// fell (Grace, σ = 0.1, grazing view; `docs/prefilter-tuning.md`).
 pub const SUPERSAMPLE: usize = 6;
 
 /// View-frame integral: the frame's grid is this many times finer per axis than the pyramid level
 /// when the lobe is narrow against the level's texels, so the rotated map resolves their edges to
 /// half a texel; it halved the p99 error of Torrance-Sparrow σ = 0.1 at a grazing view
-/// (`docs/results/prefilter-tuning.md`).
+/// (`docs/prefilter-tuning.md`).
 pub const REFINE: usize = 2;
 
 /// Texels of the cone pyramid's level summed per cone angle θ*
