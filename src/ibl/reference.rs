@@ -454,35 +454,59 @@ fn deviations(input: &RgbImage, filtered: &RgbImage, factor: usize) -> (Vec<Devi
         })
         .collect();
     let radii: Vec<f64> = (0..filtered.height).map(|y| angular_radius(coarse, y)).collect();
-    let (mut members, mut blocks) = (Vec::new(), Vec::new());
-    for y0 in (0..filtered.height).step_by(BLOCK) {
-        for x0 in (0..filtered.width).step_by(BLOCK) {
-            let (y1, x1) = ((y0 + BLOCK).min(filtered.height), (x0 + BLOCK).min(filtered.width));
-            let centre = coarse.direction_at(0.5 * (x0 + x1) as f64, 0.5 * (y0 + y1) as f64);
-            let (start, mut d, mut reach) = (members.len(), [0.0; 3], 0.0f64);
-            let (mut texel_radius, mut texel_radius_min) = (0.0f64, f64::INFINITY);
-            for y in y0..y1 {
-                texel_radius = texel_radius.max(radii[y]);
-                texel_radius_min = texel_radius_min.min(radii[y]);
-                for x in x0..x1 {
-                    let t = coarse.texel_direction(x, y);
-                    reach = reach.max(centre.dot(t).clamp(-1.0, 1.0).acos());
-                    if rows[y][x] != [0.0; 3] {
-                        (0..3).for_each(|c| d[c] += rows[y][x][c]);
-                        members.push(Deviation {
-                            centre: t,
-                            cos_radius: radii[y].cos(),
-                            sin_radius: radii[y].sin(),
-                            d: rows[y][x],
-                        });
+    // Texel centres from per-row and per-column sines and cosines: the same products as
+    // `LatLong::texel_direction`, without two sincos per texel.
+    let rows_sin_cos: Vec<(f64, f64)> = (0..coarse.height).map(|y| coarse.row_theta(y).sin_cos()).collect();
+    let columns_sin_cos: Vec<(f64, f64)> = (0..coarse.width).map(|x| coarse.column_phi(x).sin_cos()).collect();
+    let centre = |x: usize, y: usize| {
+        let ((st, ct), (sp, cp)) = (rows_sin_cos[y], columns_sin_cos[x]);
+        DVec3::new(st * cp, st * sp, ct)
+    };
+    // Each band of block rows on its own, then joined in order (the members' ranges shifted).
+    let bands: Vec<(Vec<Deviation>, Vec<Block>)> = (0..filtered.height)
+        .into_par_iter()
+        .step_by(BLOCK)
+        .map(|y0| {
+            let (mut members, mut blocks) = (Vec::new(), Vec::new());
+            let y1 = (y0 + BLOCK).min(filtered.height);
+            let (texel_radius, texel_radius_min) =
+                radii[y0..y1].iter().fold((0.0f64, f64::INFINITY), |(hi, lo), &r| (hi.max(r), lo.min(r)));
+            for x0 in (0..filtered.width).step_by(BLOCK) {
+                let x1 = (x0 + BLOCK).min(filtered.width);
+                let middle = coarse.direction_at(0.5 * (x0 + x1) as f64, 0.5 * (y0 + y1) as f64);
+                let (start, mut d, mut nearest) = (members.len(), [0.0; 3], 1.0f64);
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        let t = centre(x, y);
+                        nearest = nearest.min(middle.dot(t));
+                        if rows[y][x] != [0.0; 3] {
+                            (0..3).for_each(|c| d[c] += rows[y][x][c]);
+                            members.push(Deviation {
+                                centre: t,
+                                cos_radius: radii[y].cos(),
+                                sin_radius: radii[y].sin(),
+                                d: rows[y][x],
+                            });
+                        }
                     }
                 }
+                if members.len() > start {
+                    // The farthest texel centre: acos falls as the cosine grows.
+                    let spread = nearest.clamp(-1.0, 1.0).acos() + texel_radius;
+                    let (centre, members) = (middle, start..members.len());
+                    blocks.push(Block { centre, spread, texel_radius, texel_radius_min, d, members });
+                }
             }
-            if members.len() > start {
-                let spread = reach + texel_radius;
-                blocks.push(Block { centre, spread, texel_radius, texel_radius_min, d, members: start..members.len() });
-            }
-        }
+            (members, blocks)
+        })
+        .collect();
+    let (mut members, mut blocks) = (Vec::new(), Vec::new());
+    for (band_members, band_blocks) in bands {
+        let offset = members.len();
+        members.extend(band_members);
+        blocks.extend(
+            band_blocks.into_iter().map(|b| Block { members: b.members.start + offset..b.members.end + offset, ..b }),
+        );
     }
     (members, blocks)
 }
