@@ -12,7 +12,7 @@ use crate::metrics::CompareError;
 use crate::render::grid::{GridError, MaterialGrid};
 use crate::render::ibl::IblBake;
 use crate::render::stage::{self, Config, PanelItem, Shading, StoredFactors};
-use crate::render::transfer::OtherMesh;
+use crate::render::transfer::{LightmapError, LightmapImage, OtherMesh};
 use crate::render::{Camera, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
 pub use args::*;
@@ -73,7 +73,7 @@ impl Args {
                 })?;
                 let bake = crate::render::transfer::TransferBake::from_glb(&file.display().to_string(), &bytes)?;
                 let lightmap = match &self.lightmap {
-                    Some(file) => Some(Box::new(crate::render::transfer::LightmapImage::load(file, &bake)?)),
+                    Some(file) => Some(Box::new(LightmapImage::load(file, &bake).map_err(lightmap_error)?)),
                     None => None,
                 };
                 Shading::Transfer { bake: Box::new(bake), factors: self.stored_factors()?, lightmap }
@@ -177,6 +177,15 @@ impl Args {
             bail!("--panel-item LABEL=- (this render) may be given once");
         }
         Ok(Some(items))
+    }
+}
+
+/// A `--lightmap` that cannot relight the `--transfer` bake, with what writes one.
+fn lightmap_error(error: LightmapError) -> anyhow::Error {
+    match error {
+        LightmapError::MissingLayer { .. } => anyhow!("{error} (transfer --lightmap writes one)"),
+        LightmapError::Glossy { .. } => anyhow!("{error} (--lightmap goes with a diffuse --transfer bake)"),
+        other => other.into(),
     }
 }
 

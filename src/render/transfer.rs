@@ -515,30 +515,102 @@ pub struct LightmapImage {
 }
 
 impl LightmapImage {
-    /// Reads the lightmap `path` for the diffuse, uncompressed `bake` it was written beside.
-    pub fn load(path: &std::path::Path, bake: &TransferBake) -> Result<LightmapImage, anyhow::Error> {
+    /// Reads the lightmap `path` for the diffuse, uncompressed `bake` it was written beside:
+    /// n² layers of one size, every value finite.
+    pub fn load(path: &std::path::Path, bake: &TransferBake) -> Result<LightmapImage, LightmapError> {
         let name = path.display().to_string();
         if bake.glossy.is_some() {
-            anyhow::bail!("{name}: a lightmap relights a diffuse bake; {} is glossy", bake.name);
+            return Err(LightmapError::Glossy { name, bake: bake.name.clone() });
         }
         let coefficients = bake.order * bake.order;
         let layers = crate::io::exr::read_layers(path)?;
-        let (width, height) = layers.first().map(|(_, l)| (l.width, l.height)).unwrap_or_default();
+        let layer = |i: usize| {
+            let wanted = format!("T{i}");
+            match layers.iter().find(|(n, _)| *n == wanted) {
+                Some((_, image)) => Ok((wanted, image)),
+                None => Err(LightmapError::MissingLayer { name: name.clone(), layer: wanted, order: bake.order }),
+            }
+        };
+        let (_, first) = layer(0)?;
+        let (width, height) = (first.width, first.height);
+        if width == 0 || height == 0 {
+            return Err(LightmapError::Empty { name });
+        }
         let mut transfer = vec![0.0f32; width * height * coefficients];
         for i in 0..coefficients {
-            let wanted = format!("T{i}");
-            let Some((_, layer)) = layers.iter().find(|(n, _)| *n == wanted) else {
-                anyhow::bail!(
-                    "{name}: no layer {wanted}: not a lightmap of order {} (transfer --lightmap)",
-                    bake.order
-                );
-            };
-            for (texel, px) in layer.pixels.iter().enumerate() {
+            let (wanted, image) = layer(i)?;
+            if (image.width, image.height) != (width, height) {
+                let size = (image.width, image.height);
+                return Err(LightmapError::LayerSize { name, layer: wanted, size, first: (width, height) });
+            }
+            for (texel, px) in image.pixels.iter().enumerate() {
+                if !px[0].is_finite() {
+                    let (x, y) = (texel % width, texel / width);
+                    return Err(LightmapError::NotFinite { name, layer: wanted, x, y, value: px[0] });
+                }
                 transfer[texel * coefficients + i] = px[0];
             }
         }
         Ok(LightmapImage { name, width, height, transfer, coefficients })
     }
+}
+
+/// Why a lightmap cannot relight a bake; each names the lightmap's file.
+#[derive(Debug, thiserror::Error)]
+pub enum LightmapError {
+    /// The file cannot be read as an EXR.
+    #[error(transparent)]
+    Io(#[from] crate::io::IoError),
+    /// A lightmap holds diffuse transfer; the bake is glossy.
+    #[error("{name}: a lightmap relights a diffuse bake; {bake} is glossy")]
+    Glossy {
+        /// The lightmap.
+        name: String,
+        /// The bake.
+        bake: String,
+    },
+    /// A layer T_i the bake's order needs is missing.
+    #[error("{name}: no layer {layer}: not a lightmap of order {order}")]
+    MissingLayer {
+        /// The lightmap.
+        name: String,
+        /// The layer looked for.
+        layer: String,
+        /// The bake's SH order.
+        order: usize,
+    },
+    /// The layers have no texels.
+    #[error("{name}: the lightmap has no texels")]
+    Empty {
+        /// The lightmap.
+        name: String,
+    },
+    /// A layer differs in size from T0 (the parts of a multi-part EXR may).
+    #[error("{name}: layer {layer} is {}x{}, layer T0 is {}x{}: a lightmap's layers are one size", size.0, size.1, first.0, first.1)]
+    LayerSize {
+        /// The lightmap.
+        name: String,
+        /// The layer that differs.
+        layer: String,
+        /// Its width and height.
+        size: (usize, usize),
+        /// T0's.
+        first: (usize, usize),
+    },
+    /// A transfer value is NaN or infinite.
+    #[error("{name}: layer {layer} texel ({x}, {y}) is {value}: transfer values are finite")]
+    NotFinite {
+        /// The lightmap.
+        name: String,
+        /// The layer.
+        layer: String,
+        /// The texel's column.
+        x: usize,
+        /// Its row.
+        y: usize,
+        /// What it holds.
+        value: f32,
+    },
 }
 
 /// Shades a mesh hit from a lightmap: the lighting dotted with every texel's transfer once
