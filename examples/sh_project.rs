@@ -13,9 +13,10 @@
 
 use anyhow::Context;
 use prtkit::envmap::LoadOptions;
+use prtkit::limits::MAX_EPSILON_ORDER;
 use prtkit::progress::NoProgress;
 use prtkit::sh::project::OrderChoice;
-use prtkit::sh::stage::{self, Config, MAX_EPSILON_ORDER};
+use prtkit::sh::stage::{self, Config};
 use std::path::{Path, PathBuf};
 
 fn main() -> anyhow::Result<()> {

@@ -157,6 +157,31 @@ pub const MAX_ZONAL_TEXELS: usize = 1 << 23;
 pub const MAX_VERIFY_TEXELS: usize = 100_000;
 
 // ---------------------------------------------------------------------------------------------
+// What a stage makes (the CLI's options; `docs/cli.md` words each with its flag)
+// ---------------------------------------------------------------------------------------------
+
+/// Widest edge of an image a stage makes at a size it is given (`WxH`): 2¹⁶ texels, the
+/// largest edge the [`MAX_IMAGE_TEXELS`] of an image read can have with the other edge 4096.
+pub const MAX_IMAGE_EDGE: usize = 1 << 16;
+
+/// Largest sub-sample count per texel edge of a resampled map (`envmap::stage`): 16, k² = 256
+/// bilinear lookups per output texel, which already average far below any texel's footprint.
+pub const MAX_SUPERSAMPLE: usize = 16;
+
+/// Highest order the ε search of an SH projection (`sh::stage`) considers: 256, (F+1)² = 66 049
+/// coefficients projected before the order is chosen. An ε this order does not meet is refused
+/// as unreachable, naming the ε it achieves.
+pub const MAX_EPSILON_ORDER: usize = 256;
+
+/// Deepest quadtree level of a shader's adaptive sampling (`shader::stage`): 16, 4¹⁶ nodes, each
+/// a shader evaluation within the per-evaluation budget ([`MAX_OPERATIONS`]).
+pub const MAX_QUADTREE_DEPTH: u32 = 16;
+
+/// Most cells of a material grid (`render::grid`): 64, each rendered twice, the reference at the
+/// full cost of the rendering equation.
+pub const MAX_GRID_CELLS: usize = 64;
+
+// ---------------------------------------------------------------------------------------------
 // Documents
 // ---------------------------------------------------------------------------------------------
 

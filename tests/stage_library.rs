@@ -101,8 +101,9 @@ fn convert_library_and_binary_write_the_same_bytes() {
 
 #[test]
 fn sh_project_library_and_binary_write_the_same_bytes() {
+    use prtkit::limits::MAX_EPSILON_ORDER;
     use prtkit::sh::project::OrderChoice;
-    use prtkit::sh::stage::{run, Config, Summary, MAX_EPSILON_ORDER};
+    use prtkit::sh::stage::{run, Config, Summary};
     let b = bench();
     let args = [&b.sky, "-e", "0.05", "-o", "sky.sh.json", "--reconstruct", "r.exr", "--irradiance", "e.png", "--json"];
     let (argv, stdout) = b.binary("sh-project", &args);

@@ -5,9 +5,10 @@ mod args;
 use super::common::{Context, Outcome, Stage};
 use super::options::{parse_output, Execution};
 use super::outputs::{check_output_dir, check_outputs, Holds, Outputs};
-use crate::envmap::stage::{self, Config, MAX_SUPERSAMPLE};
+use crate::envmap::stage::{self, Config};
 use crate::envmap::{Layout, FACES};
 use crate::io::Output;
+use crate::limits::MAX_SUPERSAMPLE;
 use anyhow::Result;
 pub use args::*;
 

@@ -8,6 +8,7 @@ use crate::brdf::Brdf;
 use crate::envmap::{EnvMap, EnvMapError, Layout, LoadError, LoadOptions, NegativePolicy, Orientation, PixelFault};
 use crate::factor::{Channel, Domain, Method, Sampling};
 use crate::io::Output;
+use crate::limits::MAX_IMAGE_EDGE;
 use anyhow::{Context as _, Result};
 use clap::builder::PossibleValue;
 use clap::ValueEnum;
@@ -145,18 +146,15 @@ pub fn parse_brdf(s: &str) -> Result<Brdf, String> {
     Brdf::parse(s).map_err(|e| e.to_string())
 }
 
-/// Largest image edge on the command line (2^16).
-pub const MAX_EDGE: usize = 1 << 16;
-
-/// Parses `WxH` (e.g. `512x256`), an image a stage will make: each edge at most [`MAX_EDGE`],
+/// Parses `WxH` (e.g. `512x256`), an image a stage will make: each edge at most [`MAX_IMAGE_EDGE`],
 /// and the image within the ceilings of an image read (`limits::check_image`: 2^28 texels, and
 /// as RGB f32 within the memory budget), refused here before any work starts.
 pub fn parse_size(s: &str) -> Result<(usize, usize), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, e.g. 512x256, got {s:?}"))?;
     let w: usize = w.trim().parse().map_err(|_| format!("bad width in {s:?}"))?;
     let h: usize = h.trim().parse().map_err(|_| format!("bad height in {s:?}"))?;
-    if w == 0 || h == 0 || w > MAX_EDGE || h > MAX_EDGE {
-        return Err(format!("size {s:?} must be between 1x1 and {MAX_EDGE}x{MAX_EDGE}"));
+    if w == 0 || h == 0 || w > MAX_IMAGE_EDGE || h > MAX_IMAGE_EDGE {
+        return Err(format!("size {s:?} must be between 1x1 and {MAX_IMAGE_EDGE}x{MAX_IMAGE_EDGE}"));
     }
     crate::limits::check_image("the image", w as u64, h as u64, crate::limits::RGB_BYTES_PER_TEXEL)
         .map_err(|e| e.to_string())?;

@@ -196,7 +196,7 @@ fn grid_error(error: GridError) -> anyhow::Error {
         GridError::TooManyCells { columns, rows } => anyhow!(
             "--grid-roughness × --grid-metalness: {columns} × {rows} cells is more than the {} a grid renders \
              (each twice, the reference at full cost)",
-            crate::render::grid::MAX_CELLS
+            crate::limits::MAX_GRID_CELLS
         ),
         GridError::Roughness(r) => {
             anyhow!("--grid-roughness {r} must be in (0, 1] (r = 0, the mirror, has no GGX lobe)")

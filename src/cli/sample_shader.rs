@@ -6,8 +6,9 @@ use super::common::{Context, Outcome, Stage};
 use super::options::Execution;
 use super::outputs::{check_outputs, Holds, Outputs};
 use crate::io::{self, Output, RgbImage};
+use crate::limits::MAX_QUADTREE_DEPTH;
 use crate::shader::sampler::{Arith, Domain};
-use crate::shader::stage::{self, comparison_table, Config, Error, MAX_DEPTH};
+use crate::shader::stage::{self, comparison_table, Config, Error};
 use crate::shader::Shader;
 use anyhow::Result;
 pub use args::*;
@@ -42,7 +43,9 @@ impl TryFrom<&Args> for Config {
 fn flagged(error: Error) -> anyhow::Error {
     match error {
         Error::Tolerance(t) => anyhow::anyhow!("--tolerance must be a finite number >= 0, got {t}"),
-        Error::Depth(d) => anyhow::anyhow!("--max-depth {d} is too deep (at most {MAX_DEPTH}: 4^{MAX_DEPTH} nodes)"),
+        Error::Depth(d) => {
+            anyhow::anyhow!("--max-depth {d} is too deep (at most {MAX_QUADTREE_DEPTH}: 4^{MAX_QUADTREE_DEPTH} nodes)")
+        }
         error => error.into(),
     }
 }

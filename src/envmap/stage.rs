@@ -2,9 +2,7 @@
 //! (`docs/envmap-layouts.md`), each output texel the mean of k×k bilinear lookups.
 
 use super::{resample, EnvMap, EnvMapError, Layout};
-
-/// Largest supersampling factor: k² lookups per output texel.
-pub const MAX_SUPERSAMPLE: usize = 16;
+use crate::limits::MAX_SUPERSAMPLE;
 
 /// What `convert` computes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -23,7 +23,9 @@ use super::model::Model;
 use super::pipeline::{Lighting, PrefilterError};
 use super::shrm::{texel_frame, Shrm};
 use super::truncation::{radial_cutoff, radial_truncation, CutoffTable};
-use super::tuning::{self, ANGULAR_EPSILON, BRIGHT_Z_NODES, RULE_TOLERANCE};
+use super::tuning::{
+    self, ANGULAR_EPSILON, BRIGHT_Z_NODES, RULE_TOLERANCE, VIEW_PROJECTION_BINS, VIEW_PROJECTION_NODES,
+};
 use crate::envmap::bright::{split, BrightReport, BrightRule, BrightSources};
 use crate::envmap::zonal::{rule_for_kernel, zonal_filter, Rows};
 use crate::envmap::{EnvMap, Layout};
@@ -414,10 +416,10 @@ struct ViewProjection {
 
 impl ViewProjection {
     fn new(model: &Model, p: usize) -> Self {
-        let bins = 1024;
+        let bins = VIEW_PROJECTION_BINS;
         let min_cos = -1.0;
-        let nodes = crate::quadrature::gauss_legendre_cached(96);
-        let nphi = 96;
+        let nodes = crate::quadrature::gauss_legendre_cached(VIEW_PROJECTION_NODES);
+        let nphi = VIEW_PROJECTION_NODES;
         let table = crate::sh::legendre::LegendreTable::new(p);
         let values: Vec<f64> = (0..bins)
             .into_par_iter()

@@ -15,7 +15,10 @@
 //!   paper defines directly as ρ̂ (its microfacet eq. 11).
 
 use super::brdf_sh::{self, BrdfGrid, BrdfSh};
-use super::tuning::{HALF_ANGLE_TOLERANCE, MAX_HALF_ANGLE_ENTRIES, RADIAL_NODES};
+use super::tuning::{
+    FIRST_SEARCH_BAND, HALF_ANGLE_SCAN_STEPS as STEPS, HALF_ANGLE_TOLERANCE, LAST_SEARCH_BAND, MAX_HALF_ANGLE_ENTRIES,
+    RADIAL_NODES,
+};
 use crate::brdf::ggx::{GgxError, SplitSumLobe};
 use crate::brdf::Brdf;
 use glam::DVec3;
@@ -263,18 +266,19 @@ impl Model {
     }
 
     /// Coefficients truncated to the smallest (F_B, P_B) keeping 1 − ε of the BRDF energy
-    /// (§5.1, App. C: start at F = 16, P = 6 and double F until the tolerance is met, up to 128).
+    /// (§5.1, App. C: start at F = [`FIRST_SEARCH_BAND`] and double F until the tolerance is met,
+    /// up to [`LAST_SEARCH_BAND`]; P up to `max_p`, the paper's 6 by default).
     pub fn coefficients_for_epsilon(&self, epsilon: f64, max_p: usize) -> Result<BrdfSh, ModelError> {
         let p = if self.centre().is_some() { 0 } else { max_p };
-        let mut f = 16;
+        let mut f = FIRST_SEARCH_BAND;
         loop {
             let full = self.coefficients(f, p);
             if let Some((fb, pb)) = full.select_orders(epsilon) {
-                if fb < f || f >= 128 {
+                if fb < f || f >= LAST_SEARCH_BAND {
                     return Ok(full.truncated(fb, pb));
                 }
             }
-            if f >= 128 {
+            if f >= LAST_SEARCH_BAND {
                 return Err(ModelError::Unreachable {
                     brdf: self.brdf.spec(),
                     epsilon,
@@ -314,7 +318,6 @@ pub struct HalfAngleLobe {
 impl HalfAngleLobe {
     /// Tabulates `curve(θ_h)`; `None` when [`MAX_HALF_ANGLE_ENTRIES`] do not meet the tolerance.
     fn new(curve: impl Fn(f64) -> f64, cosine: bool) -> Option<Self> {
-        const STEPS: usize = 4096;
         let samples: Vec<f64> = (0..=STEPS).map(|i| curve(PI * i as f64 / STEPS as f64)).collect();
         let peak = samples.iter().cloned().fold(0.0, f64::max);
         if !(peak > 0.0 && peak.is_finite()) {

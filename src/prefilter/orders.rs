@@ -37,7 +37,7 @@
 
 use super::brdf_sh::BrdfSh;
 use super::model::Model;
-use super::tuning::{FIRST_PROJECTION_SHARE, VIEW_RESIDUAL_FACTOR};
+use super::tuning::{FIRST_PROJECTION_SHARE, VIEW_ANGLES, VIEW_RESIDUAL_FACTOR, VIEW_SAMPLE_NODES as NODES};
 use crate::metrics::TEXEL_FLOOR;
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use crate::sh::legendre::LegendreTable;
@@ -300,12 +300,6 @@ fn band_norms(brdf: &BrdfSh, p: usize, theta_o: f64) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// View angles (degrees) at which r(θ_o) is tabulated.
-pub const VIEW_ANGLES: &[f64] = &[
-    0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 110.0, 120.0, 130.0, 140.0, 150.0, 160.0, 170.0,
-    180.0,
-];
-
 /// ρ̂(·, ω_o) sampled over ω_i for ω_o at each of a list of angles (degrees) from R in the
 /// reflection frame (φ_o = 0), on a Gauss–Legendre grid in cos θ_i × a uniform grid in φ_i, to
 /// measure how well truncated expansions represent it (green channel). ρ̂ and its expansion are
@@ -317,9 +311,6 @@ pub struct ViewSamples {
     /// Per angle, NODES × HALF samples (θ_i node major).
     samples: Vec<Vec<f64>>,
 }
-
-/// Grid size of [`ViewSamples`] per axis.
-const NODES: usize = 192;
 
 /// The φ_i midpoints in [0, π].
 const HALF: usize = NODES / 2;

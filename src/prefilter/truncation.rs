@@ -4,6 +4,7 @@
 //! ([`reference_rule`]).
 
 use super::model::Model;
+use super::tuning::{CUTOFF_PHI_SAMPLES, CUTOFF_THETA_SAMPLES, TRUNCATION_PANELS as PANELS};
 use crate::envmap::zonal::{self, RuleChoice};
 use crate::quadrature::gauss_legendre_cached as gauss_legendre;
 use crate::sphere::{self, LatLong};
@@ -32,7 +33,6 @@ pub fn radial_truncation(u: impl Fn(f64) -> f64, epsilon: f64) -> Truncation {
     // rule in cos γ, without solving for its nodes), then the first node where it reaches 1 − ε.
     // The nodes (γ, cos γ, weight × sin γ) are the same for every lobe: computed once, they
     // leave 2 048 evaluations of u per lobe.
-    const PANELS: usize = 512;
     static NODES: OnceLock<Vec<(f64, f64, f64)>> = OnceLock::new();
     let nodes = NODES.get_or_init(|| {
         let rule = gauss_legendre(4);
@@ -113,8 +113,7 @@ impl CutoffTable {
     /// `rho_hat(ω_o)(ω_i)`, which must be even in φ_i (ω_o lies at φ = 0: the mirror y → −y
     /// leaves an isotropic ρ̂ unchanged), so only φ_i ∈ [0, π] is sampled.
     pub fn new<L: Fn(DVec3) -> f64>(rho_hat: impl Fn(DVec3) -> L + Sync, epsilon: f64, bins: usize) -> Self {
-        let n_theta = 512;
-        let n_phi = 24;
+        let (n_theta, n_phi) = (CUTOFF_THETA_SAMPLES, CUTOFF_PHI_SAMPLES);
         // The sample directions, shared by every bin.
         let directions: Vec<DVec3> = (0..n_theta)
             .flat_map(|i| {

@@ -98,3 +98,61 @@ pub const HALF_ANGLE_TOLERANCE: f64 = 1e-5;
 /// with a kink of unbounded curvature, such as Blinn-Phong's cos^s θ_h for s < 1 at θ_h = 90°,
 /// exceed it and are evaluated exactly.
 pub const MAX_HALF_ANGLE_ENTRIES: usize = 1 << 16;
+
+/// The first and the last band of the search for a BRDF's orders (F_B, P_B)
+/// ([`super::model::Model::coefficients_for_epsilon`]): F starts here and doubles until the
+/// energy rule is met. R&H 2002 App. C's values, which its measured BRDFs all meet by F = 128.
+pub const FIRST_SEARCH_BAND: usize = 16;
+/// See [`FIRST_SEARCH_BAND`]: the search ends here, with an error if the rule is not met.
+pub const LAST_SEARCH_BAND: usize = 128;
+
+/// Samples of ρ(θ_h) over [0, π] that find where a [`super::model::HalfAngleLobe`] starts (where
+/// ρ falls below 10⁻¹² of its peak): one every 0.044°, so that even Torrance-Sparrow at
+/// σ = 0.005 has its support sampled about 34 times (derived, not measured:
+/// `docs/prefilter-tuning.md`).
+pub const HALF_ANGLE_SCAN_STEPS: usize = 4096;
+
+/// Panels in γ ∈ [0, π] of [`super::truncation::radial_truncation`]'s cumulative integral, each
+/// with a 4-point Gauss rule: node spacing about π/2000, chosen to be as fine near the axis as
+/// the 2 000-node rule in cos γ it replaced (`docs/prefilter-tuning.md`).
+pub const TRUNCATION_PANELS: usize = 512;
+
+/// Sample rows in θ_i of the cone table ([`super::truncation::CutoffTable`]) per view-angle bin,
+/// midpoints over [0, π]; with [`CUTOFF_PHI_SAMPLES`], set when the table was written, with no
+/// measurement recorded (`docs/prefilter-tuning.md`).
+pub const CUTOFF_THETA_SAMPLES: usize = 512;
+/// See [`CUTOFF_THETA_SAMPLES`]: sample columns in φ_i over [0, π] (ρ̂ is even in φ_i).
+pub const CUTOFF_PHI_SAMPLES: usize = 24;
+
+/// View angles (degrees) at which the view residual r(θ_o) is tabulated
+/// ([`super::orders`]'s texel rule for view-dependent BRDFs): every 10°, so the valid range
+/// recorded in a document is a whole multiple of 10°.
+pub const VIEW_ANGLES: &[f64] = &[
+    0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 110.0, 120.0, 130.0, 140.0, 150.0, 160.0, 170.0,
+    180.0,
+];
+
+/// Nodes per axis of the grid (Gauss–Legendre in cos θ_i × midpoints in φ_i) on which the view
+/// residual r(θ_o) measures ρ̂ against its truncated expansion; set with the texel rule, with no
+/// measurement recorded (`docs/prefilter-tuning.md`).
+pub const VIEW_SAMPLE_NODES: usize = 192;
+
+/// Bins in cos θ_i ∈ [−1, 1] of the table from which an SHRM file's bright part is read (the
+/// lobe projected on the view basis per bin), and the quadrature per bin: this many
+/// Gauss–Legendre nodes in cos θ_o and as many points in φ_o. Set when the table was written,
+/// with no measurement recorded (`docs/prefilter-tuning.md`).
+pub const VIEW_PROJECTION_BINS: usize = 1024;
+/// See [`VIEW_PROJECTION_BINS`].
+pub const VIEW_PROJECTION_NODES: usize = 96;
+
+/// Steps across texel edges the view frame's lookup ([`super::view_axis`]'s `TexelLocator`)
+/// walks from the previous lookup's texel before it computes the direction's angles instead:
+/// neighbouring lookups of the rotation land within a texel or two of each other. Set when the
+/// locator was written, with no measurement of other values recorded (`docs/prefilter-tuning.md`);
+/// a walk and the angles can disagree within f32 rounding of an edge, so it may move bits.
+pub const LOCATOR_MAX_STEPS: usize = 2;
+
+/// The most bright sources whose surroundings `--verify` checks (`super::verify`), which share a
+/// quarter of the checked texels among them; set with `--verify`, with no measurement recorded
+/// (`docs/prefilter-tuning.md`).
+pub const VERIFY_SOURCES: usize = 4;

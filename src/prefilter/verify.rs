@@ -7,7 +7,7 @@
 //! bake and the environment alone, deterministically (no random numbers, no dependence on the
 //! thread count), in this order:
 //!
-//! 1. **Beside the brightest sources** (a quarter, rounded up): up to [`MAX_SOURCES`] of the
+//! 1. **Beside the brightest sources** (a quarter, rounded up): up to [`VERIFY_SOURCES`] of the
 //!    brightest environment texels at least a cone apart. Around each, the map texels within the
 //!    lobe's cone angle θ* (the texels whose exact value sees the source), sorted by their angle
 //!    from it and taken at even steps: the texel at the source's direction first, then every ring
@@ -29,7 +29,7 @@
 
 use super::model::Model;
 use super::pipeline::{AngularIntegral, AngularSettings, PrefilterError};
-use super::tuning::ANGULAR_EPSILON;
+use super::tuning::{ANGULAR_EPSILON, VERIFY_SOURCES};
 use crate::envmap::bright::{luminance, MEAN_MULTIPLE};
 use crate::envmap::EnvMap;
 use crate::io::RgbImage;
@@ -41,8 +41,6 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::limits::MAX_VERIFY_TEXELS;
-/// The most bright sources whose surroundings are checked.
-pub const MAX_SOURCES: usize = 4;
 
 /// Errors of the verification.
 #[derive(Debug, thiserror::Error)]
@@ -309,7 +307,7 @@ impl Picker {
     }
 }
 
-/// Up to [`MAX_SOURCES`] directions of the brightest texels of the lat-long `env` (luminance:
+/// Up to [`VERIFY_SOURCES`] directions of the brightest texels of the lat-long `env` (luminance:
 /// the mean of RGB), each more than `reach` from the others; after the brightest, only texels
 /// at least [`MEAN_MULTIPLE`] × the mean luminance count as sources.
 fn brightest_sources(env: &EnvMap, reach: f64) -> Vec<DVec3> {
@@ -325,7 +323,7 @@ fn brightest_sources(env: &EnvMap, reach: f64) -> Vec<DVec3> {
     order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     let mut sources: Vec<DVec3> = Vec::new();
     for (y, i) in order {
-        if sources.len() == MAX_SOURCES || (!sources.is_empty() && y < bright) {
+        if sources.len() == VERIFY_SOURCES || (!sources.is_empty() && y < bright) {
             break;
         }
         let d = grid.texel_direction(i % image.width, i / image.width);

@@ -34,7 +34,7 @@ use super::angular::ConePyramid;
 use super::bright_pass::BrightPass;
 use super::model::{Model, PreparedView};
 use super::truncation::CutoffTable;
-use super::tuning::{self, CONE_SAMPLES, REFINE, SUPERSAMPLE};
+use super::tuning::{self, CONE_SAMPLES, LOCATOR_MAX_STEPS, REFINE, SUPERSAMPLE};
 use crate::envmap::zonal::{inverse_row, row_spectra, EvenSpectrum, SubRow, TexelRule};
 use crate::io::RgbImage;
 use crate::limits::MAX_ZONAL_TEXELS;
@@ -178,9 +178,6 @@ struct TexelLocator {
 }
 
 impl TexelLocator {
-    /// Steps a walk may take before the angles are computed instead.
-    const MAX_STEPS: usize = 2;
-
     fn new(grid: LatLong) -> Self {
         let row_edges = (0..=grid.height).map(|y| (PI * y as f64 / grid.height as f64).cos() as f32).collect();
         let column_edges = (0..=grid.width)
@@ -214,18 +211,18 @@ impl TexelLocator {
         while !after(x) {
             x = (x + w - 1) % w;
             steps += 1;
-            if steps > Self::MAX_STEPS {
+            if steps > LOCATOR_MAX_STEPS {
                 return self.by_angles(d);
             }
         }
         while after(x + 1) {
             x = (x + 1) % w;
             steps += 1;
-            if steps > Self::MAX_STEPS {
+            if steps > LOCATOR_MAX_STEPS {
                 return self.by_angles(d);
             }
         }
-        if steps > Self::MAX_STEPS {
+        if steps > LOCATOR_MAX_STEPS {
             return self.by_angles(d);
         }
         (x, y)

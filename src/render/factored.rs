@@ -245,7 +245,8 @@ struct RingLighting<'a> {
 
 /// Widest lat-long map the rings resample a map into (4096 × 2048 texels, 100 MB): finer than
 /// the lighting samples of the finest grid and most samples per cell (256 bins, 8 × 8 samples
-/// per cell: 2048 samples around the hemisphere).
+/// per cell: 2048 samples around the hemisphere). A cap on a working resolution, not a ceiling on
+/// input: a wider map is accepted and resampled to this width.
 const MAX_RING_MAP_WIDTH: f64 = 4096.0;
 
 /// One lighting sample of a ring: the bilinear taps of its direction in the ring's first normal,

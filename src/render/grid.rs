@@ -19,6 +19,7 @@ use crate::brdf::Brdf;
 use crate::envmap::{self, EnvMap, EnvMapError, Layout};
 use crate::ibl::reference::ReferenceError;
 use crate::io::RgbImage;
+use crate::limits::MAX_GRID_CELLS;
 use crate::metrics::{compare, CompareError, Metrics};
 use crate::prefilter::model::ModelError;
 use crate::progress::{NoProgress, Progress};
@@ -29,9 +30,6 @@ use serde::{Deserialize, Serialize};
 pub const DEFAULT_ROUGHNESS: [f64; 5] = [0.2, 0.4, 0.6, 0.8, 1.0];
 /// Default metalness rows: a dielectric and a metal.
 pub const DEFAULT_METALNESS: [f64; 2] = [0.0, 1.0];
-/// At most this many cells (each is rendered twice, the reference at the full cost of the
-/// rendering equation).
-pub const MAX_CELLS: usize = 64;
 
 /// The materials of the grid: every roughness (columns) with every metalness (rows), one base
 /// colour.
@@ -74,9 +72,9 @@ pub enum GridError {
     /// No roughness or no metalness.
     #[error("the grid needs at least one roughness and one metalness")]
     Empty,
-    /// More than [`MAX_CELLS`] cells.
+    /// More than [`MAX_GRID_CELLS`] cells.
     #[error(
-        "{columns} × {rows} cells is more than the {MAX_CELLS} a grid renders (each twice, the reference at full cost)"
+        "{columns} × {rows} cells is more than the {MAX_GRID_CELLS} a grid renders (each twice, the reference at full cost)"
     )]
     TooManyCells {
         /// Roughness columns.
@@ -113,7 +111,7 @@ impl MaterialGrid {
         if self.roughness.is_empty() || self.metalness.is_empty() {
             return Err(GridError::Empty);
         }
-        if self.roughness.len() * self.metalness.len() > MAX_CELLS {
+        if self.roughness.len() * self.metalness.len() > MAX_GRID_CELLS {
             return Err(GridError::TooManyCells { columns: self.roughness.len(), rows: self.metalness.len() });
         }
         if let Some(r) = self.roughness.iter().find(|r| !(**r > 0.0 && **r <= 1.0)) {

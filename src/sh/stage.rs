@@ -41,9 +41,6 @@ use crate::progress::Progress;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-/// Highest order an ε search considers.
-pub const MAX_EPSILON_ORDER: usize = 256;
-
 /// What `sh-project` computes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Config {

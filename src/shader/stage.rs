@@ -6,6 +6,7 @@ use super::report::{self, Histogram, Verification, WidthStats};
 use super::sampler::{self, Arith, Domain, Raster, SampleConfig};
 use super::{ParamValue, Shader, ShaderError};
 use crate::io::{Document, Provenance, RgbImage};
+use crate::limits::MAX_QUADTREE_DEPTH;
 use crate::progress::Progress;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -14,8 +15,6 @@ use std::time::Instant;
 pub const STATS_FORMAT: &str = "prtkit.shader-stats";
 /// Its schema version.
 pub const STATS_VERSION: u32 = 1;
-/// Deepest quadtree level (4^16 nodes).
-pub const MAX_DEPTH: u32 = 16;
 
 /// What `sample-shader` computes.
 #[derive(Clone, Debug)]
@@ -140,8 +139,8 @@ pub enum Error {
     /// The tolerance is not a finite number ≥ 0.
     #[error("the tolerance must be a finite number >= 0, got {0}")]
     Tolerance(f64),
-    /// The subdivision would go deeper than [`MAX_DEPTH`].
-    #[error("a subdivision depth of {0} is too deep (at most {MAX_DEPTH}: 4^{MAX_DEPTH} nodes)")]
+    /// The subdivision would go deeper than [`MAX_QUADTREE_DEPTH`].
+    #[error("a subdivision depth of {0} is too deep (at most {MAX_QUADTREE_DEPTH}: 4^{MAX_QUADTREE_DEPTH} nodes)")]
     Depth(u32),
     /// Evaluating the shader failed.
     #[error(transparent)]
@@ -155,7 +154,7 @@ pub fn run(config: &Config, shader: &Shader, progress: &dyn Progress) -> Result<
     }
     let res = config.resolution;
     let max_depth = config.max_depth.unwrap_or_else(|| (res.0.max(res.1) as f64).log2().ceil() as u32);
-    if max_depth > MAX_DEPTH {
+    if max_depth > MAX_QUADTREE_DEPTH {
         return Err(Error::Depth(max_depth));
     }
     let arithmetics = if config.arithmetics.is_empty() { vec![Arith::Affine] } else { config.arithmetics.clone() };

@@ -24,7 +24,8 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 use rayon::prelude::*;
 
-/// Most fit-and-assign rounds.
+/// Most fit-and-assign rounds: a cap of the iteration that no input sets (the ceilings on what
+/// input may ask for are in `crate::limits`).
 pub const MAX_ITERATIONS: usize = 30;
 /// A round that lowers the total squared error by less than this fraction of it ends the
 /// iteration.
