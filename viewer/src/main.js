@@ -527,19 +527,14 @@ function updateShUniforms() {
   // by −γ about three's +Y in the mirrored (three) frame.
   scene.backgroundRotation.set(0, state.frame === 'three' ? -turn : turn, 0);
 }
-// Test hook: the code table decoded on the GPU by the emitted decoder, one texel per code,
-// into an RGBA32F target; returns the xyz as a flat array (row 0 = the first W codes).
-function decodedNormals() {
-  const tex = docs.codes.texture;
-  const { width, height } = tex.image;
+// Test hooks that run a fragment shader once per texel of a width × height RGBA32F target (a
+// full-screen triangle; gl_FragCoord.xy is the texel) and read the floats back, row 0 first.
+function renderFloats(fragmentShader, uniforms, width, height) {
   const target = new THREE.WebGLRenderTarget(width, height, { type: THREE.FloatType, format: THREE.RGBAFormat, depthBuffer: false });
   const material = new THREE.ShaderMaterial({
-    uniforms: { codes: { value: tex } },
+    uniforms,
     vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
-    fragmentShader: `${docs.decoder}
-      precision highp usampler2D;
-      uniform usampler2D codes;
-      void main() { gl_FragColor = vec4(prtkit_decode_normal(texelFetch(codes, ivec2(gl_FragCoord.xy), 0).r), 1.0); }`,
+    fragmentShader,
   });
   const quad = new THREE.Mesh(skyGeometry, material);
   quad.frustumCulled = false;
@@ -551,9 +546,42 @@ function decodedNormals() {
   renderer.readRenderTargetPixels(target, 0, 0, width, height, buf);
   renderer.setRenderTarget(null);
   target.dispose();
+  material.dispose();
+  return buf;
+}
+// Test hook: the code table decoded on the GPU by the emitted decoder, one texel per code;
+// returns the xyz as a flat array (row 0 = the first W codes).
+function decodedNormals() {
+  const tex = docs.codes.texture;
+  const { width, height } = tex.image;
+  const buf = renderFloats(`${docs.decoder}
+      precision highp usampler2D;
+      uniform usampler2D codes;
+      void main() { gl_FragColor = vec4(prtkit_decode_normal(texelFetch(codes, ivec2(gl_FragCoord.xy), 0).r), 1.0); }`,
+  { codes: { value: tex } }, width, height);
   const xyz = new Array(width * height * 3);
   for (let i = 0; i < width * height; i++) for (let c = 0; c < 3; c++) xyz[3 * i + c] = buf[4 * i + c];
   return xyz;
+}
+// Test hook: a glossy bake's h_k lookup as the emitted snippet does it (its own
+// prtkitGlossyCosThetaPhi, prtkitGlossyTaps and prtkitGlossyH, reading the page's h texture) at
+// each direction w of the normal's frame ([x, y, z] in prtkit's axes), for every term:
+// returns values[k][i] = h_k(w_i), evaluated in the shader's float precision.
+function glossyLookup(directions) {
+  const D = directions.length, K = docs.glossy.h.image.height / docs.glossy.h.image.width;
+  const dirs = new THREE.DataTexture(new Float32Array(directions.flatMap((w) => [...w, 0])), D, 1, THREE.RGBAFormat, THREE.FloatType);
+  dirs.minFilter = dirs.magFilter = THREE.NearestFilter; // read by texelFetch only
+  dirs.needsUpdate = true;
+  const buf = renderFloats(`${docs.glossy.snippet}
+      uniform sampler2D directions;
+      void main() {
+        ivec2 p = ivec2(gl_FragCoord.xy); // x: the direction, y: the term
+        vec3 w = texelFetch(directions, ivec2(p.x, 0), 0).xyz;
+        gl_FragColor = vec4(prtkitGlossyH(p.y, prtkitGlossyTaps(prtkitGlossyCosThetaPhi(w))), 0.0, 0.0, 1.0);
+      }`,
+  { directions: { value: dirs }, prtkitGlossyHTexture: { value: docs.glossy.h } }, D, K);
+  dirs.dispose();
+  return Array.from({ length: K }, (_, k) => Array.from({ length: D }, (_, i) => buf[4 * (k * D + i)]));
 }
 
 function updateUniforms() {
@@ -740,6 +768,7 @@ window.prtkit = {
   pixels,
   bench,
   decodedNormals,
+  glossyLookup,
   rotateShZ,
   sh: () => docs.sh?.coefficients,
   state: () => ({ ...state, ibl: q.get('ibl'), sh: q.get('sh'), model: q.get('model'), glb: q.get('glb'), dropped: [...dropped.urls.keys()] }),

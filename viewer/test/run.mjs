@@ -139,7 +139,7 @@ const browser = await puppeteer.launch({
 });
 const pageErrors = [];
 let gpuName = '';
-async function view(params, { bench = 0, evaluate = null } = {}) {
+async function view(params, { bench = 0, evaluate = null, arg = null } = {}) {
   const page = await browser.newPage();
   const logs = [];
   page.on('console', (m) => {
@@ -156,7 +156,7 @@ async function view(params, { bench = 0, evaluate = null } = {}) {
   const ok = await page.evaluate(() => window.prtkit.ready);
   const pixels = ok ? await page.evaluate(() => window.prtkit.pixels()) : null;
   const ms = ok && bench ? await page.evaluate((n) => window.prtkit.bench(n), bench) : null;
-  const value = ok && evaluate ? await page.evaluate(evaluate) : null;
+  const value = ok && evaluate ? await page.evaluate(evaluate, arg) : null;
   if (!gpuName && ok) gpuName = await page.evaluate(() => window.prtkit.gpu());
   const errors = await page.evaluate(() => window.prtkit.errors.slice());
   await page.close();
@@ -464,6 +464,104 @@ async function glossyPrtTests() {
   figures.prt_glossy = fig;
 }
 
+// ---- The glossy snippet's h_k lookup itself against the documented rule --------------------------
+// The image tests above cannot see every fault of the lookup: neighbouring φ columns of h differ
+// little, so the last column's neighbour clamped instead of wrapped to column 0 (the seam at
+// φ = 0) moves a pixel by a fraction of a code. Here the page runs the emitted snippet's own
+// prtkitGlossyCosThetaPhi, prtkitGlossyTaps and prtkitGlossyH (window.prtkit.glossyLookup) for
+// chosen directions of the normal's frame into an RGBA32F target, and each value is compared with
+// the rule docs/transfer.md ("Glossy bakes") states, evaluated here in double precision from the
+// .glb's glossy.h blob: bilinear between the cell centres cos θ_j = 1 − (j + ½)·span/N and
+// φ_k = (k + ½)·2π/N, φ wrapping, cos θ clamped to the first and last rows (a hemisphere grid's
+// views below the horizon read the horizon row), and within half a bin of a pole a linear blend
+// into the mean of the pole's ring. The reference is written in another form than the snippet's
+// index arithmetic: tent weights max(0, 1 − distance/bin) over every row and column, φ's distance
+// taken around the circle.
+
+// The glossy.h table of a transfer .glb (read from the file, not through the page).
+function glossyTable(glbPath) {
+  const b = readFileSync(glbPath);
+  const jsonLength = b.readUInt32LE(12);
+  const gltf = JSON.parse(b.subarray(20, 20 + jsonLength).toString());
+  const bin = 20 + jsonLength + 8; // the BIN chunk's data, after its length and type
+  const extras = gltf.meshes[0].extras;
+  const g = extras['prtkit.transfer'].glossy, blob = extras['prtkit.blobs']['glossy.h'];
+  const start = bin + (gltf.bufferViews[blob.bufferView].byteOffset ?? 0);
+  const h = Array.from({ length: blob.count }, (_, i) => b.readFloatLE(start + 4 * i));
+  return { N: g.resolution, K: g.terms, sphere: g.domain === 'sphere', h };
+}
+// h_t(w) for every term t by the documented rule; h[t·N² + j·N + k] is h_t of cell (j, k).
+function glossyReference({ N, K, sphere, h }, w) {
+  const TAU = 2 * Math.PI, dz = (sphere ? 2 : 1) / N, dphi = TAU / N;
+  const zc = (j) => 1 - (j + 0.5) * dz;
+  const z = Math.max(Math.min(w[2], 1), sphere ? -1 : 0);
+  const phi = w[0] === 0 && w[1] === 0 ? 0 : (Math.atan2(w[1], w[0]) + TAU) % TAU;
+  let pole = 0, poleRow = 0; // the pole's weight (1 at the pole, 0 half a bin away) and its ring
+  if (z > zc(0)) pole = (z - zc(0)) / (dz / 2);
+  else if (sphere && z < zc(N - 1)) [pole, poleRow] = [(zc(N - 1) - z) / (dz / 2), N - 1];
+  const zr = Math.min(Math.max(z, zc(N - 1)), zc(0));
+  const tent = (d, step) => Math.max(0, 1 - Math.abs(d) / step);
+  const around = (d) => { const a = ((d % TAU) + TAU) % TAU; return Math.min(a, TAU - a); };
+  const wRow = Array.from({ length: N }, (_, j) => tent(zr - zc(j), dz));
+  const wCol = Array.from({ length: N }, (_, k) => tent(around(phi - (k + 0.5) * dphi), dphi));
+  return Array.from({ length: K }, (_, t) => {
+    let ring = 0, mean = 0;
+    for (let j = 0; j < N; j++) for (let k = 0; k < N; k++) ring += wRow[j] * wCol[k] * h[t * N * N + j * N + k];
+    for (let k = 0; k < N; k++) mean += h[t * N * N + poleRow * N + k] / N;
+    return (1 - pole) * ring + pole * mean;
+  });
+}
+// Directions (f32, as the page gets them): φ within half a column either side of the seam
+// (between column N − 1 and column 0) and three φ away from it, at rows mid-table, within half a
+// bin of the top pole (and on it), near the bottom (the sphere's pole; the hemisphere's horizon
+// row, the horizon and below it); then 40 pseudo-random directions.
+function glossyDirections(N, sphere) {
+  const dz = (sphere ? 2 : 1) / N, bin = (2 * Math.PI) / N;
+  const at = (z, phi) => { const s = Math.sqrt(1 - z * z); return [s * Math.cos(phi), s * Math.sin(phi), z].map(Math.fround); };
+  const phis = [...[0, 0.05, 0.2, 0.45, -0.05, -0.2, -0.45].map((f) => f * bin), 1.3, 2.9, 4.4];
+  const top = [1, 1 - 0.1 * dz, 1 - 0.4 * dz, 1 - 0.55 * dz];
+  const bottom = sphere ? top.map((z) => -z) : [0.6 * dz, 0.4 * dz, 0, -0.3];
+  const mid = sphere ? [0.7, 0.1, -0.45] : [0.83, 0.5, 0.21];
+  const dirs = [...mid, ...top, ...bottom].flatMap((z) => phis.map((phi) => at(z, phi)));
+  let seed = 12345;
+  const rand = () => (seed = (seed * 1103515245 + 12345) % 2147483648) / 2147483648;
+  for (let i = 0; i < 40; i++) dirs.push(at(sphere ? 2 * rand() - 1 : rand(), 2 * Math.PI * rand()));
+  return dirs;
+}
+async function glossyLookupTests() {
+  const { dir, sky } = skyIn('prt-lookup');
+  run('sh-project', [sky, '-F', '1', '-o', join(dir, 'sky1.sh.json'), '-q']);
+  const fig = {};
+  // The image tests' grid (Phong s = 8, 16² hemisphere, cosine) and a 12² sphere grid (both poles).
+  for (const g of [{ name: 'hemisphere16', args: ['--domain', 'hemisphere', '--resolution', '16', '--cosine'] },
+    { name: 'sphere12', args: ['--domain', 'sphere', '--resolution', '12'] }]) {
+    const glb = join(dir, `${g.name}.glb`), glsl = join(dir, `${g.name}.glsl`);
+    run('factor-brdf', ['phong:s=8', ...g.args, '--factors', join(dir, `${g.name}.exr`), '--terms', '8', '-o', join(dir, `${g.name}.json`), '-q']);
+    run('transfer', ['testdata/meshes/bowl-ball.obj', '-n', '2', '--rays', '16', '--factors', join(dir, `${g.name}.json`), '-K', '6',
+      '--glb', glb, '-o', join(dir, `${g.name}-bake.json`), '--glsl', glsl, '-q']);
+    const table = glossyTable(glb), dirs = glossyDirections(table.N, table.sphere);
+    const got = (await view({ mode: 'prt', glb: url(glb), glsl: url(glsl), sh: url(join(dir, 'sky1.sh.json')), res: '16x16' },
+      { evaluate: (d) => window.prtkit.glossyLookup(d), arg: dirs })).value;
+    // Tolerance: f32 arithmetic in the shader. φ from a float atan is good to about 1e-6 rad,
+    // which moves the bilinear weights by 2.5e-6·N/16 of a column, i.e. the value by that much of
+    // the largest difference between neighbours (≤ 2 max|h_t|); the weights and the sum of at
+    // most N + 4 products add a few float ulps. So |Δ| ≤ 1e-5 · max|h_t|, term by term.
+    let worst = 0, worstAt = '';
+    dirs.forEach((w, i) => {
+      const want = glossyReference(table, w);
+      for (let t = 0; t < table.K; t++) {
+        const scale = Math.max(...table.h.slice(t * table.N ** 2, (t + 1) * table.N ** 2).map(Math.abs));
+        const e = Math.abs(got[t][i] - want[t]) / scale;
+        if (e > worst) [worst, worstAt] = [e, `term ${t}, w = (${w.map((x) => x.toFixed(4)).join(', ')})`];
+      }
+    });
+    fig[g.name] = { values: dirs.length * table.K, max_rel_error: worst, at: worstAt };
+    check(`glossy snippet's h_k lookup (${table.N}² ${table.sphere ? 'sphere' : 'hemisphere'} grid, K = ${table.K}) vs the documented rule, ${dirs.length} directions (φ seam, poles, horizon)`,
+      worst <= 1e-5, `max |Δ| ${worst.toExponential(2)} of max|h_t| (≤ 1e-5) at ${worstAt}`);
+  }
+  figures.glossy_lookup = fig;
+}
+
 // ---- Compressed PRT (mode=prt, transfer --clusters C --pca P) against render --shading transfer --
 // The page relights a clustered-PCA bake in compressed form (per frame the lighting against each
 // cluster's mean and directions on the CPU, then P multiply-adds per vertex and term in the vertex
@@ -741,7 +839,8 @@ async function dropTests() {
   figures.drop = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
+// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|lookup|cpca runs one group (development; prt includes glossy, lookup
+// and cpca; glossy includes lookup); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
   if (!only || only === 'ibl') {
@@ -846,6 +945,7 @@ try {
   if (!only || only === 'sh') await shTests();
   if (!only || only === 'prt') await prtTests();
   if (!only || only === 'prt' || only === 'glossy') await glossyPrtTests();
+  if (!only || only === 'prt' || only === 'glossy' || only === 'lookup') await glossyLookupTests();
   if (!only || only === 'prt' || only === 'cpca') await cpcaPrtTests();
 } catch (e) {
   check('viewer pages', false, e.stack ?? String(e));
