@@ -26,7 +26,7 @@
 //   (these four: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
 //    rotate=DEG turns the lighting about the up axis: SH coefficients rotated every frame)
 //   test=1            no UI, no animation loop: the test script drives window.prtkit
-// Files dropped on the page open as their URLs would (object URLs; see openFiles).
+// Files and folders dropped on the page open as their URLs would (object URLs; see openFiles).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
@@ -367,7 +367,7 @@ async function setupShMode() {
   if (mode === 'shrm') {
     const url = q.get('shrm');
     if (!url) throw new Error('mode=shrm needs shrm=URL (a prtkit.shrm document from prefilter --shrm)');
-    docs.shrm ??= await loadPrtkitShrm(url);
+    docs.shrm ??= await loadPrtkitShrm(url, dropped.urls.size ? dropped.urlOf : undefined);
     document.getElementById('source').textContent = docs.shrm.doc.brdf;
   }
   if (mode === 'normals') {
@@ -655,15 +655,18 @@ async function setup() {
 }
 
 // --- files dropped on the page ---------------------------------------------------------------
-// Each dropped file gets an object URL; the page then opens them as it opens URLs, in the mode
-// they call for:
-//   ibl.json (a prtkit.ibl manifest) and the files it names → the bake (mode grid, or the current
-//     mode if it already shows a bake: sphere, sky, model);
-//   a prtkit.sh document (sh-project) → mode irradiance (with a transfer .glb: its lighting);
+// Each dropped file, and every file under a dropped folder, gets an object URL; the page then
+// opens them as it opens URLs, in the mode they call for (the first of these that applies):
 //   a .glb whose mesh holds prtkit.transfer extras → mode prt (with the dropped .sh.json and, for a
 //     glossy bake, the dropped .glsl snippet);
 //   any other .gltf/.glb or an .obj → mode model, lit by the bake dropped with it or already open
-//     (a .gltf's .bin and textures dropped with it are found by name).
+//     (a .gltf's .bin and textures dropped with it are found by name);
+//   ibl.json (a prtkit.ibl manifest) and the files it names → the bake (mode grid, or the current
+//     mode if it already shows a bake: sphere, sky, model);
+//   a prtkit.normal-codes report (encode-normals) with the codes it names, the GLSL decoder and a
+//     prtkit.sh document → mode normals;
+//   a prtkit.shrm document (prefilter --shrm) with the EXR it names → mode shrm;
+//   a prtkit.sh document (sh-project) → mode irradiance.
 const IBL_MODES = ['grid', 'sphere', 'sky', 'model'];
 const dropped = {
   urls: new Map(), // file name → object URL
@@ -677,27 +680,58 @@ const dropped = {
     return manager;
   },
 };
-async function openFiles(files) {
-  for (const u of dropped.urls.values()) URL.revokeObjectURL(u);
-  dropped.urls = new Map(files.map((f) => [f.name, URL.createObjectURL(f)]));
+// What a drop holds, each found by its content (JSON by its `format`, a .glsl by the function it
+// defines, a .glb by its prtkit.transfer extras), the first of a kind in the drop's order.
+async function classifyDrop(files) {
   const ext = (f) => f.name.toLowerCase().split('.').pop();
-  const jsonFormat = async (f) => { try { return JSON.parse(await f.text()).format; } catch { return null; } };
-  const formats = new Map();
-  for (const f of files) if (ext(f) === 'json') formats.set(f.name, await jsonFormat(f));
-  const manifest = files.find((f) => formats.get(f.name) === 'prtkit.ibl');
-  const sh = files.find((f) => formats.get(f.name) === 'prtkit.sh');
-  const glsl = files.find((f) => ext(f) === 'glsl');
-  let prt = null, modelFile = null;
+  const text = new Map();
+  for (const f of files) if (['json', 'glsl'].includes(ext(f))) text.set(f, await f.text());
+  const json = (f) => { try { return JSON.parse(text.get(f)); } catch { return null; } };
+  const byFormat = (format) => files.find((f) => ext(f) === 'json' && json(f)?.format === format);
+  const glslWith = (name) => files.find((f) => ext(f) === 'glsl' && text.get(f).includes(name));
+  const found = {
+    manifest: byFormat('prtkit.ibl'), sh: byFormat('prtkit.sh'), shrm: byFormat('prtkit.shrm'), codesReport: byFormat('prtkit.normal-codes'),
+    glossyGlsl: glslWith('prtkitGlossyRadiance'), decoder: glslWith('prtkit_decode_normal'), prt: null, model: null, json,
+  };
   for (const f of files.filter((f) => ['glb', 'gltf', 'obj'].includes(ext(f)))) {
     let isPrt = false;
     if (ext(f) === 'glb') {
       const gltf = await new GLTFLoader().loadAsync(dropped.urls.get(f.name)).catch(() => null);
       gltf?.scene.traverse((o) => { if (o.isMesh && o.userData['prtkit.transfer']) isPrt = true; });
     }
-    if (isPrt) prt = f; else modelFile ??= f;
+    if (isPrt) found.prt ??= f; else found.model ??= f;
   }
-  if (!manifest && !sh && !prt && !modelFile) throw new Error(`dropped ${files.map((f) => f.name).join(', ')}: no ibl.json, prtkit.sh document, .glb, .gltf or .obj among them`);
-  for (const k of ['sh', 'glb', 'glsl', 'model', 'type']) q.delete(k);
+  return found;
+}
+// A dropped file named by a document (its last path component), or a clear error.
+function droppedBeside(doc, path, what) {
+  const name = path.split('/').pop();
+  const u = dropped.urls.get(name);
+  if (!u) throw new Error(`dropped ${doc.name}: ${what} ${name} was not dropped with it`);
+  return u;
+}
+// The query an encode-normals drop stands for: its codes (the file the report names), the report,
+// the GLSL decoder and a prtkit.sh document; the table is taken as lat-long 2:1 (count = 2H²).
+function normalsQuery(found) {
+  const report = found.json(found.codesReport), H = Math.round(Math.sqrt(report.count / 2));
+  if (2 * H * H !== report.count) throw new Error(`dropped ${found.codesReport.name}: ${report.count} codes are not a 2:1 lat-long table (2H² codes); open it by URL with size=WxH`);
+  if (!found.decoder) throw new Error(`dropped ${found.codesReport.name}: no GLSL decoder (encode-normals --emit-decoder glsl) dropped with it`);
+  if (!found.sh) throw new Error(`dropped ${found.codesReport.name}: no prtkit.sh document (sh-project) to light the normals dropped with it`);
+  return { codes: droppedBeside(found.codesReport, report.codes ?? '', 'the codes'), report: dropped.urls.get(found.codesReport.name),
+    decoder: dropped.urls.get(found.decoder.name), size: `${2 * H}x${H}` };
+}
+async function openFiles(files) {
+  for (const u of dropped.urls.values()) URL.revokeObjectURL(u);
+  dropped.urls = new Map(files.map((f) => [f.name, URL.createObjectURL(f)]));
+  const found = await classifyDrop(files);
+  const { manifest, sh, shrm, codesReport, prt } = found;
+  if (!manifest && !sh && !shrm && !codesReport && !prt && !found.model) {
+    throw new Error(`dropped ${files.map((f) => f.name).join(', ')}: no ibl.json, prtkit.sh, prtkit.shrm or prtkit.normal-codes document, .glb, .gltf or .obj among them`);
+  }
+  if (found.model && !prt && !manifest && !ibl) {
+    throw new Error(`dropped ${found.model.name}: a model is lit by an ibl bake; drop it with the bake's folder or files, or open a bake first`);
+  }
+  for (const k of ['sh', 'glb', 'glsl', 'model', 'type', 'shrm', 'codes', 'report', 'decoder', 'size']) q.delete(k);
   for (const k of Object.keys(docs)) delete docs[k];
   model.key = '';
   if (manifest) {
@@ -710,13 +744,20 @@ async function openFiles(files) {
   if (prt) {
     state.mode = 'prt';
     q.set('glb', dropped.urls.get(prt.name));
-    if (glsl) q.set('glsl', dropped.urls.get(glsl.name));
-  } else if (modelFile) {
+    if (found.glossyGlsl) q.set('glsl', dropped.urls.get(found.glossyGlsl.name));
+  } else if (found.model) {
     state.mode = 'model';
-    q.set('model', dropped.urls.get(modelFile.name));
-    q.set('type', ext(modelFile));
+    q.set('model', dropped.urls.get(found.model.name));
+    q.set('type', found.model.name.toLowerCase().split('.').pop());
   } else if (manifest) {
     if (!IBL_MODES.includes(state.mode) || state.mode === 'model') state.mode = 'grid';
+  } else if (codesReport) {
+    state.mode = 'normals';
+    for (const [k, v] of Object.entries(normalsQuery(found))) q.set(k, v);
+  } else if (shrm) {
+    state.mode = 'shrm';
+    droppedBeside(shrm, found.json(shrm).shrm_file ?? '', 'its EXR');
+    q.set('shrm', dropped.urls.get(shrm.name));
   } else if (sh) state.mode = 'irradiance';
   if (!q.has('eye')) placeCamera();
   if (!test) document.getElementById('mode').value = state.mode;
@@ -724,12 +765,35 @@ async function openFiles(files) {
   draw();
   return true;
 }
+// A drop's items, taken while the event is dispatched (a DataTransfer is emptied after it): a
+// folder as its FileSystemDirectoryEntry (webkitGetAsEntry), a file as its File.
+function dropEntries(dataTransfer) {
+  const items = [...(dataTransfer?.items ?? [])].filter((i) => i.kind === 'file');
+  if (!items.length) return [...(dataTransfer?.files ?? [])];
+  return items.map((i) => {
+    const entry = i.webkitGetAsEntry?.();
+    return entry?.isDirectory ? entry : i.getAsFile();
+  }).filter(Boolean);
+}
+// Every file under a dropped folder, subfolders included, each folder's entries in name order
+// (readEntries returns them a batch at a time, in no set order, until an empty batch).
+async function filesUnder(entry) {
+  if (entry.isFile) return [await new Promise((ok, fail) => entry.file(ok, fail))];
+  const reader = entry.createReader(), entries = [];
+  for (let batch; (batch = await new Promise((ok, fail) => reader.readEntries(ok, fail))).length;) entries.push(...batch);
+  entries.sort((a, b) => (a.name < b.name ? -1 : a.name > b.name ? 1 : 0));
+  const files = [];
+  for (const e of entries) files.push(...(await filesUnder(e)));
+  return files;
+}
 addEventListener('dragover', (e) => e.preventDefault());
 addEventListener('drop', (e) => {
   e.preventDefault();
-  const files = [...(e.dataTransfer?.files ?? [])];
-  if (!files.length) return;
-  window.prtkit.ready = openFiles(files).catch((err) => { report(err.stack ?? err); return false; });
+  const entries = dropEntries(e.dataTransfer);
+  if (!entries.length) return;
+  window.prtkit.ready = Promise.all(entries.map((x) => (x.isDirectory ? filesUnder(x) : [x])))
+    .then((lists) => openFiles(lists.flat()))
+    .catch((err) => { report(err.stack ?? err); return false; });
 });
 
 function draw() {

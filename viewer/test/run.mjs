@@ -4,7 +4,7 @@
 // default ../shared/testdata/envmaps/uffizi_ict_latlong_256x128.hdr, else a synthetic sky made
 // with sample-shader). Screenshots and figures go to out/viewer/. Last line: "N passed, M failed".
 import { execFileSync } from 'node:child_process';
-import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, mkdtempSync, readdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, relative, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -172,6 +172,23 @@ const toPage = (e, frame) => (frame === 'three' ? mul(THREE_FROM_GL, mul(M, e)) 
 const FOV = 32, RES = '160x160';
 
 
+// DIR/sphere.codes (encode-normals, onv-range, 32 bits), its report sphere.codes.json and
+// DIR/decoder.glsl (--emit-decoder glsl) of a W×H lat-long table of the unit sphere's own normals
+// in prtkit's frame (texel (x, y) at φ = 2π(x + ½)/W, θ = π(y + ½)/H); returns the normals.
+function encodeSphereNormals(dir, W, H) {
+  const normals = new Float32Array(W * H * 3);
+  for (let y = 0; y < H; y++) {
+    for (let x = 0; x < W; x++) {
+      const t = (Math.PI * (y + 0.5)) / H, p = (2 * Math.PI * (x + 0.5)) / W, i = 3 * (y * W + x);
+      normals[i] = Math.sin(t) * Math.cos(p); normals[i + 1] = Math.sin(t) * Math.sin(p); normals[i + 2] = Math.cos(t);
+    }
+  }
+  writeFileSync(join(dir, 'sphere.f32'), Buffer.from(normals.buffer));
+  run('encode-normals', [join(dir, 'sphere.f32'), '--scheme', 'onv-range', '--bits', '32', '-o', join(dir, 'sphere.codes'), '--report', join(dir, 'sphere.codes.json'), '-q']);
+  writeFileSync(join(dir, 'decoder.glsl'), run('encode-normals', ['--emit-decoder', 'glsl', '--scheme', 'onv-range', '--bits', '32']));
+  return normals;
+}
+
 // A fresh directory out/NAME holding sample-shader's sky, 256×128, as sky.exr.
 function skyIn(name) {
   const dir = join(out, name);
@@ -298,16 +315,7 @@ async function shTests() {
   // 3. Normals from encode-normals: a 256×128 lat-long table of the sphere's own normals (prtkit's
   // frame), 32-bit onv-range codes, decoded in the shader by the emitted GLSL decoder.
   const NW = 256, NH = 128;
-  const normals = new Float32Array(NW * NH * 3);
-  for (let y = 0; y < NH; y++) {
-    for (let x = 0; x < NW; x++) {
-      const t = (Math.PI * (y + 0.5)) / NH, p = (2 * Math.PI * (x + 0.5)) / NW, i = 3 * (y * NW + x);
-      normals[i] = Math.sin(t) * Math.cos(p); normals[i + 1] = Math.sin(t) * Math.sin(p); normals[i + 2] = Math.cos(t);
-    }
-  }
-  writeFileSync(join(dir, 'sphere.f32'), Buffer.from(normals.buffer));
-  run('encode-normals', [join(dir, 'sphere.f32'), '--scheme', 'onv-range', '--bits', '32', '-o', join(dir, 'sphere.codes'), '--report', join(dir, 'sphere.codes.json'), '-q']);
-  writeFileSync(join(dir, 'decoder.glsl'), run('encode-normals', ['--emit-decoder', 'glsl', '--scheme', 'onv-range', '--bits', '32']));
+  const normals = encodeSphereNormals(dir, NW, NH);
   const report = JSON.parse(readFileSync(join(dir, 'sphere.codes.json'), 'utf8'));
   const nParams = { mode: 'normals', sh: shUrl, src: url(sky), codes: url(join(dir, 'sphere.codes')), report: url(join(dir, 'sphere.codes.json')),
     decoder: url(join(dir, 'decoder.glsl')), size: `${NW}x${NH}` };
@@ -778,6 +786,11 @@ async function modelTests() {
 // page, makes File objects, puts them in a DataTransfer and dispatches a synthetic 'drop' on the
 // page. The page must switch to the right mode and draw the same frame as the same files opened
 // by URL (max difference 0), with no error.
+// A folder ({folder: NAME, children: [...]}, children paths or folders) cannot be put in a
+// DataTransfer by a script (the browser makes FileSystemEntry objects only for a user's drop), so
+// a drop with folders is a stub: an event whose dataTransfer.items give webkitGetAsEntry()
+// entries made in the page, a folder's reader handing its entries out two at a time, last first
+// (readEntries gives batches, of up to 100, in no set order), then an empty batch.
 async function dropView(params, files) {
   const page = await browser.newPage();
   const logs = [];
@@ -788,17 +801,40 @@ async function dropView(params, files) {
   await page.goto(`${origin}/viewer/?${new URLSearchParams({ test: '1', ...params })}`, { waitUntil: 'load' });
   await page.evaluate(() => window.prtkit.ready);
   const before = await page.evaluate(() => window.prtkit.state().mode);
-  const ok = await page.evaluate(async (paths) => {
-    const dt = new DataTransfer();
-    for (const p of paths) dt.items.add(new File([await (await fetch(p)).blob()], p.split('/').pop()));
-    document.body.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+  const ok = await page.evaluate(async (items) => {
+    const file = async (p) => new File([await (await fetch(p)).blob()], p.split('/').pop());
+    let dataTransfer;
+    if (items.every((it) => typeof it === 'string')) {
+      dataTransfer = new DataTransfer();
+      for (const p of items) dataTransfer.items.add(await file(p));
+    } else {
+      const entry = async (it) => {
+        if (typeof it === 'string') { const f = await file(it); return { isFile: true, isDirectory: false, name: f.name, file: (ok) => ok(f), f }; }
+        const children = (await Promise.all(it.children.map(entry))).reverse();
+        const createReader = () => {
+          let i = 0;
+          return { readEntries: (ok) => { const batch = children.slice(i, i + 2); i += batch.length; setTimeout(() => ok(batch)); } };
+        };
+        return { isFile: false, isDirectory: true, name: it.folder, createReader };
+      };
+      const entries = await Promise.all(items.map(entry));
+      dataTransfer = { files: [], items: entries.map((e) => ({ kind: 'file', webkitGetAsEntry: () => e, getAsFile: () => e.f ?? null })) };
+    }
+    let drop;
+    if (dataTransfer instanceof DataTransfer) drop = new DragEvent('drop', { dataTransfer, bubbles: true, cancelable: true });
+    else {
+      drop = new Event('drop', { bubbles: true, cancelable: true });
+      Object.defineProperty(drop, 'dataTransfer', { value: dataTransfer });
+    }
+    document.body.dispatchEvent(drop);
     return window.prtkit.ready;
   }, files);
   const state = await page.evaluate(() => window.prtkit.state());
   const pixels = ok ? await page.evaluate(() => window.prtkit.pixels()) : null;
   const errors = [...logs, ...(await page.evaluate(() => window.prtkit.errors.slice()))];
   await page.close();
-  if (errors.length) pageErrors.push({ query: `drop ${files.join(', ')}`, errors });
+  const what = JSON.stringify(files);
+  if (errors.length) pageErrors.push({ query: `drop ${what}`, errors });
   return { before, state, image: pixels ? fromPage(pixels) : null, errors };
 }
 async function dropTests() {
@@ -808,6 +844,15 @@ async function dropTests() {
   const { dir, sky } = skyIn('drop');
   run('sh-project', [sky, '-F', '2', '-o', join(dir, 'sky.sh.json'), '-q']);
   run('transfer', ['testdata/meshes/torus-knot.obj', '-n', '3', '--rays', '64', '--glb', join(dir, 'knot3.glb'), '-o', join(dir, 'knot3.json'), '-q']);
+  run('prefilter', [sky, '--brdf', 'phong:s=16', '--shrm', join(dir, 'p16.exr'), '-o', join(dir, 'p16.json'), '-q']);
+  const nd = join(dir, 'normals');
+  mkdirSync(nd);
+  encodeSphereNormals(nd, 128, 64);
+  const d = (f) => url(join(dir, f));
+  const normalsFiles = ['sphere.codes', 'sphere.codes.json', 'decoder.glsl'].map((f) => d(`normals/${f}`));
+  const normalsByUrl = { mode: 'normals', codes: d('normals/sphere.codes'), report: d('normals/sphere.codes.json'), decoder: d('normals/decoder.glsl'),
+    size: '128x64', sh: d('sky.sh.json'), exposure: '-3' };
+  const bakeFolder = { folder: 'bake', children: readdirSync(bake).sort().map(b) };
   const cases = [
     { name: 'a bake (ibl.json and its files), page in mode=sphere', start: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15' },
       files: bakeFiles, mode: 'sphere', byUrl: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15', ibl: url(bake) + '/' } },
@@ -822,6 +867,16 @@ async function dropTests() {
     { name: 'a transfer .glb with a .sh.json', start: { exposure: '-2' }, mode: 'prt',
       files: [url(join(dir, 'knot3.glb')), url(join(dir, 'sky.sh.json'))],
       byUrl: { mode: 'prt', glb: url(join(dir, 'knot3.glb')), sh: url(join(dir, 'sky.sh.json')), exposure: '-2' } },
+    { name: 'an SHRM (prefilter --shrm: its prtkit.shrm document and EXR)', start: { exposure: '-2' }, mode: 'shrm',
+      files: [d('p16.json'), d('p16.exr')], byUrl: { mode: 'shrm', shrm: d('p16.json'), exposure: '-2' } },
+    { name: 'encoded normals (codes, report, GLSL decoder) with a .sh.json', start: { exposure: '-3' }, mode: 'normals',
+      files: [...normalsFiles, d('sky.sh.json')], byUrl: normalsByUrl },
+    { name: 'a folder: ibl -o DIR', start: {}, mode: 'grid', files: [bakeFolder], byUrl: { ibl: url(bake) + '/' } },
+    { name: 'a folder holding a folder of encoded normals and a .sh.json', start: { exposure: '-3' }, mode: 'normals',
+      files: [{ folder: 'out', children: [{ folder: 'normals', children: normalsFiles }, d('sky.sh.json')] }], byUrl: normalsByUrl },
+    { name: 'a folder (ibl -o DIR) and a file (sphere.obj)', start: { m: '1', r: '0.3' }, mode: 'model',
+      files: [bakeFolder, url(join(repo, 'testdata/meshes/sphere.obj'))],
+      byUrl: { mode: 'model', m: '1', r: '0.3', ibl: url(bake) + '/', model: url(join(repo, 'testdata/meshes/sphere.obj')) } },
   ];
   const fig = {};
   for (const c of cases) {
@@ -836,6 +891,15 @@ async function dropTests() {
     check(`drop ${c.name}: mode ${c.mode}, the same frame as by URL, no error`, d.state.mode === c.mode && max === 0 && d.errors.length === 0,
       `mode ${d.before} → ${d.state.mode} (want ${c.mode}), max |Δ| ${max} codes against the URL-opened page (must be 0), errors: ${d.errors.join('; ').slice(0, 300) || 'none'}`);
   }
+  // A model alone on an empty page has no bake to be lit by: a clear error naming the file, the
+  // page left as it was.
+  const lone = await dropView({ ...cam }, [url(join(repo, 'testdata/meshes/sphere.obj'))]);
+  fig.model_without_bake = { mode: lone.state.mode, errors: lone.errors };
+  const expected = pageErrors.findIndex((e) => e.errors === lone.errors);
+  if (expected >= 0) pageErrors.splice(expected, 1); // this page's error is the one asked for
+  check('drop sphere.obj on an empty page (no bake): a clear error naming the file, the mode unchanged',
+    lone.state.mode === lone.before && lone.errors.length > 0 && lone.errors.every((e) => e.includes('sphere.obj') && e.includes('bake')),
+    `mode ${lone.before} → ${lone.state.mode}, errors: ${lone.errors.join('; ').slice(0, 300) || 'none'}`);
   figures.drop = fig;
 }
 
