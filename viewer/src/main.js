@@ -33,6 +33,7 @@ import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
 import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
+import { MTLLoader } from 'three/addons/loaders/MTLLoader.js';
 import { loadPrtkitIbl, PRTKIT_IBL_GLSL, prtkitUniforms } from './prtkit-loader.js';
 import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, loadPrtkitShrm, SHRM_GLSL, loadNormalCodes,
   prtAttribute, transferLightingUniform, prtVertexShader, PRT_FRAGMENT,
@@ -226,14 +227,44 @@ const modelFragment = /* glsl */ `
     vec3 c = prtkitSplitSum(n, v, base, clamp(m, 0.0, 1.0), clamp(r, 0.0, 1.0)) * exposureScale;
     gl_FragColor = linearToOutputTexel(vec4(c, 1.0));
   }`;
-const model = { object: null, materials: [], fromObj: false, key: '' };
+const model = { object: null, materials: [], fromObj: false, mtl: false, key: '' };
 // The model's file type: by the URL's extension, or `type=` (object URLs of dropped files have none).
 const modelKind = (url, type) => (type ?? url.split(/[?#]/)[0].split('.').pop()).toLowerCase();
 async function loadModel(url, type = q.get('type') ?? undefined, manager = undefined) {
   const kind = modelKind(url, type);
-  if (kind === 'obj') return { object: await new OBJLoader(manager).loadAsync(url), fromObj: true };
-  if (kind === 'gltf' || kind === 'glb') return { object: (await new GLTFLoader(manager).loadAsync(url)).scene, fromObj: false };
+  if (kind === 'obj') return loadObj(url, manager);
+  if (kind === 'gltf' || kind === 'glb') return { object: (await new GLTFLoader(manager).loadAsync(url)).scene, fromObj: false, mtl: false };
   throw new Error(`model=${url}: .gltf, .glb or .obj (or give type=gltf|glb|obj)`);
+}
+// An OBJ and the material library its `mtllib` names (three's MTLLoader: Kd, sRGB-encoded, and
+// map_Kd, an sRGB image, become the base colour; the rest of the library is not used). The library
+// is beside the OBJ (a dropped one: found by name, through the manager's URL modifier), its
+// textures beside the library; they are waited for, so the first frame has them.
+async function loadObj(url, manager) {
+  const r = await fetch(manager?.resolveURL(url) ?? url);
+  if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
+  const text = await r.text();
+  const library = /^mtllib[ \t]+(.+?)[ \t]*$/m.exec(text)?.[1];
+  const loader = new OBJLoader(manager);
+  if (library) {
+    const at = url.startsWith('blob:') ? library : new URL(library, new URL(url, location.href)).href;
+    const materials = await new MTLLoader(manager).loadAsync(at).catch((e) => {
+      throw new Error(`${url}: its material library ${library}: ${e.message ?? e}`);
+    });
+    const textures = new THREE.LoadingManager();
+    if (manager) textures.setURLModifier((u) => manager.resolveURL(u));
+    let started = false;
+    textures.onStart = () => { started = true; };
+    const loaded = new Promise((ok, fail) => {
+      textures.onLoad = ok;
+      textures.onError = (u) => fail(new Error(`${url}: ${library}: texture ${u} not loaded`));
+    });
+    materials.setManager(textures);
+    materials.preload(); // starts the texture loads
+    if (started) await loaded;
+    loader.setMaterials(materials);
+  }
+  return { object: loader.parse(text), fromObj: true, mtl: Boolean(library) };
 }
 function modelMaterial(source, fromObj) {
   const defines = {};
@@ -246,6 +277,10 @@ function modelMaterial(source, fromObj) {
     baseColorMap: { value: null },
     metalRoughMap: { value: null },
   };
+  if (fromObj && model.mtl) { // the library's Kd (linear, as MTLLoader keeps it) and map_Kd
+    uniforms.baseColor.value.copy(source.color);
+    if (source.map) { uniforms.baseColorMap.value = source.map; defines.USE_BASE_MAP = ''; }
+  }
   if (!fromObj && source?.isMeshStandardMaterial) {
     uniforms.baseColor.value.copy(source.color); // linear: glTF's baseColorFactor is, and three keeps it so
     uniforms.metalness.value = source.metalness;

@@ -778,7 +778,58 @@ async function modelTests() {
     covered > 500 && same.mean === 0, `${covered} pixels covered (> 500), mean |Δ| ${same.mean.toFixed(3)} codes between panel r/m/base settings (must be 0); vs sky ${drawn.mean.toFixed(2)} codes`);
   check('model tetrahedra.gltf: the page logged no WebGL, shader or page error', a.errors.length + b.errors.length === 0,
     [...a.errors, ...b.errors].join('; ').slice(0, 500) || 'none');
+  await mtlTests(fig);
   figures.model = fig;
+}
+
+// OBJ materials (an .mtl library, three's MTLLoader): sphere.obj with a library against the same
+// geometry without one, the panel's base colour set to what the library says, converted here:
+// Kd is sRGB-encoded (MTLLoader linearizes it) and map_Kd an sRGB image, so the base colour is
+// linear(Kd)·linear(texel). A uniform texture makes the reference one colour; the geometry is
+// the same on both sides, so what may differ is the colour's rounding (bar: 1 code).
+const srgbToLinear = (c) => (c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4);
+// In DIR: sphere-kd.obj (sphere.obj with kd.mtl: Kd 0.9 0.3 0.2), sphere-uv.obj (sphere.obj with
+// texture coordinates, each vertex's (φ/2π, 1 − θ/π); faces v/vt/vn) and sphere-painted.obj (that,
+// with painted.mtl: Kd 0.8 0.9 0.7 and map_Kd paint.png, 4×4 of sRGB (200, 120, 60)).
+function writeMtlModels(dir) {
+  const lines = readFileSync(join(repo, 'testdata/meshes/sphere.obj'), 'utf8').split('\n');
+  const vt = lines.filter((l) => l.startsWith('v ')).map((l) => {
+    const [x, y, z] = l.split(/\s+/).slice(1).map(Number);
+    return `vt ${(((Math.atan2(y, x) / (2 * Math.PI)) + 1) % 1).toFixed(6)} ${(1 - Math.acos(Math.max(-1, Math.min(1, z))) / Math.PI).toFixed(6)}`;
+  });
+  const uvBody = [...lines.filter((l) => !l.startsWith('f ')), ...vt, ...lines.filter((l) => l.startsWith('f ')).map((l) => l.replace(/(\d+)\/\/(\d+)/g, '$1/$1/$2'))].join('\n');
+  const png = new PNG({ width: 4, height: 4 });
+  for (let i = 0; i < 16; i++) png.data.set([200, 120, 60, 255], 4 * i);
+  writeFileSync(join(dir, 'paint.png'), PNG.sync.write(png));
+  writeFileSync(join(dir, 'kd.mtl'), 'newmtl red\nKd 0.9 0.3 0.2\n');
+  writeFileSync(join(dir, 'painted.mtl'), 'newmtl painted\nKd 0.8 0.9 0.7\nmap_Kd paint.png\n');
+  writeFileSync(join(dir, 'sphere-kd.obj'), `mtllib kd.mtl\nusemtl red\n${lines.join('\n')}`);
+  writeFileSync(join(dir, 'sphere-uv.obj'), uvBody);
+  writeFileSync(join(dir, 'sphere-painted.obj'), `mtllib painted.mtl\nusemtl painted\n${uvBody}`);
+}
+async function mtlTests(fig) {
+  const dir = join(out, 'model-mtl');
+  rmSync(dir, { recursive: true, force: true });
+  mkdirSync(dir, { recursive: true });
+  writeMtlModels(dir);
+  const lin = (rgb) => rgb.map(srgbToLinear);
+  const cases = [
+    { name: 'Kd', obj: 'sphere-kd.obj', plain: url(join(repo, 'testdata/meshes/sphere.obj')), base: lin([0.9, 0.3, 0.2]) },
+    { name: 'Kd and map_Kd', obj: 'sphere-painted.obj', plain: url(join(dir, 'sphere-uv.obj')),
+      base: lin([0.8, 0.9, 0.7]).map((k, i) => k * srgbToLinear([200, 120, 60][i] / 255)) },
+  ];
+  const cam = { ibl: url(bake) + '/', mode: 'model', m: '0', r: '0.5', eye: toPage([3, -2.5, 1.2], 'three'), target: '0,0,0', fov: String(FOV), res: RES, exposure: '0' };
+  for (const c of cases) {
+    const got = await view({ ...cam, model: url(join(dir, c.obj)), base: '1,1,1' });
+    const ref = (await view({ ...cam, model: c.plain, base: c.base.map((x) => x.toFixed(7)).join(',') })).image;
+    let max = 0;
+    for (let i = 0; i < ref.rgba.length; i++) if (i % 4 !== 3) max = Math.max(max, Math.abs(got.image.rgba[i] - ref.rgba[i]));
+    const slug = c.obj.replace('.obj', '');
+    writePng(join(out, `model-mtl-${slug}.png`), got.image);
+    fig[`mtl_${slug}_max`] = max;
+    check(`model ${c.obj} (.mtl: ${c.name}) vs the same geometry without a library, the panel's base = the library's colour`,
+      max <= 1 && got.errors.length === 0, `max |Δ| ${max} codes over the frame (≤ 1), errors: ${got.errors.join('; ').slice(0, 300) || 'none'}`);
+  }
 }
 
 // ---- Files dropped on the page ----------------------------------------------------------------
@@ -853,6 +904,8 @@ async function dropTests() {
   const normalsByUrl = { mode: 'normals', codes: d('normals/sphere.codes'), report: d('normals/sphere.codes.json'), decoder: d('normals/decoder.glsl'),
     size: '128x64', sh: d('sky.sh.json'), exposure: '-3' };
   const bakeFolder = { folder: 'bake', children: readdirSync(bake).sort().map(b) };
+  mkdirSync(join(dir, 'mtl'));
+  writeMtlModels(join(dir, 'mtl'));
   const cases = [
     { name: 'a bake (ibl.json and its files), page in mode=sphere', start: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15' },
       files: bakeFiles, mode: 'sphere', byUrl: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15', ibl: url(bake) + '/' } },
@@ -874,6 +927,9 @@ async function dropTests() {
     { name: 'a folder: ibl -o DIR', start: {}, mode: 'grid', files: [bakeFolder], byUrl: { ibl: url(bake) + '/' } },
     { name: 'a folder holding a folder of encoded normals and a .sh.json', start: { exposure: '-3' }, mode: 'normals',
       files: [{ folder: 'out', children: [{ folder: 'normals', children: normalsFiles }, d('sky.sh.json')] }], byUrl: normalsByUrl },
+    { name: 'a bake with an OBJ, its .mtl and its texture', start: { m: '0', r: '0.5' }, mode: 'model',
+      files: [...bakeFiles, ...['sphere-painted.obj', 'painted.mtl', 'paint.png'].map((f) => d(`mtl/${f}`))],
+      byUrl: { mode: 'model', m: '0', r: '0.5', ibl: url(bake) + '/', model: d('mtl/sphere-painted.obj') } },
     { name: 'a folder (ibl -o DIR) and a file (sphere.obj)', start: { m: '1', r: '0.3' }, mode: 'model',
       files: [bakeFolder, url(join(repo, 'testdata/meshes/sphere.obj'))],
       byUrl: { mode: 'model', m: '1', r: '0.3', ibl: url(bake) + '/', model: url(join(repo, 'testdata/meshes/sphere.obj')) } },
