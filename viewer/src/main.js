@@ -26,13 +26,14 @@
 //   (these four: frame=three|gl as above; src=URL shows three's equirect view of the map behind;
 //    rotate=DEG turns the lighting about the up axis: SH coefficients rotated every frame)
 //   test=1            no UI, no animation loop: the test script drives window.prtkit
-// Files dropped on the page open as their URLs would (object URLs; see openFiles).
+// Files and folders dropped on the page open as their URLs would (object URLs; see openFiles).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
 import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
+import { MTLLoader } from 'three/addons/loaders/MTLLoader.js';
 import { loadPrtkitIbl, PRTKIT_IBL_GLSL, prtkitUniforms } from './prtkit-loader.js';
 import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, loadPrtkitShrm, SHRM_GLSL, loadNormalCodes,
   prtAttribute, transferLightingUniform, prtVertexShader, PRT_FRAGMENT,
@@ -226,14 +227,44 @@ const modelFragment = /* glsl */ `
     vec3 c = prtkitSplitSum(n, v, base, clamp(m, 0.0, 1.0), clamp(r, 0.0, 1.0)) * exposureScale;
     gl_FragColor = linearToOutputTexel(vec4(c, 1.0));
   }`;
-const model = { object: null, materials: [], fromObj: false, key: '' };
+const model = { object: null, materials: [], fromObj: false, mtl: false, key: '' };
 // The model's file type: by the URL's extension, or `type=` (object URLs of dropped files have none).
 const modelKind = (url, type) => (type ?? url.split(/[?#]/)[0].split('.').pop()).toLowerCase();
 async function loadModel(url, type = q.get('type') ?? undefined, manager = undefined) {
   const kind = modelKind(url, type);
-  if (kind === 'obj') return { object: await new OBJLoader(manager).loadAsync(url), fromObj: true };
-  if (kind === 'gltf' || kind === 'glb') return { object: (await new GLTFLoader(manager).loadAsync(url)).scene, fromObj: false };
+  if (kind === 'obj') return loadObj(url, manager);
+  if (kind === 'gltf' || kind === 'glb') return { object: (await new GLTFLoader(manager).loadAsync(url)).scene, fromObj: false, mtl: false };
   throw new Error(`model=${url}: .gltf, .glb or .obj (or give type=gltf|glb|obj)`);
+}
+// An OBJ and the material library its `mtllib` names (three's MTLLoader: Kd, sRGB-encoded, and
+// map_Kd, an sRGB image, become the base colour; the rest of the library is not used). The library
+// is beside the OBJ (a dropped one: found by name, through the manager's URL modifier), its
+// textures beside the library; they are waited for, so the first frame has them.
+async function loadObj(url, manager) {
+  const r = await fetch(manager?.resolveURL(url) ?? url);
+  if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
+  const text = await r.text();
+  const library = /^mtllib[ \t]+(.+?)[ \t]*$/m.exec(text)?.[1];
+  const loader = new OBJLoader(manager);
+  if (library) {
+    const at = url.startsWith('blob:') ? library : new URL(library, new URL(url, location.href)).href;
+    const materials = await new MTLLoader(manager).loadAsync(at).catch((e) => {
+      throw new Error(`${url}: its material library ${library}: ${e.message ?? e}`);
+    });
+    const textures = new THREE.LoadingManager();
+    if (manager) textures.setURLModifier((u) => manager.resolveURL(u));
+    let started = false;
+    textures.onStart = () => { started = true; };
+    const loaded = new Promise((ok, fail) => {
+      textures.onLoad = ok;
+      textures.onError = (u) => fail(new Error(`${url}: ${library}: texture ${u} not loaded`));
+    });
+    materials.setManager(textures);
+    materials.preload(); // starts the texture loads
+    if (started) await loaded;
+    loader.setMaterials(materials);
+  }
+  return { object: loader.parse(text), fromObj: true, mtl: Boolean(library) };
 }
 function modelMaterial(source, fromObj) {
   const defines = {};
@@ -246,6 +277,10 @@ function modelMaterial(source, fromObj) {
     baseColorMap: { value: null },
     metalRoughMap: { value: null },
   };
+  if (fromObj && model.mtl) { // the library's Kd (linear, as MTLLoader keeps it) and map_Kd
+    uniforms.baseColor.value.copy(source.color);
+    if (source.map) { uniforms.baseColorMap.value = source.map; defines.USE_BASE_MAP = ''; }
+  }
   if (!fromObj && source?.isMeshStandardMaterial) {
     uniforms.baseColor.value.copy(source.color); // linear: glTF's baseColorFactor is, and three keeps it so
     uniforms.metalness.value = source.metalness;
@@ -367,7 +402,7 @@ async function setupShMode() {
   if (mode === 'shrm') {
     const url = q.get('shrm');
     if (!url) throw new Error('mode=shrm needs shrm=URL (a prtkit.shrm document from prefilter --shrm)');
-    docs.shrm ??= await loadPrtkitShrm(url);
+    docs.shrm ??= await loadPrtkitShrm(url, dropped.urls.size ? dropped.urlOf : undefined);
     document.getElementById('source').textContent = docs.shrm.doc.brdf;
   }
   if (mode === 'normals') {
@@ -527,19 +562,14 @@ function updateShUniforms() {
   // by −γ about three's +Y in the mirrored (three) frame.
   scene.backgroundRotation.set(0, state.frame === 'three' ? -turn : turn, 0);
 }
-// Test hook: the code table decoded on the GPU by the emitted decoder, one texel per code,
-// into an RGBA32F target; returns the xyz as a flat array (row 0 = the first W codes).
-function decodedNormals() {
-  const tex = docs.codes.texture;
-  const { width, height } = tex.image;
+// Test hooks that run a fragment shader once per texel of a width × height RGBA32F target (a
+// full-screen triangle; gl_FragCoord.xy is the texel) and read the floats back, row 0 first.
+function renderFloats(fragmentShader, uniforms, width, height) {
   const target = new THREE.WebGLRenderTarget(width, height, { type: THREE.FloatType, format: THREE.RGBAFormat, depthBuffer: false });
   const material = new THREE.ShaderMaterial({
-    uniforms: { codes: { value: tex } },
+    uniforms,
     vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
-    fragmentShader: `${docs.decoder}
-      precision highp usampler2D;
-      uniform usampler2D codes;
-      void main() { gl_FragColor = vec4(prtkit_decode_normal(texelFetch(codes, ivec2(gl_FragCoord.xy), 0).r), 1.0); }`,
+    fragmentShader,
   });
   const quad = new THREE.Mesh(skyGeometry, material);
   quad.frustumCulled = false;
@@ -551,9 +581,42 @@ function decodedNormals() {
   renderer.readRenderTargetPixels(target, 0, 0, width, height, buf);
   renderer.setRenderTarget(null);
   target.dispose();
+  material.dispose();
+  return buf;
+}
+// Test hook: the code table decoded on the GPU by the emitted decoder, one texel per code;
+// returns the xyz as a flat array (row 0 = the first W codes).
+function decodedNormals() {
+  const tex = docs.codes.texture;
+  const { width, height } = tex.image;
+  const buf = renderFloats(`${docs.decoder}
+      precision highp usampler2D;
+      uniform usampler2D codes;
+      void main() { gl_FragColor = vec4(prtkit_decode_normal(texelFetch(codes, ivec2(gl_FragCoord.xy), 0).r), 1.0); }`,
+  { codes: { value: tex } }, width, height);
   const xyz = new Array(width * height * 3);
   for (let i = 0; i < width * height; i++) for (let c = 0; c < 3; c++) xyz[3 * i + c] = buf[4 * i + c];
   return xyz;
+}
+// Test hook: a glossy bake's h_k lookup as the emitted snippet does it (its own
+// prtkitGlossyCosThetaPhi, prtkitGlossyTaps and prtkitGlossyH, reading the page's h texture) at
+// each direction w of the normal's frame ([x, y, z] in prtkit's axes), for every term:
+// returns values[k][i] = h_k(w_i), evaluated in the shader's float precision.
+function glossyLookup(directions) {
+  const D = directions.length, K = docs.glossy.h.image.height / docs.glossy.h.image.width;
+  const dirs = new THREE.DataTexture(new Float32Array(directions.flatMap((w) => [...w, 0])), D, 1, THREE.RGBAFormat, THREE.FloatType);
+  dirs.minFilter = dirs.magFilter = THREE.NearestFilter; // read by texelFetch only
+  dirs.needsUpdate = true;
+  const buf = renderFloats(`${docs.glossy.snippet}
+      uniform sampler2D directions;
+      void main() {
+        ivec2 p = ivec2(gl_FragCoord.xy); // x: the direction, y: the term
+        vec3 w = texelFetch(directions, ivec2(p.x, 0), 0).xyz;
+        gl_FragColor = vec4(prtkitGlossyH(p.y, prtkitGlossyTaps(prtkitGlossyCosThetaPhi(w))), 0.0, 0.0, 1.0);
+      }`,
+  { directions: { value: dirs }, prtkitGlossyHTexture: { value: docs.glossy.h } }, D, K);
+  dirs.dispose();
+  return Array.from({ length: K }, (_, k) => Array.from({ length: D }, (_, i) => buf[4 * (k * D + i)]));
 }
 
 function updateUniforms() {
@@ -627,15 +690,18 @@ async function setup() {
 }
 
 // --- files dropped on the page ---------------------------------------------------------------
-// Each dropped file gets an object URL; the page then opens them as it opens URLs, in the mode
-// they call for:
-//   ibl.json (a prtkit.ibl manifest) and the files it names → the bake (mode grid, or the current
-//     mode if it already shows a bake: sphere, sky, model);
-//   a prtkit.sh document (sh-project) → mode irradiance (with a transfer .glb: its lighting);
+// Each dropped file, and every file under a dropped folder, gets an object URL; the page then
+// opens them as it opens URLs, in the mode they call for (the first of these that applies):
 //   a .glb whose mesh holds prtkit.transfer extras → mode prt (with the dropped .sh.json and, for a
 //     glossy bake, the dropped .glsl snippet);
 //   any other .gltf/.glb or an .obj → mode model, lit by the bake dropped with it or already open
-//     (a .gltf's .bin and textures dropped with it are found by name).
+//     (a .gltf's .bin and textures dropped with it are found by name);
+//   ibl.json (a prtkit.ibl manifest) and the files it names → the bake (mode grid, or the current
+//     mode if it already shows a bake: sphere, sky, model);
+//   a prtkit.normal-codes report (encode-normals) with the codes it names, the GLSL decoder and a
+//     prtkit.sh document → mode normals;
+//   a prtkit.shrm document (prefilter --shrm) with the EXR it names → mode shrm;
+//   a prtkit.sh document (sh-project) → mode irradiance.
 const IBL_MODES = ['grid', 'sphere', 'sky', 'model'];
 const dropped = {
   urls: new Map(), // file name → object URL
@@ -649,27 +715,58 @@ const dropped = {
     return manager;
   },
 };
-async function openFiles(files) {
-  for (const u of dropped.urls.values()) URL.revokeObjectURL(u);
-  dropped.urls = new Map(files.map((f) => [f.name, URL.createObjectURL(f)]));
+// What a drop holds, each found by its content (JSON by its `format`, a .glsl by the function it
+// defines, a .glb by its prtkit.transfer extras), the first of a kind in the drop's order.
+async function classifyDrop(files) {
   const ext = (f) => f.name.toLowerCase().split('.').pop();
-  const jsonFormat = async (f) => { try { return JSON.parse(await f.text()).format; } catch { return null; } };
-  const formats = new Map();
-  for (const f of files) if (ext(f) === 'json') formats.set(f.name, await jsonFormat(f));
-  const manifest = files.find((f) => formats.get(f.name) === 'prtkit.ibl');
-  const sh = files.find((f) => formats.get(f.name) === 'prtkit.sh');
-  const glsl = files.find((f) => ext(f) === 'glsl');
-  let prt = null, modelFile = null;
+  const text = new Map();
+  for (const f of files) if (['json', 'glsl'].includes(ext(f))) text.set(f, await f.text());
+  const json = (f) => { try { return JSON.parse(text.get(f)); } catch { return null; } };
+  const byFormat = (format) => files.find((f) => ext(f) === 'json' && json(f)?.format === format);
+  const glslWith = (name) => files.find((f) => ext(f) === 'glsl' && text.get(f).includes(name));
+  const found = {
+    manifest: byFormat('prtkit.ibl'), sh: byFormat('prtkit.sh'), shrm: byFormat('prtkit.shrm'), codesReport: byFormat('prtkit.normal-codes'),
+    glossyGlsl: glslWith('prtkitGlossyRadiance'), decoder: glslWith('prtkit_decode_normal'), prt: null, model: null, json,
+  };
   for (const f of files.filter((f) => ['glb', 'gltf', 'obj'].includes(ext(f)))) {
     let isPrt = false;
     if (ext(f) === 'glb') {
       const gltf = await new GLTFLoader().loadAsync(dropped.urls.get(f.name)).catch(() => null);
       gltf?.scene.traverse((o) => { if (o.isMesh && o.userData['prtkit.transfer']) isPrt = true; });
     }
-    if (isPrt) prt = f; else modelFile ??= f;
+    if (isPrt) found.prt ??= f; else found.model ??= f;
   }
-  if (!manifest && !sh && !prt && !modelFile) throw new Error(`dropped ${files.map((f) => f.name).join(', ')}: no ibl.json, prtkit.sh document, .glb, .gltf or .obj among them`);
-  for (const k of ['sh', 'glb', 'glsl', 'model', 'type']) q.delete(k);
+  return found;
+}
+// A dropped file named by a document (its last path component), or a clear error.
+function droppedBeside(doc, path, what) {
+  const name = path.split('/').pop();
+  const u = dropped.urls.get(name);
+  if (!u) throw new Error(`dropped ${doc.name}: ${what} ${name} was not dropped with it`);
+  return u;
+}
+// The query an encode-normals drop stands for: its codes (the file the report names), the report,
+// the GLSL decoder and a prtkit.sh document; the table is taken as lat-long 2:1 (count = 2H²).
+function normalsQuery(found) {
+  const report = found.json(found.codesReport), H = Math.round(Math.sqrt(report.count / 2));
+  if (2 * H * H !== report.count) throw new Error(`dropped ${found.codesReport.name}: ${report.count} codes are not a 2:1 lat-long table (2H² codes); open it by URL with size=WxH`);
+  if (!found.decoder) throw new Error(`dropped ${found.codesReport.name}: no GLSL decoder (encode-normals --emit-decoder glsl) dropped with it`);
+  if (!found.sh) throw new Error(`dropped ${found.codesReport.name}: no prtkit.sh document (sh-project) to light the normals dropped with it`);
+  return { codes: droppedBeside(found.codesReport, report.codes ?? '', 'the codes'), report: dropped.urls.get(found.codesReport.name),
+    decoder: dropped.urls.get(found.decoder.name), size: `${2 * H}x${H}` };
+}
+async function openFiles(files) {
+  for (const u of dropped.urls.values()) URL.revokeObjectURL(u);
+  dropped.urls = new Map(files.map((f) => [f.name, URL.createObjectURL(f)]));
+  const found = await classifyDrop(files);
+  const { manifest, sh, shrm, codesReport, prt } = found;
+  if (!manifest && !sh && !shrm && !codesReport && !prt && !found.model) {
+    throw new Error(`dropped ${files.map((f) => f.name).join(', ')}: no ibl.json, prtkit.sh, prtkit.shrm or prtkit.normal-codes document, .glb, .gltf or .obj among them`);
+  }
+  if (found.model && !prt && !manifest && !ibl) {
+    throw new Error(`dropped ${found.model.name}: a model is lit by an ibl bake; drop it with the bake's folder or files, or open a bake first`);
+  }
+  for (const k of ['sh', 'glb', 'glsl', 'model', 'type', 'shrm', 'codes', 'report', 'decoder', 'size']) q.delete(k);
   for (const k of Object.keys(docs)) delete docs[k];
   model.key = '';
   if (manifest) {
@@ -682,13 +779,20 @@ async function openFiles(files) {
   if (prt) {
     state.mode = 'prt';
     q.set('glb', dropped.urls.get(prt.name));
-    if (glsl) q.set('glsl', dropped.urls.get(glsl.name));
-  } else if (modelFile) {
+    if (found.glossyGlsl) q.set('glsl', dropped.urls.get(found.glossyGlsl.name));
+  } else if (found.model) {
     state.mode = 'model';
-    q.set('model', dropped.urls.get(modelFile.name));
-    q.set('type', ext(modelFile));
+    q.set('model', dropped.urls.get(found.model.name));
+    q.set('type', found.model.name.toLowerCase().split('.').pop());
   } else if (manifest) {
     if (!IBL_MODES.includes(state.mode) || state.mode === 'model') state.mode = 'grid';
+  } else if (codesReport) {
+    state.mode = 'normals';
+    for (const [k, v] of Object.entries(normalsQuery(found))) q.set(k, v);
+  } else if (shrm) {
+    state.mode = 'shrm';
+    droppedBeside(shrm, found.json(shrm).shrm_file ?? '', 'its EXR');
+    q.set('shrm', dropped.urls.get(shrm.name));
   } else if (sh) state.mode = 'irradiance';
   if (!q.has('eye')) placeCamera();
   if (!test) document.getElementById('mode').value = state.mode;
@@ -696,12 +800,35 @@ async function openFiles(files) {
   draw();
   return true;
 }
+// A drop's items, taken while the event is dispatched (a DataTransfer is emptied after it): a
+// folder as its FileSystemDirectoryEntry (webkitGetAsEntry), a file as its File.
+function dropEntries(dataTransfer) {
+  const items = [...(dataTransfer?.items ?? [])].filter((i) => i.kind === 'file');
+  if (!items.length) return [...(dataTransfer?.files ?? [])];
+  return items.map((i) => {
+    const entry = i.webkitGetAsEntry?.();
+    return entry?.isDirectory ? entry : i.getAsFile();
+  }).filter(Boolean);
+}
+// Every file under a dropped folder, subfolders included, each folder's entries in name order
+// (readEntries returns them a batch at a time, in no set order, until an empty batch).
+async function filesUnder(entry) {
+  if (entry.isFile) return [await new Promise((ok, fail) => entry.file(ok, fail))];
+  const reader = entry.createReader(), entries = [];
+  for (let batch; (batch = await new Promise((ok, fail) => reader.readEntries(ok, fail))).length;) entries.push(...batch);
+  entries.sort((a, b) => (a.name < b.name ? -1 : a.name > b.name ? 1 : 0));
+  const files = [];
+  for (const e of entries) files.push(...(await filesUnder(e)));
+  return files;
+}
 addEventListener('dragover', (e) => e.preventDefault());
 addEventListener('drop', (e) => {
   e.preventDefault();
-  const files = [...(e.dataTransfer?.files ?? [])];
-  if (!files.length) return;
-  window.prtkit.ready = openFiles(files).catch((err) => { report(err.stack ?? err); return false; });
+  const entries = dropEntries(e.dataTransfer);
+  if (!entries.length) return;
+  window.prtkit.ready = Promise.all(entries.map((x) => (x.isDirectory ? filesUnder(x) : [x])))
+    .then((lists) => openFiles(lists.flat()))
+    .catch((err) => { report(err.stack ?? err); return false; });
 });
 
 function draw() {
@@ -740,6 +867,7 @@ window.prtkit = {
   pixels,
   bench,
   decodedNormals,
+  glossyLookup,
   rotateShZ,
   sh: () => docs.sh?.coefficients,
   state: () => ({ ...state, ibl: q.get('ibl'), sh: q.get('sh'), model: q.get('model'), glb: q.get('glb'), dropped: [...dropped.urls.keys()] }),

@@ -178,19 +178,20 @@ function unpredict(t) { // OpenEXR's ZIP predictor and byte interleave, undone
 }
 
 /**
- * Reads a prtkit.shrm document and its EXR (the `shrm_file` it names, beside the document unless
- * `exrUrl` is given): a THREE.DataArrayTexture with one RGBA32F layer per B_pq (index p(p+1)+q),
+ * Reads a prtkit.shrm document and its EXR (the `shrm_file` it names: beside the document, or
+ * where `urlOf(name)` says, e.g. the object URL of a dropped file): a THREE.DataArrayTexture with one RGBA32F layer per B_pq (index p(p+1)+q),
  * each a lat-long map of reflection directions R (row 0: R = +Z, column 0: φ = 0, texel centres at
  * half-integers), linearly filtered, repeating in φ.
  */
-export async function loadPrtkitShrm(url, exrUrl = null) {
+export async function loadPrtkitShrm(url, urlOf = undefined) {
   const doc = await fetchJson(url);
   if (doc.format !== 'prtkit.shrm') throw new Error(`${url}: format ${doc.format}, expected prtkit.shrm`);
   if (doc.method !== 'frequency') throw new Error(`${url}: method ${doc.method}: only frequency SHRMs have an EXR`);
   if (doc.layout !== 'latlong') throw new Error(`${url}: layout ${doc.layout}: only latlong here`);
   if (doc.parameterization !== 'reflection') throw new Error(`${url}: parameterization ${doc.parameterization}: only reflection here`);
   const base = url.slice(0, url.lastIndexOf('/') + 1);
-  const file = exrUrl ?? base + doc.shrm_file.split('/').pop();
+  const name = doc.shrm_file.split('/').pop();
+  const file = urlOf ? urlOf(name) : base + name;
   const r = await fetch(file);
   if (!r.ok) throw new Error(`${file}: HTTP ${r.status}`);
   const exr = await readExrChannels(await r.arrayBuffer());

@@ -4,7 +4,7 @@
 // default ../shared/testdata/envmaps/uffizi_ict_latlong_256x128.hdr, else a synthetic sky made
 // with sample-shader). Screenshots and figures go to out/viewer/. Last line: "N passed, M failed".
 import { execFileSync } from 'node:child_process';
-import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, mkdtempSync, readdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, relative, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -139,7 +139,7 @@ const browser = await puppeteer.launch({
 });
 const pageErrors = [];
 let gpuName = '';
-async function view(params, { bench = 0, evaluate = null } = {}) {
+async function view(params, { bench = 0, evaluate = null, arg = null } = {}) {
   const page = await browser.newPage();
   const logs = [];
   page.on('console', (m) => {
@@ -156,7 +156,7 @@ async function view(params, { bench = 0, evaluate = null } = {}) {
   const ok = await page.evaluate(() => window.prtkit.ready);
   const pixels = ok ? await page.evaluate(() => window.prtkit.pixels()) : null;
   const ms = ok && bench ? await page.evaluate((n) => window.prtkit.bench(n), bench) : null;
-  const value = ok && evaluate ? await page.evaluate(evaluate) : null;
+  const value = ok && evaluate ? await page.evaluate(evaluate, arg) : null;
   if (!gpuName && ok) gpuName = await page.evaluate(() => window.prtkit.gpu());
   const errors = await page.evaluate(() => window.prtkit.errors.slice());
   await page.close();
@@ -171,6 +171,23 @@ async function view(params, { bench = 0, evaluate = null } = {}) {
 const toPage = (e, frame) => (frame === 'three' ? mul(THREE_FROM_GL, mul(M, e)) : mul(M, e)).map((x) => +x.toFixed(6)).join(',');
 const FOV = 32, RES = '160x160';
 
+
+// DIR/sphere.codes (encode-normals, onv-range, 32 bits), its report sphere.codes.json and
+// DIR/decoder.glsl (--emit-decoder glsl) of a W×H lat-long table of the unit sphere's own normals
+// in prtkit's frame (texel (x, y) at φ = 2π(x + ½)/W, θ = π(y + ½)/H); returns the normals.
+function encodeSphereNormals(dir, W, H) {
+  const normals = new Float32Array(W * H * 3);
+  for (let y = 0; y < H; y++) {
+    for (let x = 0; x < W; x++) {
+      const t = (Math.PI * (y + 0.5)) / H, p = (2 * Math.PI * (x + 0.5)) / W, i = 3 * (y * W + x);
+      normals[i] = Math.sin(t) * Math.cos(p); normals[i + 1] = Math.sin(t) * Math.sin(p); normals[i + 2] = Math.cos(t);
+    }
+  }
+  writeFileSync(join(dir, 'sphere.f32'), Buffer.from(normals.buffer));
+  run('encode-normals', [join(dir, 'sphere.f32'), '--scheme', 'onv-range', '--bits', '32', '-o', join(dir, 'sphere.codes'), '--report', join(dir, 'sphere.codes.json'), '-q']);
+  writeFileSync(join(dir, 'decoder.glsl'), run('encode-normals', ['--emit-decoder', 'glsl', '--scheme', 'onv-range', '--bits', '32']));
+  return normals;
+}
 
 // A fresh directory out/NAME holding sample-shader's sky, 256×128, as sky.exr.
 function skyIn(name) {
@@ -298,16 +315,7 @@ async function shTests() {
   // 3. Normals from encode-normals: a 256×128 lat-long table of the sphere's own normals (prtkit's
   // frame), 32-bit onv-range codes, decoded in the shader by the emitted GLSL decoder.
   const NW = 256, NH = 128;
-  const normals = new Float32Array(NW * NH * 3);
-  for (let y = 0; y < NH; y++) {
-    for (let x = 0; x < NW; x++) {
-      const t = (Math.PI * (y + 0.5)) / NH, p = (2 * Math.PI * (x + 0.5)) / NW, i = 3 * (y * NW + x);
-      normals[i] = Math.sin(t) * Math.cos(p); normals[i + 1] = Math.sin(t) * Math.sin(p); normals[i + 2] = Math.cos(t);
-    }
-  }
-  writeFileSync(join(dir, 'sphere.f32'), Buffer.from(normals.buffer));
-  run('encode-normals', [join(dir, 'sphere.f32'), '--scheme', 'onv-range', '--bits', '32', '-o', join(dir, 'sphere.codes'), '--report', join(dir, 'sphere.codes.json'), '-q']);
-  writeFileSync(join(dir, 'decoder.glsl'), run('encode-normals', ['--emit-decoder', 'glsl', '--scheme', 'onv-range', '--bits', '32']));
+  const normals = encodeSphereNormals(dir, NW, NH);
   const report = JSON.parse(readFileSync(join(dir, 'sphere.codes.json'), 'utf8'));
   const nParams = { mode: 'normals', sh: shUrl, src: url(sky), codes: url(join(dir, 'sphere.codes')), report: url(join(dir, 'sphere.codes.json')),
     decoder: url(join(dir, 'decoder.glsl')), size: `${NW}x${NH}` };
@@ -462,6 +470,104 @@ async function glossyPrtTests() {
   fig.frame_ms_640x360 = r.ms;
   console.log(`     frame time prt glossy (K = 10, n = 4, bowl-ball) 640×360: ${r.ms.toFixed(1)} ms (CPU, SwiftShader)`);
   figures.prt_glossy = fig;
+}
+
+// ---- The glossy snippet's h_k lookup itself against the documented rule --------------------------
+// The image tests above cannot see every fault of the lookup: neighbouring φ columns of h differ
+// little, so the last column's neighbour clamped instead of wrapped to column 0 (the seam at
+// φ = 0) moves a pixel by a fraction of a code. Here the page runs the emitted snippet's own
+// prtkitGlossyCosThetaPhi, prtkitGlossyTaps and prtkitGlossyH (window.prtkit.glossyLookup) for
+// chosen directions of the normal's frame into an RGBA32F target, and each value is compared with
+// the rule docs/transfer.md ("Glossy bakes") states, evaluated here in double precision from the
+// .glb's glossy.h blob: bilinear between the cell centres cos θ_j = 1 − (j + ½)·span/N and
+// φ_k = (k + ½)·2π/N, φ wrapping, cos θ clamped to the first and last rows (a hemisphere grid's
+// views below the horizon read the horizon row), and within half a bin of a pole a linear blend
+// into the mean of the pole's ring. The reference is written in another form than the snippet's
+// index arithmetic: tent weights max(0, 1 − distance/bin) over every row and column, φ's distance
+// taken around the circle.
+
+// The glossy.h table of a transfer .glb (read from the file, not through the page).
+function glossyTable(glbPath) {
+  const b = readFileSync(glbPath);
+  const jsonLength = b.readUInt32LE(12);
+  const gltf = JSON.parse(b.subarray(20, 20 + jsonLength).toString());
+  const bin = 20 + jsonLength + 8; // the BIN chunk's data, after its length and type
+  const extras = gltf.meshes[0].extras;
+  const g = extras['prtkit.transfer'].glossy, blob = extras['prtkit.blobs']['glossy.h'];
+  const start = bin + (gltf.bufferViews[blob.bufferView].byteOffset ?? 0);
+  const h = Array.from({ length: blob.count }, (_, i) => b.readFloatLE(start + 4 * i));
+  return { N: g.resolution, K: g.terms, sphere: g.domain === 'sphere', h };
+}
+// h_t(w) for every term t by the documented rule; h[t·N² + j·N + k] is h_t of cell (j, k).
+function glossyReference({ N, K, sphere, h }, w) {
+  const TAU = 2 * Math.PI, dz = (sphere ? 2 : 1) / N, dphi = TAU / N;
+  const zc = (j) => 1 - (j + 0.5) * dz;
+  const z = Math.max(Math.min(w[2], 1), sphere ? -1 : 0);
+  const phi = w[0] === 0 && w[1] === 0 ? 0 : (Math.atan2(w[1], w[0]) + TAU) % TAU;
+  let pole = 0, poleRow = 0; // the pole's weight (1 at the pole, 0 half a bin away) and its ring
+  if (z > zc(0)) pole = (z - zc(0)) / (dz / 2);
+  else if (sphere && z < zc(N - 1)) [pole, poleRow] = [(zc(N - 1) - z) / (dz / 2), N - 1];
+  const zr = Math.min(Math.max(z, zc(N - 1)), zc(0));
+  const tent = (d, step) => Math.max(0, 1 - Math.abs(d) / step);
+  const around = (d) => { const a = ((d % TAU) + TAU) % TAU; return Math.min(a, TAU - a); };
+  const wRow = Array.from({ length: N }, (_, j) => tent(zr - zc(j), dz));
+  const wCol = Array.from({ length: N }, (_, k) => tent(around(phi - (k + 0.5) * dphi), dphi));
+  return Array.from({ length: K }, (_, t) => {
+    let ring = 0, mean = 0;
+    for (let j = 0; j < N; j++) for (let k = 0; k < N; k++) ring += wRow[j] * wCol[k] * h[t * N * N + j * N + k];
+    for (let k = 0; k < N; k++) mean += h[t * N * N + poleRow * N + k] / N;
+    return (1 - pole) * ring + pole * mean;
+  });
+}
+// Directions (f32, as the page gets them): φ within half a column either side of the seam
+// (between column N − 1 and column 0) and three φ away from it, at rows mid-table, within half a
+// bin of the top pole (and on it), near the bottom (the sphere's pole; the hemisphere's horizon
+// row, the horizon and below it); then 40 pseudo-random directions.
+function glossyDirections(N, sphere) {
+  const dz = (sphere ? 2 : 1) / N, bin = (2 * Math.PI) / N;
+  const at = (z, phi) => { const s = Math.sqrt(1 - z * z); return [s * Math.cos(phi), s * Math.sin(phi), z].map(Math.fround); };
+  const phis = [...[0, 0.05, 0.2, 0.45, -0.05, -0.2, -0.45].map((f) => f * bin), 1.3, 2.9, 4.4];
+  const top = [1, 1 - 0.1 * dz, 1 - 0.4 * dz, 1 - 0.55 * dz];
+  const bottom = sphere ? top.map((z) => -z) : [0.6 * dz, 0.4 * dz, 0, -0.3];
+  const mid = sphere ? [0.7, 0.1, -0.45] : [0.83, 0.5, 0.21];
+  const dirs = [...mid, ...top, ...bottom].flatMap((z) => phis.map((phi) => at(z, phi)));
+  let seed = 12345;
+  const rand = () => (seed = (seed * 1103515245 + 12345) % 2147483648) / 2147483648;
+  for (let i = 0; i < 40; i++) dirs.push(at(sphere ? 2 * rand() - 1 : rand(), 2 * Math.PI * rand()));
+  return dirs;
+}
+async function glossyLookupTests() {
+  const { dir, sky } = skyIn('prt-lookup');
+  run('sh-project', [sky, '-F', '1', '-o', join(dir, 'sky1.sh.json'), '-q']);
+  const fig = {};
+  // The image tests' grid (Phong s = 8, 16² hemisphere, cosine) and a 12² sphere grid (both poles).
+  for (const g of [{ name: 'hemisphere16', args: ['--domain', 'hemisphere', '--resolution', '16', '--cosine'] },
+    { name: 'sphere12', args: ['--domain', 'sphere', '--resolution', '12'] }]) {
+    const glb = join(dir, `${g.name}.glb`), glsl = join(dir, `${g.name}.glsl`);
+    run('factor-brdf', ['phong:s=8', ...g.args, '--factors', join(dir, `${g.name}.exr`), '--terms', '8', '-o', join(dir, `${g.name}.json`), '-q']);
+    run('transfer', ['testdata/meshes/bowl-ball.obj', '-n', '2', '--rays', '16', '--factors', join(dir, `${g.name}.json`), '-K', '6',
+      '--glb', glb, '-o', join(dir, `${g.name}-bake.json`), '--glsl', glsl, '-q']);
+    const table = glossyTable(glb), dirs = glossyDirections(table.N, table.sphere);
+    const got = (await view({ mode: 'prt', glb: url(glb), glsl: url(glsl), sh: url(join(dir, 'sky1.sh.json')), res: '16x16' },
+      { evaluate: (d) => window.prtkit.glossyLookup(d), arg: dirs })).value;
+    // Tolerance: f32 arithmetic in the shader. φ from a float atan is good to about 1e-6 rad,
+    // which moves the bilinear weights by 2.5e-6·N/16 of a column, i.e. the value by that much of
+    // the largest difference between neighbours (≤ 2 max|h_t|); the weights and the sum of at
+    // most N + 4 products add a few float ulps. So |Δ| ≤ 1e-5 · max|h_t|, term by term.
+    let worst = 0, worstAt = '';
+    dirs.forEach((w, i) => {
+      const want = glossyReference(table, w);
+      for (let t = 0; t < table.K; t++) {
+        const scale = Math.max(...table.h.slice(t * table.N ** 2, (t + 1) * table.N ** 2).map(Math.abs));
+        const e = Math.abs(got[t][i] - want[t]) / scale;
+        if (e > worst) [worst, worstAt] = [e, `term ${t}, w = (${w.map((x) => x.toFixed(4)).join(', ')})`];
+      }
+    });
+    fig[g.name] = { values: dirs.length * table.K, max_rel_error: worst, at: worstAt };
+    check(`glossy snippet's h_k lookup (${table.N}² ${table.sphere ? 'sphere' : 'hemisphere'} grid, K = ${table.K}) vs the documented rule, ${dirs.length} directions (φ seam, poles, horizon)`,
+      worst <= 1e-5, `max |Δ| ${worst.toExponential(2)} of max|h_t| (≤ 1e-5) at ${worstAt}`);
+  }
+  figures.glossy_lookup = fig;
 }
 
 // ---- Compressed PRT (mode=prt, transfer --clusters C --pca P) against render --shading transfer --
@@ -672,7 +778,58 @@ async function modelTests() {
     covered > 500 && same.mean === 0, `${covered} pixels covered (> 500), mean |Δ| ${same.mean.toFixed(3)} codes between panel r/m/base settings (must be 0); vs sky ${drawn.mean.toFixed(2)} codes`);
   check('model tetrahedra.gltf: the page logged no WebGL, shader or page error', a.errors.length + b.errors.length === 0,
     [...a.errors, ...b.errors].join('; ').slice(0, 500) || 'none');
+  await mtlTests(fig);
   figures.model = fig;
+}
+
+// OBJ materials (an .mtl library, three's MTLLoader): sphere.obj with a library against the same
+// geometry without one, the panel's base colour set to what the library says, converted here:
+// Kd is sRGB-encoded (MTLLoader linearizes it) and map_Kd an sRGB image, so the base colour is
+// linear(Kd)·linear(texel). A uniform texture makes the reference one colour; the geometry is
+// the same on both sides, so what may differ is the colour's rounding (bar: 1 code).
+const srgbToLinear = (c) => (c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4);
+// In DIR: sphere-kd.obj (sphere.obj with kd.mtl: Kd 0.9 0.3 0.2), sphere-uv.obj (sphere.obj with
+// texture coordinates, each vertex's (φ/2π, 1 − θ/π); faces v/vt/vn) and sphere-painted.obj (that,
+// with painted.mtl: Kd 0.8 0.9 0.7 and map_Kd paint.png, 4×4 of sRGB (200, 120, 60)).
+function writeMtlModels(dir) {
+  const lines = readFileSync(join(repo, 'testdata/meshes/sphere.obj'), 'utf8').split('\n');
+  const vt = lines.filter((l) => l.startsWith('v ')).map((l) => {
+    const [x, y, z] = l.split(/\s+/).slice(1).map(Number);
+    return `vt ${(((Math.atan2(y, x) / (2 * Math.PI)) + 1) % 1).toFixed(6)} ${(1 - Math.acos(Math.max(-1, Math.min(1, z))) / Math.PI).toFixed(6)}`;
+  });
+  const uvBody = [...lines.filter((l) => !l.startsWith('f ')), ...vt, ...lines.filter((l) => l.startsWith('f ')).map((l) => l.replace(/(\d+)\/\/(\d+)/g, '$1/$1/$2'))].join('\n');
+  const png = new PNG({ width: 4, height: 4 });
+  for (let i = 0; i < 16; i++) png.data.set([200, 120, 60, 255], 4 * i);
+  writeFileSync(join(dir, 'paint.png'), PNG.sync.write(png));
+  writeFileSync(join(dir, 'kd.mtl'), 'newmtl red\nKd 0.9 0.3 0.2\n');
+  writeFileSync(join(dir, 'painted.mtl'), 'newmtl painted\nKd 0.8 0.9 0.7\nmap_Kd paint.png\n');
+  writeFileSync(join(dir, 'sphere-kd.obj'), `mtllib kd.mtl\nusemtl red\n${lines.join('\n')}`);
+  writeFileSync(join(dir, 'sphere-uv.obj'), uvBody);
+  writeFileSync(join(dir, 'sphere-painted.obj'), `mtllib painted.mtl\nusemtl painted\n${uvBody}`);
+}
+async function mtlTests(fig) {
+  const dir = join(out, 'model-mtl');
+  rmSync(dir, { recursive: true, force: true });
+  mkdirSync(dir, { recursive: true });
+  writeMtlModels(dir);
+  const lin = (rgb) => rgb.map(srgbToLinear);
+  const cases = [
+    { name: 'Kd', obj: 'sphere-kd.obj', plain: url(join(repo, 'testdata/meshes/sphere.obj')), base: lin([0.9, 0.3, 0.2]) },
+    { name: 'Kd and map_Kd', obj: 'sphere-painted.obj', plain: url(join(dir, 'sphere-uv.obj')),
+      base: lin([0.8, 0.9, 0.7]).map((k, i) => k * srgbToLinear([200, 120, 60][i] / 255)) },
+  ];
+  const cam = { ibl: url(bake) + '/', mode: 'model', m: '0', r: '0.5', eye: toPage([3, -2.5, 1.2], 'three'), target: '0,0,0', fov: String(FOV), res: RES, exposure: '0' };
+  for (const c of cases) {
+    const got = await view({ ...cam, model: url(join(dir, c.obj)), base: '1,1,1' });
+    const ref = (await view({ ...cam, model: c.plain, base: c.base.map((x) => x.toFixed(7)).join(',') })).image;
+    let max = 0;
+    for (let i = 0; i < ref.rgba.length; i++) if (i % 4 !== 3) max = Math.max(max, Math.abs(got.image.rgba[i] - ref.rgba[i]));
+    const slug = c.obj.replace('.obj', '');
+    writePng(join(out, `model-mtl-${slug}.png`), got.image);
+    fig[`mtl_${slug}_max`] = max;
+    check(`model ${c.obj} (.mtl: ${c.name}) vs the same geometry without a library, the panel's base = the library's colour`,
+      max <= 1 && got.errors.length === 0, `max |Δ| ${max} codes over the frame (≤ 1), errors: ${got.errors.join('; ').slice(0, 300) || 'none'}`);
+  }
 }
 
 // ---- Files dropped on the page ----------------------------------------------------------------
@@ -680,6 +837,11 @@ async function modelTests() {
 // page, makes File objects, puts them in a DataTransfer and dispatches a synthetic 'drop' on the
 // page. The page must switch to the right mode and draw the same frame as the same files opened
 // by URL (max difference 0), with no error.
+// A folder ({folder: NAME, children: [...]}, children paths or folders) cannot be put in a
+// DataTransfer by a script (the browser makes FileSystemEntry objects only for a user's drop), so
+// a drop with folders is a stub: an event whose dataTransfer.items give webkitGetAsEntry()
+// entries made in the page, a folder's reader handing its entries out two at a time, last first
+// (readEntries gives batches, of up to 100, in no set order), then an empty batch.
 async function dropView(params, files) {
   const page = await browser.newPage();
   const logs = [];
@@ -690,17 +852,40 @@ async function dropView(params, files) {
   await page.goto(`${origin}/viewer/?${new URLSearchParams({ test: '1', ...params })}`, { waitUntil: 'load' });
   await page.evaluate(() => window.prtkit.ready);
   const before = await page.evaluate(() => window.prtkit.state().mode);
-  const ok = await page.evaluate(async (paths) => {
-    const dt = new DataTransfer();
-    for (const p of paths) dt.items.add(new File([await (await fetch(p)).blob()], p.split('/').pop()));
-    document.body.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+  const ok = await page.evaluate(async (items) => {
+    const file = async (p) => new File([await (await fetch(p)).blob()], p.split('/').pop());
+    let dataTransfer;
+    if (items.every((it) => typeof it === 'string')) {
+      dataTransfer = new DataTransfer();
+      for (const p of items) dataTransfer.items.add(await file(p));
+    } else {
+      const entry = async (it) => {
+        if (typeof it === 'string') { const f = await file(it); return { isFile: true, isDirectory: false, name: f.name, file: (ok) => ok(f), f }; }
+        const children = (await Promise.all(it.children.map(entry))).reverse();
+        const createReader = () => {
+          let i = 0;
+          return { readEntries: (ok) => { const batch = children.slice(i, i + 2); i += batch.length; setTimeout(() => ok(batch)); } };
+        };
+        return { isFile: false, isDirectory: true, name: it.folder, createReader };
+      };
+      const entries = await Promise.all(items.map(entry));
+      dataTransfer = { files: [], items: entries.map((e) => ({ kind: 'file', webkitGetAsEntry: () => e, getAsFile: () => e.f ?? null })) };
+    }
+    let drop;
+    if (dataTransfer instanceof DataTransfer) drop = new DragEvent('drop', { dataTransfer, bubbles: true, cancelable: true });
+    else {
+      drop = new Event('drop', { bubbles: true, cancelable: true });
+      Object.defineProperty(drop, 'dataTransfer', { value: dataTransfer });
+    }
+    document.body.dispatchEvent(drop);
     return window.prtkit.ready;
   }, files);
   const state = await page.evaluate(() => window.prtkit.state());
   const pixels = ok ? await page.evaluate(() => window.prtkit.pixels()) : null;
   const errors = [...logs, ...(await page.evaluate(() => window.prtkit.errors.slice()))];
   await page.close();
-  if (errors.length) pageErrors.push({ query: `drop ${files.join(', ')}`, errors });
+  const what = JSON.stringify(files);
+  if (errors.length) pageErrors.push({ query: `drop ${what}`, errors });
   return { before, state, image: pixels ? fromPage(pixels) : null, errors };
 }
 async function dropTests() {
@@ -710,6 +895,17 @@ async function dropTests() {
   const { dir, sky } = skyIn('drop');
   run('sh-project', [sky, '-F', '2', '-o', join(dir, 'sky.sh.json'), '-q']);
   run('transfer', ['testdata/meshes/torus-knot.obj', '-n', '3', '--rays', '64', '--glb', join(dir, 'knot3.glb'), '-o', join(dir, 'knot3.json'), '-q']);
+  run('prefilter', [sky, '--brdf', 'phong:s=16', '--shrm', join(dir, 'p16.exr'), '-o', join(dir, 'p16.json'), '-q']);
+  const nd = join(dir, 'normals');
+  mkdirSync(nd);
+  encodeSphereNormals(nd, 128, 64);
+  const d = (f) => url(join(dir, f));
+  const normalsFiles = ['sphere.codes', 'sphere.codes.json', 'decoder.glsl'].map((f) => d(`normals/${f}`));
+  const normalsByUrl = { mode: 'normals', codes: d('normals/sphere.codes'), report: d('normals/sphere.codes.json'), decoder: d('normals/decoder.glsl'),
+    size: '128x64', sh: d('sky.sh.json'), exposure: '-3' };
+  const bakeFolder = { folder: 'bake', children: readdirSync(bake).sort().map(b) };
+  mkdirSync(join(dir, 'mtl'));
+  writeMtlModels(join(dir, 'mtl'));
   const cases = [
     { name: 'a bake (ibl.json and its files), page in mode=sphere', start: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15' },
       files: bakeFiles, mode: 'sphere', byUrl: { mode: 'sphere', m: '0', r: '0.5', base: '0.8,0.2,0.15', ibl: url(bake) + '/' } },
@@ -724,6 +920,19 @@ async function dropTests() {
     { name: 'a transfer .glb with a .sh.json', start: { exposure: '-2' }, mode: 'prt',
       files: [url(join(dir, 'knot3.glb')), url(join(dir, 'sky.sh.json'))],
       byUrl: { mode: 'prt', glb: url(join(dir, 'knot3.glb')), sh: url(join(dir, 'sky.sh.json')), exposure: '-2' } },
+    { name: 'an SHRM (prefilter --shrm: its prtkit.shrm document and EXR)', start: { exposure: '-2' }, mode: 'shrm',
+      files: [d('p16.json'), d('p16.exr')], byUrl: { mode: 'shrm', shrm: d('p16.json'), exposure: '-2' } },
+    { name: 'encoded normals (codes, report, GLSL decoder) with a .sh.json', start: { exposure: '-3' }, mode: 'normals',
+      files: [...normalsFiles, d('sky.sh.json')], byUrl: normalsByUrl },
+    { name: 'a folder: ibl -o DIR', start: {}, mode: 'grid', files: [bakeFolder], byUrl: { ibl: url(bake) + '/' } },
+    { name: 'a folder holding a folder of encoded normals and a .sh.json', start: { exposure: '-3' }, mode: 'normals',
+      files: [{ folder: 'out', children: [{ folder: 'normals', children: normalsFiles }, d('sky.sh.json')] }], byUrl: normalsByUrl },
+    { name: 'a bake with an OBJ, its .mtl and its texture', start: { m: '0', r: '0.5' }, mode: 'model',
+      files: [...bakeFiles, ...['sphere-painted.obj', 'painted.mtl', 'paint.png'].map((f) => d(`mtl/${f}`))],
+      byUrl: { mode: 'model', m: '0', r: '0.5', ibl: url(bake) + '/', model: d('mtl/sphere-painted.obj') } },
+    { name: 'a folder (ibl -o DIR) and a file (sphere.obj)', start: { m: '1', r: '0.3' }, mode: 'model',
+      files: [bakeFolder, url(join(repo, 'testdata/meshes/sphere.obj'))],
+      byUrl: { mode: 'model', m: '1', r: '0.3', ibl: url(bake) + '/', model: url(join(repo, 'testdata/meshes/sphere.obj')) } },
   ];
   const fig = {};
   for (const c of cases) {
@@ -738,10 +947,20 @@ async function dropTests() {
     check(`drop ${c.name}: mode ${c.mode}, the same frame as by URL, no error`, d.state.mode === c.mode && max === 0 && d.errors.length === 0,
       `mode ${d.before} → ${d.state.mode} (want ${c.mode}), max |Δ| ${max} codes against the URL-opened page (must be 0), errors: ${d.errors.join('; ').slice(0, 300) || 'none'}`);
   }
+  // A model alone on an empty page has no bake to be lit by: a clear error naming the file, the
+  // page left as it was.
+  const lone = await dropView({ ...cam }, [url(join(repo, 'testdata/meshes/sphere.obj'))]);
+  fig.model_without_bake = { mode: lone.state.mode, errors: lone.errors };
+  const expected = pageErrors.findIndex((e) => e.errors === lone.errors);
+  if (expected >= 0) pageErrors.splice(expected, 1); // this page's error is the one asked for
+  check('drop sphere.obj on an empty page (no bake): a clear error naming the file, the mode unchanged',
+    lone.state.mode === lone.before && lone.errors.length > 0 && lone.errors.every((e) => e.includes('sphere.obj') && e.includes('bake')),
+    `mode ${lone.before} → ${lone.state.mode}, errors: ${lone.errors.join('; ').slice(0, 300) || 'none'}`);
   figures.drop = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|cpca runs one group (development; prt includes glossy and cpca); all by default.
+// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|lookup|cpca runs one group (development; prt includes glossy, lookup
+// and cpca; glossy includes lookup); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
   if (!only || only === 'ibl') {
@@ -846,6 +1065,7 @@ try {
   if (!only || only === 'sh') await shTests();
   if (!only || only === 'prt') await prtTests();
   if (!only || only === 'prt' || only === 'glossy') await glossyPrtTests();
+  if (!only || only === 'prt' || only === 'glossy' || only === 'lookup') await glossyLookupTests();
   if (!only || only === 'prt' || only === 'cpca') await cpcaPrtTests();
 } catch (e) {
   check('viewer pages', false, e.stack ?? String(e));
