@@ -309,3 +309,53 @@ fn bad_values_exit_2_naming_the_flag_and_render_names_the_file_of_an_unexpected_
     assert!(says.contains("bad.glb") && says.contains("_PRT_0") && says.contains("normalized BYTE"), "{says}");
     assert!(!d.join("bad.exr").exists());
 }
+
+#[test]
+fn the_snippets_of_a_quantized_bake_dequantize_with_the_stored_scales_and_compile() {
+    // The float bake's snippets are those of a bake without --quantize; a quantized bake's are
+    // the same text followed by the dequantization, whose literals are the .glb's scales, and it
+    // parses and validates in naga (GLSL and WGSL front ends) called before the dot product.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = test_mesh("bowl-ball.obj");
+    for kind in ["none", "i8"] {
+        let args = [mesh.as_str(), "-n", "3", "--rays", "16", "--quantize", kind, "--glb", "s.glb", "-o", "s.json"];
+        let outputs = ["--glsl", &format!("{kind}.glsl"), "--wgsl", &format!("{kind}.wgsl")];
+        run_in(d, "transfer", &[&args[..], &outputs].concat());
+    }
+    let text = |name: &str| std::fs::read_to_string(d.join(name)).unwrap();
+    let (glsl, wgsl) = (text("i8.glsl"), text("i8.wgsl"));
+    assert!(glsl.starts_with(&text("none.glsl")) && wgsl.starts_with(&text("none.wgsl")));
+    let literals: Vec<f64> = glsl[text("none.glsl").len()..]
+        .split("vec4(")
+        .skip(1)
+        .flat_map(|s| {
+            s[..s.find(')').unwrap()].split(", ").map(|x| x.parse::<f32>().unwrap() as f64).collect::<Vec<_>>()
+        })
+        .collect();
+    let scales = Glb::read(&d.join("s.glb")).blob("transfer.scales");
+    assert_eq!(&literals[..9], &scales[..]);
+    assert!(literals[9..].iter().all(|&x| x == 0.0));
+    let src = format!(
+        "#version 450\n#define PRTKIT_LIGHT_SH_DECLARED\nlayout(std140, binding = 0) uniform Light {{ vec3 prtkitLightSH[9]; }};\n\
+         {glsl}layout(location = 0) in vec4 t0;\nlayout(location = 0) out vec4 o;\n\
+         void main() {{ vec4 t[3] = vec4[3](t0, t0, t0); prtkitDequantizeTransfer(t); o = vec4(prtkitTransferRadiance(t), 1.0); }}\n"
+    );
+    let validate = |module: &naga::Module| {
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+            .validate(module)
+            .unwrap();
+    };
+    let module = naga::front::glsl::Frontend::default()
+        .parse(&naga::front::glsl::Options::from(naga::ShaderStage::Fragment), &src)
+        .unwrap_or_else(|e| panic!("{e:?}\n{src}"));
+    validate(&module);
+    let src = format!(
+        "{wgsl}@group(0) @binding(0) var<uniform> light: array<vec4<f32>, 9>;\n\
+         @fragment fn main(@location(0) t0: vec4<f32>) -> @location(0) vec4<f32> {{\n\
+         var l: array<vec3<f32>, 9>;\n    for (var i = 0; i < 9; i++) {{ l[i] = light[i].xyz; }}\n\
+         let t = prtkit_dequantize_transfer(array<vec4<f32>, 3>(t0, t0, t0));\n\
+         return vec4<f32>(prtkit_transfer_radiance(t, l), 1.0);\n}}\n"
+    );
+    validate(&naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}\n{src}", e.emit_to_string(&src))));
+}
