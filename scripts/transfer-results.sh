@@ -3,8 +3,9 @@
 # stdout: accuracy against independent derivations (examples/transfer_accuracy.rs: rows with
 # "check" unshadowed, shadowed, furnace), the speed of a shadowed and an interreflected bake of a
 # bowl holding a ball generated here (about 100 000 vertices; "check": "speed"), the frames per
-# second of relighting that mesh from its .glb at order 3 ("check": "relight"), and clustered PCA
-# of diffuse and glossy bakes ("check": "compression").
+# second of relighting that mesh from its .glb at order 3 ("check": "relight"), clustered PCA
+# of diffuse and glossy bakes ("check": "compression"), and the quantized bakes of the demo's bowl
+# ("check": "quantization": size and error for --quantize none, i16, i8).
 # Knobs (scripts/README.md): PRTKIT_BIN, PRTKIT_RESULTS, PRTKIT_SMALL=1 (a 650-vertex scene,
 # 64 rays, the example's small sizes).
 set -euo pipefail
@@ -131,6 +132,36 @@ for cp in "16 8" "64 8" "64 16"; do
   compressed "glossy-c$1-p$2" testdata/meshes/bowl-ball.obj "--brdf phong:s=8" -- "${glossy[@]}" --clusters "$1" --pca "$2"
 done
 
+# quantized NAME MESH RELIGHT_ARGS -- TRANSFER_ARGS...: bakes MESH with --quantize none, i16 and i8,
+# relights each and compares the quantized pictures with the float one; prints a row per bake:
+# its size and the manifest's quantization error and bound.
+quantized() {
+  local name=$1 mesh=$2 relight_args=$3 kind compare
+  shift 4
+  for kind in none i16 i8; do
+    echo "transfer-results: $name, --quantize $kind…" >&2
+    "$bin/transfer" "$mesh" "$@" --quantize "$kind" --glb "$tmp/q-$name-$kind.glb" -o "$tmp/q-$name-$kind.json" -q
+    compare=()
+    [ "$kind" = none ] || compare=(--compare "$tmp/q-$name-none.exr" --metrics "$tmp/q-$name-$kind.metrics.json")
+    # shellcheck disable=SC2086
+    "$bin/render" "$tmp/sky.exr" --scene "$mesh" --shading transfer --transfer "$tmp/q-$name-$kind.glb" $relight_args \
+        --res 64x64 -o "$tmp/q-$name-$kind.exr" -q "${compare[@]}"
+    jq -c --arg name "$name" --arg bytes "$(wc -c <"$tmp/q-$name-$kind.glb")" \
+        --argjson image "$(if [ "$kind" = none ]; then echo 0; else json_get "$tmp/q-$name-$kind.metrics.json" metrics.rel_error; fi)" \
+        '{check: "quantization", name: $name, quantize: (.quantization.method // "none"), vertices: .mesh.vertices,
+          values: (.compression.values_per_vertex // .coefficients), clusters: (.compression.clusters // 0),
+          pca: (.compression.components // 0), cpca_relative_rms: (.compression.relative_rms // 0),
+          relative_rms: (.quantization.relative_rms // 0), relative_rms_bound: (.quantization.relative_rms_bound // 0),
+          glb_bytes: ($bytes | tonumber), image_relative_rms: $image}' "$tmp/q-$name-$kind.json" | tee "$tmp/q-$name-$kind.row"
+    quantized_rows+=("$tmp/q-$name-$kind.row")
+  done
+}
+quantized_rows=()
+quantized diffuse testdata/meshes/bowl-ball.obj "" -- -n 4 --rays "$rays"
+quantized diffuse-c32-p4 testdata/meshes/bowl-ball.obj "" -- -n 4 --rays "$rays" --clusters 32 --pca 4
+quantized glossy testdata/meshes/bowl-ball.obj "--brdf phong:s=8" -- "${glossy[@]}"
+quantized glossy-c64-p16 testdata/meshes/bowl-ball.obj "--brdf phong:s=8" -- "${glossy[@]}" --clusters 64 --pca 16
+
 out="$docs/results/transfer.md"
 acc="$tmp/accuracy.jsonl"
 {
@@ -208,6 +239,23 @@ acc="$tmp/accuracy.jsonl"
   echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
   for f in "${compressed_rows[@]}"; do
     jq -r '"| \(.name) | \(.vertices) | \(.values) | \(.clusters) | \(.pca) | \(.iterations) | \(.relative_rms * 10000 | round / 100) % | \(.max_vertex * 10000 | round / 100) % | \(.glb_bytes / 1e4 | round / 100) | \(.wall) | \(.frames_per_second | round) |"' "$f"
+  done
+  echo
+  echo "### Quantization (\`--quantize none|i16|i8\`)"
+  echo
+  echo "The demo's bowl (\`testdata/meshes/bowl-ball.obj\`, 1 507 vertices): diffuse at order 4 ($rays rays),"
+  echo "and glossy as above; each uncompressed and compressed. i16 stores the per-vertex values"
+  echo "(\`_PRT_k\`, or the weights \`_PRT_W_k\` when compressed) as normalized SHORT, i8 as normalized"
+  echo "BYTE, with a scale per value index (per cluster when compressed). Quantization error: the"
+  echo "manifest's ‖T̂ − T_float‖/‖T‖ (T_float the transfer the float file holds: the CPCA reconstruction"
+  echo "when compressed), and its closed-form bound from half a code step per value. Relit picture:"
+  echo "relative RMS of \`render --shading transfer\` of the bake against the float bake's picture (the"
+  echo "sky, 64 × 64, \`render --compare\`)."
+  echo
+  echo "| bake | quantize | values per vertex | C | P | .glb kB | quantization error | its bound | CPCA error | relit picture vs float |"
+  echo "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+  for f in "${quantized_rows[@]}"; do
+    jq -r '"| \(.name) | \(.quantize) | \(.values) | \(.clusters) | \(.pca) | \(.glb_bytes / 1e3 | round) | \(.relative_rms * 1e6 | round / 1e4) % | \(.relative_rms_bound * 1e6 | round / 1e4) % | \(.cpca_relative_rms * 1e4 | round / 100) % | \(.image_relative_rms * 1e6 | round / 1e4) % |"' "$f"
   done
 } >"$out"
 echo "wrote $out" >&2

@@ -355,12 +355,14 @@ fn a_gltf_with_texcoord_0_bakes_the_lightmap_of_the_same_obj() {
             prtkit::io::glb::Attribute {
                 name: "NORMAL".into(),
                 components: 3,
-                values: mesh.normals.iter().flat_map(|n| n.as_vec3().to_array()).collect(),
+                values: prtkit::io::glb::Values::Float(
+                    mesh.normals.iter().flat_map(|n| n.as_vec3().to_array()).collect(),
+                ),
             },
             prtkit::io::glb::Attribute {
                 name: "TEXCOORD_0".into(),
                 components: 2,
-                values: uvs.iter().flat_map(|uv| uv.map(|c| c as f32)).collect(),
+                values: prtkit::io::glb::Values::Float(uvs.iter().flat_map(|uv| uv.map(|c| c as f32)).collect()),
             },
         ],
         triangles: mesh.triangles.clone(),

@@ -51,6 +51,7 @@ impl TryFrom<&Args> for Config {
             lightmap,
             glossy,
             compression,
+            quantization: args.quantize,
             order: args.order,
             mode: args.mode,
             rays: args.rays,

@@ -1,5 +1,5 @@
-//! Binary glTF 2.0 (`.glb`): one mesh of one indexed triangle primitive with float vertex
-//! attributes, written by hand (Khronos glTF 2.0 specification, §4.4 "GLB File Format
+//! Binary glTF 2.0 (`.glb`): one mesh of one indexed triangle primitive with float or
+//! normalized-integer vertex attributes, written by hand (Khronos glTF 2.0 specification, §4.4 "GLB File Format
 //! Specification": a 12-byte header, a JSON chunk padded with spaces and a BIN chunk padded
 //! with zeros, each to 4 bytes). Application-specific attributes are named with a leading
 //! underscore (§3.7.2.1), e.g. `_PRT_0`.
@@ -15,7 +15,39 @@ pub struct Attribute {
     /// Components per vertex: 1 (SCALAR) to 4 (VEC4).
     pub components: usize,
     /// `components` × vertex count values.
-    pub values: Vec<f32>,
+    pub values: Values,
+}
+
+/// An attribute's values in the accessor component type they are stored as. A normalized
+/// integer accessor (glTF 2.0 §3.6.2.2, `normalized: true`) is read by a client as
+/// max(c / 32767, −1) (SHORT) or max(c / 127, −1) (BYTE) (§3.11's table of normalized integers).
+#[derive(Clone, Debug)]
+pub enum Values {
+    /// FLOAT (5126).
+    Float(Vec<f32>),
+    /// SHORT (5122), normalized.
+    NormalizedShort(Vec<i16>),
+    /// BYTE (5120), normalized.
+    NormalizedByte(Vec<i8>),
+}
+
+impl Values {
+    fn len(&self) -> usize {
+        match self {
+            Values::Float(v) => v.len(),
+            Values::NormalizedShort(v) => v.len(),
+            Values::NormalizedByte(v) => v.len(),
+        }
+    }
+
+    /// The little-endian bytes, the accessor's `componentType` and whether it is normalized.
+    fn encoded(&self) -> (Vec<u8>, u32, bool) {
+        match self {
+            Values::Float(v) => (v.iter().flat_map(|x| x.to_le_bytes()).collect(), FLOAT, false),
+            Values::NormalizedShort(v) => (v.iter().flat_map(|x| x.to_le_bytes()).collect(), SHORT, true),
+            Values::NormalizedByte(v) => (v.iter().flat_map(|x| x.to_le_bytes()).collect(), BYTE, true),
+        }
+    }
 }
 
 /// A triangle mesh to write.
@@ -46,7 +78,12 @@ pub struct Blob {
     pub values: Vec<f32>,
 }
 
-const FLOAT: u32 = 5126;
+/// Accessor component types (glTF 2.0 §3.6.2.2).
+pub const FLOAT: u32 = 5126;
+/// Signed 16-bit.
+pub const SHORT: u32 = 5122;
+/// Signed 8-bit.
+pub const BYTE: u32 = 5120;
 const UNSIGNED_INT: u32 = 5125;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -88,8 +125,21 @@ pub fn encode(mesh: &GlbMesh) -> Result<Vec<u8>, String> {
             return Err(format!("attribute {} holds {} values for {count} vertices", a.name, a.values.len()));
         }
         let kind = ["SCALAR", "VEC2", "VEC3", "VEC4"][a.components - 1];
-        let view = push_view(&mut bin, &floats(&a.values), Some(ARRAY_BUFFER));
-        accessors.push(json!({"bufferView": view, "componentType": FLOAT, "count": count, "type": kind}));
+        let (bytes, component_type, normalized) = a.values.encoded();
+        // Each vertex's element must start on a 4-byte boundary (§3.6.2.4): refuse what would not.
+        if bytes.len() % (4 * count.max(1)) != 0 {
+            return Err(format!(
+                "attribute {}: {} bytes per vertex is not a multiple of 4",
+                a.name,
+                bytes.len() / count
+            ));
+        }
+        let view = push_view(&mut bin, &bytes, Some(ARRAY_BUFFER));
+        let mut accessor = json!({"bufferView": view, "componentType": component_type, "count": count, "type": kind});
+        if normalized {
+            accessor["normalized"] = json!(true);
+        }
+        accessors.push(accessor);
         attributes.insert(a.name.clone(), json!(accessors.len() - 1));
     }
     let indices: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();

@@ -227,12 +227,30 @@ impl<'a> Glb<'a> {
         NotATransfer { file: self.name.to_string(), reason: reason.into() }
     }
 
-    /// The accessor `index` of float `kind` (SCALAR, VEC3, VEC4): its count and its bytes.
-    fn accessor(&self, index: &Value, kind: &str) -> Result<(usize, &'a [u8]), NotATransfer> {
-        let index = index.as_u64().ok_or_else(|| self.bad("an attribute has no accessor"))?;
+    /// The accessor of attribute `name` in `attributes`, of `kind` (SCALAR, VEC3, VEC4) and
+    /// component type `storage`: its count and its bytes.
+    fn accessor(
+        &self,
+        attributes: &Value,
+        name: &str,
+        kind: &str,
+        storage: Storage,
+    ) -> Result<(usize, &'a [u8]), NotATransfer> {
+        let index = attributes[name].as_u64().ok_or_else(|| self.bad(format!("no {name} attribute")))?;
         let a = &self.gltf["accessors"][index as usize];
-        if a["componentType"].as_u64() != Some(5126) || a["type"].as_str() != Some(kind) {
-            return Err(self.bad(format!("an accessor is not float {kind}")));
+        let component_type = a["componentType"].as_u64();
+        let normalized = a["normalized"].as_bool().unwrap_or(false);
+        if component_type != Some(storage.component_type() as u64)
+            || normalized != (storage != Storage::Float)
+            || a["type"].as_str() != Some(kind)
+        {
+            return Err(self.bad(format!(
+                "{name} is a {} accessor of componentType {}{}, not {} {kind}",
+                a["type"].as_str().unwrap_or("?"),
+                component_type.map_or("none".into(), |c| c.to_string()),
+                if normalized { " (normalized)" } else { "" },
+                storage.describe()
+            )));
         }
         let count = a["count"].as_u64().ok_or_else(|| self.bad("an accessor has no count"))? as usize;
         let view = a["bufferView"].as_u64().ok_or_else(|| self.bad("no bufferView"))?;
@@ -244,7 +262,7 @@ impl<'a> Glb<'a> {
             _ => 4,
         };
         let data = count
-            .checked_mul(4 * components)
+            .checked_mul(storage.bytes() * components)
             .and_then(|length| start.checked_add(length))
             .and_then(|end| self.bin.get(start..end))
             .ok_or_else(|| self.bad("an accessor runs past the BIN chunk"))?;
@@ -252,23 +270,26 @@ impl<'a> Glb<'a> {
     }
 
     /// `per_vertex` values for each of `vertices`, packed four to a VEC4 attribute PREFIX0,
-    /// PREFIX1, … of `attributes`.
+    /// PREFIX1, … of `attributes`, stored as `storage` (normalized integers read as glTF 2.0
+    /// §3.11 says, max(c / q, −1), before any scale).
     fn vec4s(
         &self,
         attributes: &Value,
         prefix: &str,
         vertices: usize,
         per_vertex: usize,
+        storage: Storage,
     ) -> Result<Vec<f32>, NotATransfer> {
         crate::limits::check_memory("the transfer", (vertices as u128) * (per_vertex as u128) * 4)
             .map_err(|e| self.bad(e.to_string()))?;
         let mut out = vec![0.0f32; vertices * per_vertex];
         for k in 0..per_vertex.div_ceil(4) {
-            let (count, data) = self.accessor(&attributes[format!("{prefix}{k}")], "VEC4")?;
+            let name = format!("{prefix}{k}");
+            let (count, data) = self.accessor(attributes, &name, "VEC4", storage)?;
             if count != vertices {
                 return Err(self.bad(format!("{prefix}{k} has {count} vertices, POSITION {vertices}")));
             }
-            for (v, c) in floats(data).chunks_exact(4).enumerate() {
+            for (v, c) in storage.read(data).chunks_exact(4).enumerate() {
                 for j in 0..4 {
                     if 4 * k + j < per_vertex {
                         out[v * per_vertex + 4 * k + j] = c[j];
@@ -280,6 +301,27 @@ impl<'a> Glb<'a> {
             return Err(self.bad(format!("a value of {prefix}k is not finite")));
         }
         Ok(out)
+    }
+
+    /// The uncompressed transfer, `coeffs` values per vertex: `_PRT_k` times the value index's
+    /// scale when quantized (docs/formats/transfer.md).
+    fn transfer(
+        &self,
+        attributes: &Value,
+        vertices: usize,
+        coeffs: usize,
+        quantized: &Quantized,
+    ) -> Result<Vec<f32>, NotATransfer> {
+        let mut transfer = self.vec4s(attributes, "_PRT_", vertices, coeffs, quantized.storage)?;
+        if let Some(scales) = &quantized.scales {
+            if scales.len() != coeffs {
+                return Err(self.bad(format!("{} holds {} scales for {coeffs} values", quantized.blob, scales.len())));
+            }
+            for row in transfer.chunks_exact_mut(coeffs) {
+                row.iter_mut().zip(scales).for_each(|(t, s)| *t *= s);
+            }
+        }
+        Ok(transfer)
     }
 
     /// The blob `name` of the mesh's extras, `None` when absent.
@@ -321,6 +363,7 @@ impl<'a> Glb<'a> {
         attributes: &Value,
         vertices: usize,
         coeffs: usize,
+        quantized: &Quantized,
     ) -> Result<Compressed, NotATransfer> {
         let clusters = record["clusters"].as_u64().unwrap_or(0) as usize;
         let components = record["components"].as_u64().unwrap_or(0) as usize;
@@ -329,7 +372,7 @@ impl<'a> Glb<'a> {
         {
             return Err(self.bad(format!("cpca: {clusters} clusters of {components} directions")));
         }
-        let (count, data) = self.accessor(&attributes["_PRT_CLUSTER"], "SCALAR")?;
+        let (count, data) = self.accessor(attributes, "_PRT_CLUSTER", "SCALAR", Storage::Float)?;
         let cluster_of = floats(data)
             .into_iter()
             .map(|c| (c >= 0.0 && c.fract() == 0.0 && (c as usize) < clusters).then_some(c as u32))
@@ -345,7 +388,20 @@ impl<'a> Glb<'a> {
         };
         let means = blob("cpca.means", clusters * coeffs)?;
         let bases = blob("cpca.bases", clusters * components * coeffs)?;
-        let weights = self.vec4s(attributes, "_PRT_W_", vertices, components)?;
+        let mut weights = self.vec4s(attributes, "_PRT_W_", vertices, components, quantized.storage)?;
+        if let Some(scales) = &quantized.scales {
+            if scales.len() != clusters {
+                return Err(self.bad(format!(
+                    "{} holds {} scales for {clusters} clusters",
+                    quantized.blob,
+                    scales.len()
+                )));
+            }
+            // w_p = max(c / q, −1) × the cluster's scale (docs/formats/transfer.md).
+            for (w, &c) in weights.chunks_exact_mut(components).zip(&cluster_of) {
+                w.iter_mut().for_each(|x| *x *= scales[c as usize]);
+            }
+        }
         Ok(Compressed { clusters, components, means, bases, cluster_of, weights })
     }
 }
@@ -353,6 +409,86 @@ impl<'a> Glb<'a> {
 /// Little-endian f32s.
 fn floats(data: &[u8]) -> Vec<f32> {
     data.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
+}
+
+/// The component type a bake's per-vertex values are stored as (`transfer --quantize`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Storage {
+    /// FLOAT.
+    Float,
+    /// Normalized SHORT, read as max(c / 32767, −1).
+    NormalizedShort,
+    /// Normalized BYTE, read as max(c / 127, −1).
+    NormalizedByte,
+}
+
+impl Storage {
+    fn component_type(self) -> u32 {
+        match self {
+            Storage::Float => glb::FLOAT,
+            Storage::NormalizedShort => glb::SHORT,
+            Storage::NormalizedByte => glb::BYTE,
+        }
+    }
+
+    fn bytes(self) -> usize {
+        match self {
+            Storage::Float => 4,
+            Storage::NormalizedShort => 2,
+            Storage::NormalizedByte => 1,
+        }
+    }
+
+    fn describe(self) -> &'static str {
+        match self {
+            Storage::Float => "float (5126)",
+            Storage::NormalizedShort => "normalized SHORT (5122), as extras.prtkit.transfer.quantization says,",
+            Storage::NormalizedByte => "normalized BYTE (5120), as extras.prtkit.transfer.quantization says,",
+        }
+    }
+
+    /// The values as a glTF client reads them (glTF 2.0 §3.11: max(c / q, −1) when normalized).
+    fn read(self, data: &[u8]) -> Vec<f32> {
+        match self {
+            Storage::Float => floats(data),
+            Storage::NormalizedShort => data
+                .chunks_exact(2)
+                .map(|b| (i16::from_le_bytes([b[0], b[1]]) as f32 / i16::MAX as f32).max(-1.0))
+                .collect(),
+            Storage::NormalizedByte => data.iter().map(|&b| (b as i8 as f32 / i8::MAX as f32).max(-1.0)).collect(),
+        }
+    }
+}
+
+/// A bake's quantization as its extras record it: the storage, and the scales (absent for
+/// float storage) from the blob named there.
+struct Quantized {
+    storage: Storage,
+    blob: String,
+    scales: Option<Vec<f32>>,
+}
+
+impl Glb<'_> {
+    /// The extras' `quantization` (absent: float storage), its scales read and checked.
+    fn quantized(&self, record: Option<&Value>) -> Result<Quantized, NotATransfer> {
+        let Some(record) = record else {
+            return Ok(Quantized { storage: Storage::Float, blob: String::new(), scales: None });
+        };
+        let storage = match (record["type"].as_str(), record["code_max"].as_i64()) {
+            (Some("i16"), Some(32767)) => Storage::NormalizedShort,
+            (Some("i8"), Some(127)) => Storage::NormalizedByte,
+            (kind, code_max) => {
+                return Err(self
+                    .bad(format!("quantization {kind:?} with code_max {code_max:?} is not i16 (32767) or i8 (127)")))
+            }
+        };
+        let blob = record["scales"].as_str().ok_or_else(|| self.bad("quantization without its scales blob"))?;
+        let scales = self.blob(blob).ok_or_else(|| self.bad(format!("no {blob} blob")))??;
+        if scales.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
+            return Err(self.bad(format!("{blob}: a scale is not a finite number >= 0")));
+        }
+        Ok(Quantized { storage, blob: blob.to_string(), scales: Some(scales) })
+    }
 }
 
 impl TransferBake {
@@ -374,12 +510,13 @@ impl TransferBake {
         let albedo = extras["albedo"].as_f64().filter(|a| a.is_finite()).ok_or_else(|| bad("no finite albedo"))?;
         let primitive = &mesh["primitives"][0];
         let attributes = &primitive["attributes"];
-        let (vertices, data) = glb.accessor(&attributes["POSITION"], "VEC3")?;
+        let (vertices, data) = glb.accessor(attributes, "POSITION", "VEC3", Storage::Float)?;
         let positions: Vec<[f32; 3]> = floats(data).chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         let coeffs = terms * order * order;
+        let quantized = glb.quantized(extras.get("quantization"))?;
         let (transfer, compressed) = match extras.get("cpca") {
-            None => (glb.vec4s(attributes, "_PRT_", vertices, coeffs)?, None),
-            Some(c) => (Vec::new(), Some(glb.compressed(c, attributes, vertices, coeffs)?)),
+            None => (glb.transfer(attributes, vertices, coeffs, &quantized)?, None),
+            Some(c) => (Vec::new(), Some(glb.compressed(c, attributes, vertices, coeffs, &quantized)?)),
         };
         let indices = primitive["indices"].as_u64().ok_or_else(|| bad("no indices"))?;
         let count = glb.gltf["accessors"][indices as usize]["count"].as_u64();

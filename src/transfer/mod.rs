@@ -13,8 +13,8 @@
 //! integrators (exact quadrature without visibility, stratified rays with it), [`directions`]
 //! the stratified ray directions, [`visibility`] the BVH the rays are cast through,
 //! [`interreflect`] the bounces, [`shaders`] the run-time dot product and SH rotation (GLSL,
-//! HLSL, WGSL), [`lightmap`] the same diffuse transfer per texel of a UV set, and [`stage`] the
-//! `transfer` stage.
+//! HLSL, WGSL), [`lightmap`] the same diffuse transfer per texel of a UV set, [`cpca`] and
+//! [`quantize`] the compressed and quantized storage, and [`stage`] the `transfer` stage.
 
 pub mod cpca;
 pub mod diffuse;
@@ -22,6 +22,7 @@ pub mod directions;
 pub mod glossy;
 pub mod interreflect;
 pub mod lightmap;
+pub mod quantize;
 pub mod shaders;
 pub mod stage;
 pub mod visibility;

@@ -20,6 +20,7 @@
 //!
 //! [`ShRotation`]: crate::sh::rotate::ShRotation
 
+use super::quantize::Quantized;
 use crate::factor::{Domain, Grid};
 pub use crate::normals::shader::Language;
 use crate::sh::index;
@@ -471,6 +472,47 @@ fn {radiance}(h: texture_2d<f32>, n: vec3<f32>, wo: vec3<f32>, c: array<vec3<f32
         }
     }
     out
+}
+
+/// The dequantization of a quantized, uncompressed bake's `_PRT_k` four-vectors (`transfer
+/// --quantize`): a client reads a normalized component as max(code / q, −1) (glTF 2.0 §3.11),
+/// and the transfer value is that times its index's scale, `scales` being the `.glb`'s
+/// `transfer.scales` blob written out as literals. Call it on a vertex's four-vectors before
+/// the dot product (or, for a glossy bake, before splitting the stream into terms).
+pub fn dequantize_snippet(quantized: &Quantized, lang: Language) -> String {
+    let (scales, code_max, kind) = (&quantized.scales, quantized.code_max, quantized.component());
+    let vec4s = scales.len().div_ceil(4);
+    let s = syntax(lang);
+    let name = match lang {
+        Language::Wgsl => "prtkit_dequantize_transfer",
+        _ => "prtkitDequantizeTransfer",
+    };
+    let mut body = String::new();
+    for k in 0..vec4s {
+        let four: Vec<String> =
+            (4 * k..4 * k + 4).map(|i| format!("{:.8e}", scales.get(i).copied().unwrap_or(0.0))).collect();
+        let scale = format!("{}({})", s.vec4, four.join(", "));
+        body += &match lang {
+            Language::Wgsl => format!("    t[{k}] = t[{k}] * {scale};\n"),
+            _ => format!("    transfer[{k}] *= {scale};\n"),
+        };
+    }
+    let header = format!(
+        "
+// prtkit transfer, quantized (transfer --quantize): the _PRT_k attributes are normalized {kind}
+// VEC4s; a glTF client reads each component as max(code / {code_max}, -1), and the transfer value
+// is that times its index's scale, scale_i = the .glb's transfer.scales blob (written out below).
+// {name}: call it on the vertex's {vec4s} four-vectors before the dot product.
+"
+    );
+    header
+        + &match lang {
+            Language::Wgsl => format!(
+                "\nfn {name}(transfer: array<{vec4}, {vec4s}>) -> array<{vec4}, {vec4s}> {{\n    var t = transfer;\n{body}    return t;\n}}\n",
+                vec4 = s.vec4
+            ),
+            _ => format!("\nvoid {name}(inout {vec4} transfer[{vec4s}]) {{\n{body}}}\n", vec4 = s.vec4),
+        }
 }
 
 #[cfg(test)]

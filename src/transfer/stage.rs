@@ -14,10 +14,11 @@ use super::directions::Stratified;
 use super::glossy::Glossy;
 use super::interreflect::{Hits, Storage, Tracer};
 use super::lightmap::{self, Lightmap, LightmapConfig, LightmapInfo};
-use super::shaders::{glossy_snippet, snippet, Language};
+use super::quantize::{Quantization, Quantized};
+use super::shaders::{dequantize_snippet, glossy_snippet, snippet, Language};
 use super::visibility::{triangle_area, Occluders};
 use crate::factor::Factorization;
-use crate::io::glb::{self, Attribute, Blob, GlbMesh};
+use crate::io::glb::{self, Attribute, Blob, GlbMesh, Values};
 use crate::io::{Document, Provenance};
 use crate::limits::LimitError;
 use crate::limits::{
@@ -82,6 +83,8 @@ pub struct Config {
     pub compression: Option<Compression>,
     /// A per-texel lightmap beside the per-vertex bake (`--lightmap WxH FILE.exr`).
     pub lightmap: Option<LightmapConfig>,
+    /// How the `.glb` stores the per-vertex values (`--quantize`).
+    pub quantization: Quantization,
 }
 
 /// How many clusters and directions CPCA keeps (Sloan et al. 2003).
@@ -129,6 +132,7 @@ impl Default for Config {
             glossy: None,
             compression: None,
             lightmap: None,
+            quantization: Quantization::None,
         }
     }
 }
@@ -169,6 +173,38 @@ pub struct TransferBody {
     /// The per-texel lightmap written beside the `.glb` (absent: none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lightmap: Option<LightmapInfo>,
+    /// How the `.glb`'s per-vertex values are quantized (absent: float).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quantization: Option<QuantizationInfo>,
+}
+
+/// How the per-vertex values are quantized and what it costs (`docs/formats/transfer.md`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct QuantizationInfo {
+    /// `i16` or `i8`.
+    pub method: Quantization,
+    /// The accessors' component type in words.
+    pub component_type: String,
+    /// The largest code q: value = max(code / q, −1) × scale.
+    pub code_max: i32,
+    /// The attributes quantized (`_PRT_k`, or `_PRT_W_k` when compressed).
+    pub attributes: String,
+    /// `value` (one scale per value index over the mesh) or `cluster` (one per CPCA cluster).
+    pub scale_per: String,
+    /// The `.glb` blob holding the scales.
+    pub scales_blob: String,
+    /// The scales, as the blob holds them.
+    pub scales: Vec<f32>,
+    /// The largest |v − v̂| over the stored values in units of their half code step
+    /// scale / (2q): at most 1.
+    pub max_error_over_half_step: f64,
+    /// ‖T̂ − T_float‖ / ‖T‖ over every vertex and value: T̂ the transfer from the dequantized
+    /// values, T_float from the unquantized ones (the CPCA reconstruction when compressed).
+    pub relative_rms: f64,
+    /// The closed-form bound on `relative_rms` from half a code step per value.
+    pub relative_rms_bound: f64,
+    /// How a reader dequantizes, in words.
+    pub dequantize: String,
 }
 
 /// What CPCA kept and what it costs in accuracy (`docs/formats/transfer.md`).
@@ -597,13 +633,25 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         Some(l) => Some(lightmap::bake(l, config, mesh, progress)?),
         None => None,
     };
-    let body = manifest(config, mesh, &plan, &baked, cpca.as_ref(), lightmap.as_ref().map(|l| l.info.clone()));
+    let quantized = quantize(config.quantization, &baked.transfer, plan.per_vertex, cpca.as_ref());
+    let mut body = manifest(config, mesh, &plan, &baked, cpca.as_ref(), lightmap.as_ref().map(|l| l.info.clone()));
+    if let Some(q) = &quantized {
+        let info = quantization_info(config.quantization, q, &baked.transfer, plan.per_vertex, cpca.as_ref());
+        body.glb.packing +=
+            &format!("; quantized: {} hold {} VEC4s, {}", info.attributes, info.component_type, info.dequantize);
+        body.quantization = Some(info);
+    }
     let h = config
         .glossy
         .as_ref()
         .map(|g| g.factorization.h[..g.terms].iter().flatten().map(|&v| v as f32).collect::<Vec<f32>>());
-    let glb = glb::encode(&glb_mesh(mesh, &baked.transfer, plan.per_vertex, &body, h, cpca.as_ref()))
-        .map_err(Error::GlbEncoding)?;
+    let stored = Stored {
+        transfer: &baked.transfer,
+        per_vertex: plan.per_vertex,
+        cpca: cpca.as_ref(),
+        quantized: quantized.as_ref(),
+    };
+    let glb = glb::encode(&glb_mesh(mesh, &stored, &body, h)).map_err(Error::GlbEncoding)?;
     let vertices = mesh.positions.len();
     let summary = Summary {
         vertices,
@@ -621,9 +669,9 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     Ok(Output {
         document: Document::new(FORMAT, VERSION, provenance, body),
         glb,
-        glsl: run_time_snippet(config, Language::Glsl),
-        hlsl: run_time_snippet(config, Language::Hlsl),
-        wgsl: run_time_snippet(config, Language::Wgsl),
+        glsl: run_time_snippet(config, quantized.as_ref(), Language::Glsl),
+        hlsl: run_time_snippet(config, quantized.as_ref(), Language::Hlsl),
+        wgsl: run_time_snippet(config, quantized.as_ref(), Language::Wgsl),
         transfer: baked.transfer,
         summary,
         lightmap,
@@ -837,6 +885,7 @@ fn manifest(
         glossy,
         compression: cpca.map(|cpca| compression_info(cpca, &baked.transfer)),
         lightmap,
+        quantization: None,
     }
 }
 
@@ -866,34 +915,47 @@ fn packing(coeffs: usize, per_vertex: usize, glossy: Option<&GlossyInfo>, cpca: 
 /// The run-time snippet in `lang`. A glossy bake's adds the view-dependent half: the frame F and
 /// the h_k lookup. A compressed bake's `.glb` has no `_PRT_k`: its header says how to get T (or
 /// c_k) first.
-fn run_time_snippet(config: &Config, lang: Language) -> String {
-    let text = match &config.glossy {
+fn run_time_snippet(config: &Config, quantized: Option<&Quantized>, lang: Language) -> String {
+    let mut text = match &config.glossy {
         Some(g) => glossy_snippet(config.order, g.terms, g.factorization.grid, lang),
         None => snippet(config.order, lang),
     };
-    match &config.compression {
-        None => text,
-        Some(c) => format!(
+    match (&config.compression, quantized) {
+        (None, None) => text,
+        (None, Some(q)) => {
+            text += &dequantize_snippet(q, lang);
+            text
+        }
+        (Some(c), q) => format!(
             "// This bake's .glb stores the transfer by clustered PCA (transfer --clusters {} --pca {}): it has no\n\
              // _PRT_k attributes but _PRT_CLUSTER, _PRT_W_k and the cpca.means / cpca.bases blobs. Per frame,\n\
              // dot the (turned) lighting with each cluster's mean and directions, then per vertex add P\n\
              // weighted terms (Sloan et al. 2003, eq. 3; docs/formats/transfer.md); the dot product below is\n\
-             // that of an uncompressed T, T = mean[c] + sum_p w_p basis[c][p].\n{text}",
-            c.clusters, c.components
+             // that of an uncompressed T, T = mean[c] + sum_p w_p basis[c][p].\n{}{text}",
+            c.clusters,
+            c.components,
+            q.map_or(String::new(), |q| format!(
+                "// The weights are quantized (transfer --quantize): _PRT_W_k are normalized {} VEC4s, read by a\n\
+                 // glTF client as max(code / {1}, -1); w_p = that * cpca.scales[c], one scale per cluster.\n",
+                q.component(),
+                q.code_max
+            ))
         ),
     }
 }
 
+/// What the `.glb` stores per vertex: the transfer (`per_vertex` values a vertex) or its
+/// clustered PCA, either as floats or quantized.
+struct Stored<'a> {
+    transfer: &'a [f64],
+    per_vertex: usize,
+    cpca: Option<&'a Cpca>,
+    quantized: Option<&'a Quantized>,
+}
+
 /// The `.glb`: positions, unit normals, the transfer packed four coefficients per `_PRT_k`, and
 /// the manifest's body in the mesh's `extras` (so that the file explains itself).
-fn glb_mesh(
-    mesh: &Mesh,
-    transfer: &[f64],
-    coeffs: usize,
-    body: &TransferBody,
-    h: Option<Vec<f32>>,
-    cpca: Option<&Cpca>,
-) -> GlbMesh {
+fn glb_mesh(mesh: &Mesh, stored: &Stored, body: &TransferBody, h: Option<Vec<f32>>) -> GlbMesh {
     let mut extras = serde_json::json!({ "order": body.order, "mode": body.mode, "albedo": body.albedo });
     if let Some(g) = &body.glossy {
         extras["glossy"] = serde_json::json!({
@@ -910,23 +972,34 @@ fn glb_mesh(
     let mut attributes = vec![Attribute {
         name: "NORMAL".into(),
         components: 3,
-        values: mesh.normals.iter().flat_map(|n| n.as_vec3().to_array()).collect(),
+        values: Values::Float(mesh.normals.iter().flat_map(|n| n.as_vec3().to_array()).collect()),
     }];
     let mut blobs: Vec<Blob> = h.map(|values| Blob { name: GLOSSY_H_BLOB.into(), values }).into_iter().collect();
-    match cpca {
-        None => attributes.extend(vec4_attributes("_PRT_", transfer, coeffs, vertices)),
+    let quantized = stored.quantized;
+    match stored.cpca {
+        None => attributes.extend(vec4_attributes("_PRT_", stored.transfer, stored.per_vertex, vertices, quantized)),
         Some(c) => {
             extras["cpca"] = serde_json::json!({ "clusters": c.clusters, "components": c.components });
             attributes.push(Attribute {
                 name: "_PRT_CLUSTER".into(),
                 components: 1,
-                values: c.cluster_of.iter().map(|&k| k as f32).collect(),
+                values: Values::Float(c.cluster_of.iter().map(|&k| k as f32).collect()),
             });
-            attributes.extend(vec4_attributes("_PRT_W_", &c.weights, c.components, vertices));
+            attributes.extend(vec4_attributes("_PRT_W_", &c.weights, c.components, vertices, quantized));
             let floats = |v: &[f64]| v.iter().map(|&x| x as f32).collect();
             blobs.push(Blob { name: "cpca.means".into(), values: floats(&c.means) });
             blobs.push(Blob { name: "cpca.bases".into(), values: floats(&c.bases) });
         }
+    }
+    // The scales beside the data they scale (after the clusters' means and directions).
+    if let (Some(q), Some(info)) = (quantized, &body.quantization) {
+        extras["quantization"] = serde_json::json!({
+            "type": info.method,
+            "code_max": q.code_max,
+            "scale_per": info.scale_per,
+            "scales": info.scales_blob,
+        });
+        blobs.push(Blob { name: info.scales_blob.clone(), values: q.scales.clone() });
     }
     GlbMesh {
         positions: mesh.positions.iter().map(|p| p.as_vec3().to_array()).collect(),
@@ -938,22 +1011,110 @@ fn glb_mesh(
     }
 }
 
-/// `values` (`per_vertex` per vertex) as float VEC4 attributes `PREFIX0`, `PREFIX1`, …, four
-/// values each, zeros padding the last.
-fn vec4_attributes(prefix: &str, values: &[f64], per_vertex: usize, vertices: usize) -> Vec<Attribute> {
+/// `values` (`per_vertex` per vertex) as VEC4 attributes `PREFIX0`, `PREFIX1`, …, four values
+/// each, zeros padding the last: floats, or the codes of `quantized` (normalized SHORT or BYTE).
+fn vec4_attributes(
+    prefix: &str,
+    values: &[f64],
+    per_vertex: usize,
+    vertices: usize,
+    quantized: Option<&Quantized>,
+) -> Vec<Attribute> {
+    let packed = |k: usize| {
+        (0..vertices).flat_map(move |v| (4 * k..4 * k + 4).map(move |i| (i < per_vertex).then_some(v * per_vertex + i)))
+    };
     (0..per_vertex.div_ceil(4))
         .map(|k| {
-            let mut packed = Vec::with_capacity(4 * vertices);
-            for v in 0..vertices {
-                for j in 0..4 {
-                    let i = 4 * k + j;
-                    packed.push(if i < per_vertex { values[v * per_vertex + i] as f32 } else { 0.0 });
+            let values = match quantized {
+                None => Values::Float(packed(k).map(|i| i.map_or(0.0, |i| values[i] as f32)).collect()),
+                // Codes lie in -q..=q, so they fit the type q is the largest of.
+                Some(q) if q.code_max == i8::MAX as i32 => {
+                    Values::NormalizedByte(packed(k).map(|i| i.map_or(0, |i| q.codes[i] as i8)).collect())
                 }
-            }
-            Attribute { name: format!("{prefix}{k}"), components: 4, values: packed }
+                Some(q) => Values::NormalizedShort(packed(k).map(|i| i.map_or(0, |i| q.codes[i] as i16)).collect()),
+            };
+            Attribute { name: format!("{prefix}{k}"), components: 4, values }
         })
         .collect()
 }
+
+/// The per-vertex values of a bake coded by `quantization` (`None` for float storage): the
+/// transfer with one scale per value index, or, compressed, the PCA weights with one scale per
+/// cluster ([`super::quantize`]).
+fn quantize(quantization: Quantization, transfer: &[f64], per_vertex: usize, cpca: Option<&Cpca>) -> Option<Quantized> {
+    let q = quantization.code_max()?;
+    Some(match cpca {
+        None => Quantized::new(transfer, per_vertex, per_vertex, q, |_, j| j),
+        Some(c) => Quantized::new(&c.weights, c.components, c.clusters, q, |v, _| c.cluster_of[v] as usize),
+    })
+}
+
+/// The manifest's account of a quantization: the error of the transfer it stores against the
+/// unquantized file's, and its closed-form bound. Each stored value moves by at most half a code
+/// step, s / (2q). Uncompressed, that is the transfer's own change, so
+/// ‖ΔT‖² ≤ V Σ_i (s_i / 2q)² over V vertices. Compressed, ΔT(x) = Σ_p Δw_p b_cp with the
+/// cluster's directions orthonormal (or zero), so ‖ΔT(x)‖ ≤ ‖Δw‖ ≤ √P s_c / (2q) (Sloan et al.
+/// 2003, eq. 2).
+fn quantization_info(
+    quantization: Quantization,
+    q: &Quantized,
+    transfer: &[f64],
+    per_vertex: usize,
+    cpca: Option<&Cpca>,
+) -> QuantizationInfo {
+    let half_step = |s: f32| s as f64 / (2.0 * q.code_max as f64);
+    let reference2: f64 = transfer.iter().map(|t| t * t).sum();
+    let (diff2, bound2, attributes, scale_per, scales_blob) = match cpca {
+        None => {
+            let diff2: f64 = transfer.iter().enumerate().map(|(k, t)| (t - q.value(k, k % per_vertex)).powi(2)).sum();
+            let vertices = transfer.len() / per_vertex;
+            let bound2 = vertices as f64 * q.scales.iter().map(|&s| half_step(s).powi(2)).sum::<f64>();
+            (diff2, bound2, "_PRT_k", "value", TRANSFER_SCALES_BLOB)
+        }
+        Some(c) => {
+            let (p, d) = (c.components, c.dim);
+            let (mut diff2, mut bound2) = (0.0, 0.0);
+            let mut delta = vec![0.0; d];
+            for (v, &cluster) in c.cluster_of.iter().enumerate() {
+                let cluster = cluster as usize;
+                delta.fill(0.0);
+                for j in 0..p {
+                    let dw = c.weights[v * p + j] - q.value(v * p + j, cluster);
+                    let basis = &c.bases[(cluster * p + j) * d..(cluster * p + j + 1) * d];
+                    delta.iter_mut().zip(basis).for_each(|(t, b)| *t += dw * b);
+                }
+                diff2 += delta.iter().map(|t| t * t).sum::<f64>();
+                bound2 += p as f64 * half_step(q.scales[cluster]).powi(2);
+            }
+            (diff2, bound2, "_PRT_W_k", "cluster", CPCA_SCALES_BLOB)
+        }
+    };
+    let relative = |x2: f64| if reference2 > 0.0 { (x2 / reference2).sqrt() } else { 0.0 };
+    QuantizationInfo {
+        method: quantization,
+        component_type: quantization.component_type().into(),
+        code_max: q.code_max,
+        attributes: attributes.into(),
+        scale_per: scale_per.into(),
+        scales_blob: scales_blob.into(),
+        scales: q.scales.clone(),
+        max_error_over_half_step: q.max_error_over_half_step,
+        relative_rms: relative(diff2),
+        relative_rms_bound: relative(bound2),
+        dequantize: format!(
+            "value = max(code / {q}, -1) * {scales_blob}[{which} (a glTF client's normalized read gives \
+             max(code / {q}, -1))",
+            q = q.code_max,
+            which = if cpca.is_some() { "c], c the vertex's cluster" } else { "i], i the value's index in the layout" }
+        ),
+    }
+}
+
+/// The blob of a quantized, uncompressed `.glb` holding one scale per value index (the layout's
+/// n² or K·n² values).
+pub const TRANSFER_SCALES_BLOB: &str = "transfer.scales";
+/// The blob of a quantized, compressed `.glb` holding one scale per cluster for its weights.
+pub const CPCA_SCALES_BLOB: &str = "cpca.scales";
 
 /// The manifest's account of a compression.
 fn compression_info(cpca: &Cpca, transfer: &[f64]) -> CompressionInfo {

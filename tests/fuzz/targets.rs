@@ -486,8 +486,16 @@ pub fn corpus(work: &Path) -> Vec<(&'static str, Vec<Vec<u8>>)> {
 /// with 16-bit indices in a strip, written here.
 fn glb_seeds() -> Vec<Vec<u8>> {
     let positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let normal = prtkit::io::glb::Attribute { name: "NORMAL".into(), components: 3, values: [0.0, 0.6, 0.8].repeat(4) };
-    let prt = prtkit::io::glb::Attribute { name: "_PRT_0".into(), components: 4, values: vec![0.5; 16] };
+    let normal = prtkit::io::glb::Attribute {
+        name: "NORMAL".into(),
+        components: 3,
+        values: prtkit::io::glb::Values::Float([0.0, 0.6, 0.8].repeat(4)),
+    };
+    let prt = prtkit::io::glb::Attribute {
+        name: "_PRT_0".into(),
+        components: 4,
+        values: prtkit::io::glb::Values::Float(vec![0.5; 16]),
+    };
     let mesh = prtkit::io::glb::GlbMesh {
         positions,
         attributes: vec![normal, prt],

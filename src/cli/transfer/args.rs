@@ -2,6 +2,7 @@
 
 use crate::cli::options::{parse_output, Execution};
 use crate::io::Output;
+use crate::transfer::quantize::Quantization;
 use crate::transfer::stage::Mode;
 use clap::Parser;
 use std::path::PathBuf;
@@ -108,6 +109,13 @@ pub struct Args {
     /// With --clusters: principal directions P per cluster (1 to 64, at most the values per vertex)
     #[arg(long, value_name = "P", requires = "clusters")]
     pub pca: Option<usize>,
+
+    /// Store the per-vertex values quantized: i16 (normalized SHORT, glTF's 16-bit form: it has
+    /// no half float) or i8 (normalized BYTE), value = code / 32767 (or 127) × a scale per value
+    /// index over the mesh, or per cluster with --clusters; the manifest reports the error and
+    /// its bound
+    #[arg(long, value_enum, value_name = "KIND", default_value_t = Quantization::None)]
+    pub quantize: Quantization,
 
     /// Also bake the transfer per texel of the mesh's UV set (OBJ vt, glTF TEXCOORD_1 else TEXCOORD_0) into a W×H grid, written as
     /// one multi-layer EXR (layers T0… per coefficient and coverage); unshadowed or shadowed,
