@@ -50,6 +50,30 @@ impl Values {
     }
 }
 
+/// Bytes per component of an accessor `componentType` [`Values`] writes (FLOAT, SHORT, BYTE).
+pub fn component_bytes(component_type: u32) -> Option<usize> {
+    match component_type {
+        FLOAT => Some(4),
+        SHORT => Some(2),
+        BYTE => Some(1),
+        _ => None,
+    }
+}
+
+/// Accessor data of `component_type` as a glTF client reads it, the inverse of [`Values`]'
+/// encoding: floats as they are, normalized SHORT and BYTE as max(c / q, −1) (glTF 2.0 §3.11).
+pub fn decode_values(component_type: u32, data: &[u8]) -> Option<Vec<f32>> {
+    Some(match component_type {
+        FLOAT => data.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+        SHORT => data
+            .chunks_exact(2)
+            .map(|b| (i16::from_le_bytes([b[0], b[1]]) as f32 / i16::MAX as f32).max(-1.0))
+            .collect(),
+        BYTE => data.iter().map(|&b| (b as i8 as f32 / i8::MAX as f32).max(-1.0)).collect(),
+        _ => return None,
+    })
+}
+
 /// A triangle mesh to write.
 #[derive(Clone, Debug)]
 pub struct GlbMesh {
@@ -203,7 +227,7 @@ pub fn blob(json: &Value, bin: &[u8], name: &str) -> Option<Result<Vec<f32>, Str
             return Err(format!("{count} values in a buffer view of {length} bytes"));
         }
         let bytes = start.checked_add(length).and_then(|end| bin.get(start..end)).ok_or("past the BIN chunk")?;
-        Ok(bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
+        Ok(decode_values(FLOAT, bytes).expect("FLOAT is a component type"))
     };
     Some(read().map_err(|e| format!("blob {name}: {e}")))
 }

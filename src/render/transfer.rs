@@ -373,7 +373,8 @@ impl<'a> Glb<'a> {
             return Err(self.bad(format!("cpca: {clusters} clusters of {components} directions")));
         }
         let (count, data) = self.accessor(attributes, "_PRT_CLUSTER", "SCALAR", Storage::Float)?;
-        let cluster_of = floats(data)
+        let cluster_of = Storage::Float
+            .read(data)
             .into_iter()
             .map(|c| (c >= 0.0 && c.fract() == 0.0 && (c as usize) < clusters).then_some(c as u32))
             .collect::<Option<Vec<u32>>>()
@@ -406,11 +407,6 @@ impl<'a> Glb<'a> {
     }
 }
 
-/// Little-endian f32s.
-fn floats(data: &[u8]) -> Vec<f32> {
-    data.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
-}
-
 /// The component type a bake's per-vertex values are stored as (`transfer --quantize`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Storage {
@@ -432,11 +428,7 @@ impl Storage {
     }
 
     fn bytes(self) -> usize {
-        match self {
-            Storage::Float => 4,
-            Storage::NormalizedShort => 2,
-            Storage::NormalizedByte => 1,
-        }
+        glb::component_bytes(self.component_type()).expect("a component type the writer has")
     }
 
     fn describe(self) -> &'static str {
@@ -447,16 +439,9 @@ impl Storage {
         }
     }
 
-    /// The values as a glTF client reads them (glTF 2.0 §3.11: max(c / q, −1) when normalized).
+    /// The values as a glTF client reads them ([`glb::decode_values`]).
     fn read(self, data: &[u8]) -> Vec<f32> {
-        match self {
-            Storage::Float => floats(data),
-            Storage::NormalizedShort => data
-                .chunks_exact(2)
-                .map(|b| (i16::from_le_bytes([b[0], b[1]]) as f32 / i16::MAX as f32).max(-1.0))
-                .collect(),
-            Storage::NormalizedByte => data.iter().map(|&b| (b as i8 as f32 / i8::MAX as f32).max(-1.0)).collect(),
-        }
+        glb::decode_values(self.component_type(), data).expect("a component type the writer has")
     }
 }
 
@@ -511,7 +496,7 @@ impl TransferBake {
         let primitive = &mesh["primitives"][0];
         let attributes = &primitive["attributes"];
         let (vertices, data) = glb.accessor(attributes, "POSITION", "VEC3", Storage::Float)?;
-        let positions: Vec<[f32; 3]> = floats(data).chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let positions: Vec<[f32; 3]> = Storage::Float.read(data).chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         let coeffs = terms * order * order;
         let quantized = glb.quantized(extras.get("quantization"))?;
         let (transfer, compressed) = match extras.get("cpca") {
