@@ -2,8 +2,8 @@
 //! for every scheme at budgets that exercise one-word, straddling and two-word layouts, and they
 //! decode like the Rust decoder: a small interpreter of naga's IR runs the parsed WGSL and GLSL
 //! (the very modules a GPU driver would compile) in f32 and compares the directions. The HLSL
-//! output shares its text with the GLSL apart from type names; it was checked with
-//! glslangValidator by hand (docs/encode-normals.md).
+//! output shares its text with the GLSL apart from type names; glslang compiles it
+//! (`tests/hlsl_snippets.rs`).
 
 use glam::DVec3;
 use naga::{BinaryOperator as Bin, Expression as E, Handle, Literal, MathFunction as M, ScalarKind, Statement};

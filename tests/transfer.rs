@@ -219,8 +219,8 @@ fn thread_counts_give_the_same_bytes() {
 fn hlsl_and_wgsl_snippets_beside_the_glsl_one_and_their_rotation_compiles() {
     // `--glsl/--hlsl/--wgsl` write the dot product and the SH rotation; GLSL and WGSL go through
     // naga's front ends and validator at every order (the rotation's band blocks are written out,
-    // so each order is different code). naga has no HLSL front end: the HLSL is checked for its
-    // declarations only.
+    // so each order is different code). naga has no HLSL front end: here the HLSL is checked for its
+    // declarations; glslang compiles it (`tests/hlsl_snippets.rs`).
     let dir = tempfile::tempdir().unwrap();
     let validate = |module: &naga::Module, what: &str| {
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
