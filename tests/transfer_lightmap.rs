@@ -240,6 +240,44 @@ fn bake_cli(dir: &Path, obj: &Path, extra: &[&str], tag: &str) -> (std::process:
     (output, glb, json, exr)
 }
 
+/// `mesh` as an ASCII PLY with `double` x y z, nx ny nz and the UV pair `s t` (written in
+/// shortest round-trip form, so every value reads back to the bit).
+fn write_ply(path: &Path, mesh: &Mesh) {
+    let uvs = mesh.uvs.as_ref().expect("the mesh has UVs");
+    let mut s = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\n\
+         property double nx\nproperty double ny\nproperty double nz\nproperty double s\nproperty double t\n\
+         element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    );
+    for ((p, n), uv) in mesh.positions.iter().zip(&mesh.normals).zip(uvs) {
+        s += &format!("{:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}\n", p.x, p.y, p.z, n.x, n.y, n.z, uv[0], uv[1]);
+    }
+    for t in &mesh.triangles {
+        s += &format!("3 {} {} {}\n", t[0], t[1], t[2]);
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+#[test]
+fn a_ply_with_texture_coordinates_bakes_the_lightmap_of_the_same_obj() {
+    // The OBJ as prtkit reads it, written out as a PLY with `s t`: the same vertices, normals,
+    // UVs and triangles, so the same lightmap, byte for byte.
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write_floor_and_ball(dir.path(), 2);
+    let ply = dir.path().join("floor2.ply");
+    write_ply(&ply, &Mesh::load(&obj).unwrap());
+    let mut bytes = Vec::new();
+    for (mesh, tag) in [(&obj, "obj"), (&ply, "ply")] {
+        let exr = dir.path().join(format!("{tag}.exr"));
+        let (output, ..) = bake_cli(dir.path(), mesh, &["--lightmap", "48x32", exr.to_str().unwrap()], tag);
+        assert!(output.status.success(), "{tag}: {}", stderr(&output));
+        bytes.push(std::fs::read(&exr).unwrap());
+    }
+    assert!(bytes[0] == bytes[1], "the PLY's lightmap differs from the OBJ's");
+}
+
 #[test]
 fn thread_counts_give_the_same_lightmap_bytes() {
     let dir = tempfile::tempdir().unwrap();
@@ -272,7 +310,7 @@ fn bad_lightmap_requests_exit_2_naming_the_file_and_write_nothing() {
     let without = dir.path().join("plain.obj");
     std::fs::write(&without, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     let cases: [(&Path, &[&str], &str); 6] = [
-        (&without, &["64x64"], "no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt)"),
+        (&without, &["64x64"], "no lightmap UVs (TEXCOORD_1/TEXCOORD_0, vt, or a PLY's s t / u v)"),
         (&with_uvs, &["0x64"], "has no texels"),
         (&with_uvs, &["100000x100000"], "16384"),
         (&with_uvs, &["16384x16384", "--order", "8"], "268435456"),

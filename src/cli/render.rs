@@ -151,7 +151,7 @@ impl Args {
                 format!("{bake}: the transfer was baked with albedo {albedo}, --brdf says {brdf}")
             }
             E::NoLightmapUvs { lightmap } => format!(
-                "{lightmap}: the --scene mesh {} has no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt) to look the lightmap up with",
+                "{lightmap}: the --scene mesh {} has no lightmap UVs (TEXCOORD_1/TEXCOORD_0, vt, or a PLY's s t / u v) to look the lightmap up with",
                 self.scene
             ),
             E::Grid(grid) => return grid_error(grid),

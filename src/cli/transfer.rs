@@ -146,8 +146,8 @@ fn flagged(error: Error) -> anyhow::Error {
              (minutes per round); use fewer clusters or directions"
         ),
         Error::NoUvs(mesh) => format!(
-            "{mesh}: no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt): --lightmap needs a UV set on every vertex (PLY \
-             texture coordinates are not read yet)"
+            "{mesh}: no lightmap UVs (TEXCOORD_1/TEXCOORD_0, vt, or a PLY's s t / u v): --lightmap needs a UV \
+             set on every vertex"
         ),
         Error::NoTexels { source_name, width, height } => {
             format!("{source_name}: --lightmap {width}x{height} has no texels")

@@ -4,8 +4,9 @@
 //! knows where each value sits ([`walk`]). Two views are taken of a file through it:
 //!
 //! - [`parse`], the geometry of a mesh: the `vertex` element's `x`, `y`, `z` (and `nx`, `ny`, `nz`
-//!   when all three are there) and the `face` element's index list (`vertex_indices` or
-//!   `vertex_index`), polygons split into fans; every other element and property is skipped.
+//!   when all three are there, and a texture coordinate pair, [`UV_NAMES`]) and the `face`
+//!   element's index list (`vertex_indices` or `vertex_index`), polygons split into fans; every
+//!   other element and property is skipped.
 //! - [`vertex_normals`], the `vertex` element's `nx ny nz` alone with where each sits, so that
 //!   decoded normals can be written back with only their bytes changed ([`PlyNormals`]).
 //!
@@ -31,8 +32,22 @@ pub fn read(path: &Path) -> Result<Vec<u8>, IoError> {
     })
 }
 
-/// What a PLY file holds for a mesh: positions, normals if every vertex has one, triangles.
-pub type PlyMesh = (Vec<DVec3>, Option<Vec<DVec3>>, Vec<[u32; 3]>);
+/// What a PLY file holds for a mesh.
+#[derive(Debug, PartialEq)]
+pub struct PlyMesh {
+    pub positions: Vec<DVec3>,
+    /// One per vertex when the vertex element has `nx ny nz`.
+    pub normals: Option<Vec<DVec3>>,
+    /// One (u, v) per vertex when the vertex element has a pair of [`UV_NAMES`], as stored (the
+    /// convention of an OBJ's `vt`, which prtkit reads the same way).
+    pub uvs: Option<Vec<[f64; 2]>>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// The names PLY writers give a vertex's texture coordinates, in the order they are looked for:
+/// `s t` (Blender, the Stanford scans' convention), `u v`, `texture_u texture_v` and
+/// `texture_s texture_t` (MeshLab, Open3D).
+pub const UV_NAMES: [[&str; 2]; 4] = [["s", "t"], ["u", "v"], ["texture_u", "texture_v"], ["texture_s", "texture_t"]];
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Encoding {
@@ -291,12 +306,16 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, String> {
         [Some(a), Some(b), Some(c)] => Some([a, b, c]),
         _ => None,
     };
+    let uv = UV_NAMES.iter().find_map(|names| match names.map(|n| property(vertex, n)) {
+        [Some(u), Some(v)] => Some([u, v]),
+        _ => None,
+    });
     let list = property(face, "vertex_indices")
         .or_else(|| property(face, "vertex_index"))
         .filter(|&k| matches!(header.elements[face].properties[k], Property::List(..)))
         .ok_or("the face element has no vertex_indices list")?;
 
-    let (mut positions, mut normals, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut positions, mut normals, mut uvs, mut triangles) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let last = header.elements.len() - 1;
     walk(bytes, &header, last, |e, number, item| {
         let at = |k: usize| item.scalars[k].0;
@@ -304,6 +323,9 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, String> {
             positions.push(DVec3::new(at(x), at(y), at(z)));
             if let Some([a, b, c]) = normal {
                 normals.push(DVec3::new(at(a), at(b), at(c)));
+            }
+            if let Some([u, v]) = uv {
+                uvs.push([at(u), at(v)]);
             }
         } else if e == face {
             let indices = &item.lists[list];
@@ -320,8 +342,7 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, String> {
         }
         Ok(())
     })?;
-    let normals = normal.map(|_| normals);
-    Ok((positions, normals, triangles))
+    Ok(PlyMesh { positions, normals: normal.map(|_| normals), uvs: uv.map(|_| uvs), triangles })
 }
 
 /// The `vertex` element's `nx ny nz` of a PLY file, with where each sits.
@@ -452,11 +473,12 @@ mod tests {
         let ascii = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
                      property uchar red\nelement face 1\nproperty uchar intensity\nproperty list uchar int vertex_indices\n\
                      end_header\n0 0 0 200\n1 0 0 200\n1 1 0 200\n0 1 0.5 200\n7 4 0 1 2 3\n";
-        let expected = (
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.0, 1.0, 0.5)],
-            None,
-            vec![[0, 1, 2], [0, 2, 3]],
-        );
+        let expected = PlyMesh {
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.0, 1.0, 0.5)],
+            normals: None,
+            uvs: None,
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
         assert_eq!(parse(ascii.as_bytes()).unwrap(), expected);
         assert_eq!(parse(&binary(false)).unwrap(), expected);
         assert_eq!(parse(&binary(true)).unwrap(), expected);
@@ -475,8 +497,26 @@ mod tests {
         let ascii = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
                      property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
                      0.1 0 0\n0 0.1 0\n0 0 0.1\n3 0 1 2\n";
-        let (positions, ..) = parse(ascii.as_bytes()).unwrap();
+        let positions = parse(ascii.as_bytes()).unwrap().positions;
         assert_eq!(positions[0].x, 0.1f32 as f64);
+    }
+
+    #[test]
+    fn texture_coordinates_are_read_under_each_writers_names() {
+        let file = |u: &str, v: &str| {
+            format!(
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float {u}\nproperty float y\n\
+                 property float z\nproperty double {v}\nelement face 1\nproperty list uchar int vertex_indices\n\
+                 end_header\n0 0.25 0 0 0.5\n1 1 0 0 0.75\n0 0 1 0 1\n3 0 1 2\n"
+            )
+        };
+        for [u, v] in UV_NAMES {
+            let mesh = parse(file(u, v).as_bytes()).unwrap();
+            assert_eq!(mesh.uvs, Some(vec![[0.25, 0.5], [1.0, 0.75], [0.0, 1.0]]), "{u} {v}");
+            assert_eq!(mesh.positions[1], DVec3::X, "{u} {v}");
+        }
+        // One coordinate of a pair is not a pair.
+        assert_eq!(parse(file("s", "w").as_bytes()).unwrap().uvs, None);
     }
 
     #[test]

@@ -60,8 +60,9 @@ pub struct Mesh {
     /// True when the file had no normals and they were computed (area-weighted face normals).
     pub normals_computed: bool,
     /// The lightmap UV set, one (u, v) per vertex, when the file has one (OBJ `vt` on every
-    /// vertex; glTF `TEXCOORD_1`, else `TEXCOORD_0`, on every primitive; PLY texture coordinates
-    /// are not read yet): `transfer --lightmap` bakes per texel of it.
+    /// vertex; glTF `TEXCOORD_1`, else `TEXCOORD_0`, on every primitive; a PLY's vertex pair
+    /// `s t`, `u v`, `texture_u texture_v` or `texture_s texture_t`): `transfer --lightmap` bakes
+    /// per texel of it.
     pub uvs: Option<Vec<[f64; 2]>>,
     /// Length of the bounding box diagonal, computed once: shadow rays offset by a fraction of it.
     extent: f64,
@@ -117,12 +118,13 @@ impl Mesh {
     }
 
     /// Reads a PLY file (ASCII or binary; [`crate::io::ply`]): its vertices, their normals when
-    /// every vertex has `nx ny nz` (else computed), its faces split into triangles.
+    /// every vertex has `nx ny nz` (else computed), their texture coordinates when the vertex
+    /// element has a pair ([`crate::io::ply::UV_NAMES`]), its faces split into triangles.
     pub fn load_ply(path: &Path) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
         let invalid = |reason: String| MeshError::Invalid { path: name.clone(), reason };
         let bytes = crate::io::ply::read(path)?;
-        let (positions, normals, triangles) =
+        let crate::io::ply::PlyMesh { positions, normals, uvs, triangles } =
             crate::io::ply::parse(&bytes).map_err(|reason| invalid(format!("cannot read PLY: {reason}")))?;
         if triangles.is_empty() {
             return Err(invalid("the PLY holds no triangles".into()));
@@ -130,7 +132,12 @@ impl Mesh {
         if positions.iter().any(|p| !p.is_finite()) {
             return Err(invalid("a vertex position is not finite".into()));
         }
-        Mesh::new(positions, normals, triangles).map_err(invalid)
+        if uvs.as_ref().is_some_and(|uvs| uvs.iter().flatten().any(|c| !c.is_finite())) {
+            return Err(invalid("a texture coordinate is not finite".into()));
+        }
+        let mut mesh = Mesh::new(positions, normals, triangles).map_err(invalid)?;
+        mesh.uvs = uvs;
+        Ok(mesh)
     }
 
     /// Reads a glTF 2.0 asset (`.gltf` with its buffers, or `.glb`; [`crate::io::gltf`]): the

@@ -404,7 +404,7 @@ pub enum Error {
         brdf: String,
     },
     /// A lightmap given with a mesh that has no UVs.
-    #[error("{lightmap}: the mesh has no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt) to look the lightmap up with")]
+    #[error("{lightmap}: the mesh has no lightmap UVs (TEXCOORD_1/TEXCOORD_0, vt, or a PLY's s t / u v) to look the lightmap up with")]
     NoLightmapUvs {
         /// The lightmap's file.
         lightmap: String,

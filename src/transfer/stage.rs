@@ -468,8 +468,8 @@ pub enum Error {
     Cpca(#[source] crate::factor::svd::FactorError),
     /// The mesh has no UV set for a lightmap.
     #[error(
-        "{0}: no lightmap UVs (TEXCOORD_1/TEXCOORD_0 or vt): a lightmap needs a UV set on every vertex (PLY \
-         texture coordinates are not read yet)"
+        "{0}: no lightmap UVs (TEXCOORD_1/TEXCOORD_0, vt, or a PLY's s t / u v): a lightmap needs a UV set \
+         on every vertex"
     )]
     NoUvs(String),
     /// The lightmap's grid has no texels.
