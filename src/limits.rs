@@ -322,6 +322,10 @@ pub const MAX_TRANSFER_RAYS: usize = 1 << 20;
 /// the 16th, so more bounces only matter for albedos near 1.
 pub const MAX_TRANSFER_BOUNCES: usize = 16;
 
+/// Most jobs a transfer bake splits into (`--job I/N`): 65 536, far more than a build farm
+/// runs, and small enough that job ranges are computed without overflow.
+pub const MAX_TRANSFER_JOBS: usize = 1 << 16;
+
 /// Most basis samples per factor cell along each axis, for the factored render and glossy
 /// transfer alike (`--cell-samples`): 8, 64 per cell.
 pub const MAX_CELL_SAMPLES: usize = 8;

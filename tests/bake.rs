@@ -94,7 +94,7 @@ fn the_bake_makefile_rebuilds_what_changed_survives_an_interruption_and_is_deter
         eprintln!("skipped: `make` is not installed");
         return;
     }
-    // A parallel bake: every stage, 34 files.
+    // A parallel bake: every stage, 40 files.
     let a = clone();
     let start = Instant::now();
     run(a.path(), &["-j2"]);
@@ -103,7 +103,9 @@ fn the_bake_makefile_rebuilds_what_changed_survives_an_interruption_and_is_deter
     for stage_output in ["noon.exr", "dusk.png", "noon.sh.json", "dusk-brushed.exr", "plastic.factor.exr"] {
         assert!(baked.contains_key(stage_output), "no {stage_output} in {:?}", baked.keys());
     }
-    for also in ["terms.svg", "noon-matte.png", "dusk-plastic.png", "mesh.codes", "texture.exr"] {
+    for also in
+        ["terms.svg", "noon-matte.png", "dusk-plastic.png", "mesh.codes", "texture.exr", "mesh.glb", "mesh-4.part"]
+    {
         assert!(baked.contains_key(also), "no {also} in {:?}", baked.keys());
     }
     assert!(!baked.keys().any(|n| n.contains(".prtkit-")), "temporary files: {:?}", baked.keys());

@@ -87,6 +87,8 @@ pub enum Holds {
     Exr,
     /// A binary glTF: `.glb`.
     Glb,
+    /// A transfer job's part (`transfer --job`): `.part`.
+    Part,
 }
 
 impl Holds {
@@ -100,6 +102,7 @@ impl Holds {
             Holds::Png => ext.as_deref() == Some("png"),
             Holds::Exr => ext.as_deref() == Some("exr"),
             Holds::Glb => ext.as_deref() == Some("glb"),
+            Holds::Part => ext.as_deref() == Some("part"),
         };
         if !fits {
             let expected = match self {
@@ -108,6 +111,7 @@ impl Holds {
                 Holds::Png => ".png",
                 Holds::Exr => ".exr",
                 Holds::Glb => ".glb",
+                Holds::Part => ".part",
             };
             anyhow::bail!("{}: unknown output format: the name must end in {expected}", path.display());
         }

@@ -11,6 +11,7 @@ use crate::limits::{
     MAX_TRANSFER_ORDER, MAX_TRANSFER_RAYS,
 };
 use crate::mesh::Mesh;
+use crate::transfer::jobs::{read_part, Job};
 use crate::transfer::lightmap::LightmapConfig;
 use crate::transfer::stage::{self, Compression, Config, Error, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES};
 use anyhow::{Context as _, Result};
@@ -26,8 +27,9 @@ impl TryFrom<&Args> for Config {
             );
         }
         let glb_name = match &args.glb {
-            Output::File(path) => path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
-            Output::Stdout => "-".into(),
+            Some(Output::File(path)) => path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+            Some(Output::Stdout) => "-".into(),
+            None => String::new(),
         };
         let glossy = match &args.factors {
             Some(doc) => Some(glossy_config(args, doc)?),
@@ -152,6 +154,12 @@ fn flagged(error: Error) -> anyhow::Error {
         Error::NoTexels { source_name, width, height } => {
             format!("{source_name}: --lightmap {width}x{height} has no texels")
         }
+        Error::JobInterreflected => {
+            "--job and --join split diffuse unshadowed or shadowed and glossy bakes; interreflected transfer is \
+             baked in one run (each bounce gathers the transfer of every vertex)"
+                .into()
+        }
+        Error::Part { file, reason } => format!("{file}: {reason} (--join takes the parts --job wrote)"),
         Error::LightmapOf { source_name, .. } => format!(
             "{source_name}: --lightmap bakes diffuse unshadowed or shadowed transfer; interreflected (its bounces \
              gather the per-vertex transfer at the rays' hits), glossy (--factors) and compressed (--clusters) \
@@ -168,26 +176,36 @@ impl Stage for Args {
         &self.run
     }
     fn run(self, ctx: &Context) -> Result<Outcome> {
-        check_json_output(&self.output, self.json)?;
-        check_outputs(
-            [(&self.glb, Holds::Glb), (&self.output, Holds::Text)]
-                .into_iter()
-                .chain([&self.glsl, &self.hlsl, &self.wgsl].into_iter().flatten().map(|g| (g, Holds::Text))),
-        )?;
         let extension = self.mesh.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         if !matches!(extension.as_deref(), Some("obj" | "ply" | "gltf" | "glb")) {
             anyhow::bail!("{}: transfer reads OBJ, PLY and glTF meshes (.obj, .ply, .gltf, .glb)", self.mesh.display());
         }
+        if let Some(job) = &self.job {
+            return self.run_job(job, ctx);
+        }
+        let glb = self.glb.as_ref().expect("clap requires --glb without --job");
+        check_json_output(&self.output, self.json)?;
+        check_outputs(
+            [(glb, Holds::Glb), (&self.output, Holds::Text)]
+                .into_iter()
+                .chain([&self.glsl, &self.hlsl, &self.wgsl].into_iter().flatten().map(|g| (g, Holds::Text))),
+        )?;
         let lightmap_file = lightmap_request(&self)?.map(|(_, _, path)| Output::File(path));
         if let Some(file) = &lightmap_file {
             check_outputs([(file, Holds::Exr)])?;
         }
         let config = Config::try_from(&self)?;
         let mesh = Mesh::load(&self.mesh)?;
-        let out = stage::run(&config, &mesh, ctx.progress())
-            .map_err(flagged)
-            .with_context(|| format!("cannot bake {}", self.mesh.display()))?;
-        if out.summary.rays > 0 {
+        let out = match &self.join {
+            None => stage::run(&config, &mesh, ctx.progress()),
+            Some(parts) => {
+                ctx.note(format!("joining {} parts", parts.len()));
+                stage::run_joined(&config, &mesh, parts.iter().map(|p| read_part(p)), ctx.progress())
+            }
+        }
+        .map_err(flagged)
+        .with_context(|| format!("cannot bake {}", self.mesh.display()))?;
+        if out.summary.rays > 0 && out.summary.rays_per_second > 0.0 {
             ctx.note(format!(
                 "{} vertices x {} rays in {:.2} s: {:.3e} rays/s",
                 out.summary.vertices,
@@ -201,7 +219,7 @@ impl Stage for Args {
         }
 
         let mut outputs = Outputs::new();
-        outputs.bytes(&self.glb, out.glb)?;
+        outputs.bytes(glb, out.glb)?;
         for (file, text) in [(&self.glsl, out.glsl), (&self.hlsl, out.hlsl), (&self.wgsl, out.wgsl)] {
             if let Some(file) = file {
                 outputs.bytes(file, text.into_bytes())?;
@@ -214,6 +232,33 @@ impl Stage for Args {
         if self.json {
             outputs.json(&Output::Stdout, &out.summary)?;
         }
+        outputs.commit()?;
+        Ok(Outcome::Success)
+    }
+}
+
+impl Args {
+    /// `--job I/N FILE.part`: one job's part.
+    fn run_job(&self, job: &[String], ctx: &Context) -> Result<Outcome> {
+        let [job, file] = job else { anyhow::bail!("--job takes I/N and FILE.part") };
+        let job = Job::parse(job).map_err(|e| anyhow::anyhow!("--job {e}"))?;
+        let file = Output::File(file.into());
+        check_outputs([(&file, Holds::Part)])?;
+        let config = Config::try_from(self)?;
+        let mesh = Mesh::load(&self.mesh)?;
+        let part = stage::run_job(&config, &mesh, job, ctx.progress())
+            .map_err(flagged)
+            .with_context(|| format!("cannot bake {}", self.mesh.display()))?;
+        ctx.note(format!(
+            "job {}/{}: vertices {}..{} of {}",
+            job.index,
+            job.count,
+            part.vertices.start,
+            part.vertices.end,
+            mesh.positions.len()
+        ));
+        let mut outputs = Outputs::new();
+        outputs.bytes(&file, part.encode())?;
         outputs.commit()?;
         Ok(Outcome::Success)
     }

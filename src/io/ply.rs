@@ -35,12 +35,14 @@ pub fn read(path: &Path) -> Result<Vec<u8>, IoError> {
 /// What a PLY file holds for a mesh.
 #[derive(Debug, PartialEq)]
 pub struct PlyMesh {
+    /// The vertex element's x y z.
     pub positions: Vec<DVec3>,
     /// One per vertex when the vertex element has `nx ny nz`.
     pub normals: Option<Vec<DVec3>>,
     /// One (u, v) per vertex when the vertex element has a pair of [`UV_NAMES`], as stored (the
     /// convention of an OBJ's `vt`, which prtkit reads the same way).
     pub uvs: Option<Vec<[f64; 2]>>,
+    /// The faces, polygons split into fans about their first vertex.
     pub triangles: Vec<[u32; 3]>,
 }
 

@@ -13,6 +13,7 @@ use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
 use super::glossy::Glossy;
 use super::interreflect::{Hits, Storage, Tracer};
+use super::jobs::{Job, Joined, Part, Recipe, Transfer};
 use super::lightmap::{self, Lightmap, LightmapConfig, LightmapInfo};
 use super::quantize::{Quantization, Quantized};
 use super::shaders::{dequantize_snippet, glossy_snippet, snippet, Language};
@@ -29,6 +30,7 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 use std::time::Instant;
 
 /// Document kind of the manifest.
@@ -496,6 +498,28 @@ pub enum Error {
     /// The `.glb` cannot be encoded.
     #[error("cannot encode the .glb: {0}")]
     GlbEncoding(String),
+    /// A part file cannot be read.
+    #[error(transparent)]
+    Io(#[from] crate::io::IoError),
+    /// A bake split into jobs is interreflected.
+    #[error("interreflected transfer is not split into jobs: each bounce gathers the transfer of every vertex")]
+    JobInterreflected,
+    /// A part file that cannot be read or does not belong to the join.
+    #[error("{file}: {reason}")]
+    Part {
+        /// The part file.
+        file: String,
+        /// Why.
+        reason: String,
+    },
+    /// The parts leave vertices out.
+    #[error("{source_name}: no part holds vertices {missing:?}")]
+    PartsMissing {
+        /// The mesh.
+        source_name: String,
+        /// The first range no part holds.
+        missing: Range<usize>,
+    },
 }
 
 /// The bake a [`Config`] asks for, decided once, after every check.
@@ -611,15 +635,108 @@ struct Baked {
 pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Output, Error> {
     let plan = Plan::new(config, mesh)?;
     let start = Instant::now();
+    let all = 0..mesh.positions.len();
     let baked = match &plan.bake {
-        Bake::Unshadowed => unshadowed(config, mesh, progress),
-        Bake::Shadowed => shadowed(config, mesh, plan.offset, progress),
         Bake::Interreflected { bounces } => interreflected(config, mesh, *bounces, plan.offset, progress),
-        Bake::Glossy { integrator, shadowed } => {
-            glossy(config, mesh, integrator, shadowed.then_some(plan.offset), progress)
+        _ => {
+            let transfer = per_vertex(config, mesh, &plan, all, progress);
+            baked(config, mesh, &plan, transfer, start.elapsed().as_secs_f64())
         }
     };
-    let seconds = start.elapsed().as_secs_f64();
+    finish(config, mesh, &plan, baked, start.elapsed().as_secs_f64(), progress)
+}
+
+/// Runs job `job` of a `transfer` split into jobs ([`jobs`]): the per-vertex transfer of its
+/// vertex range, as a part for [`run_joined`].
+pub fn run_job(config: &Config, mesh: &Mesh, job: Job, progress: &dyn Progress) -> Result<Part, Error> {
+    let plan = Plan::new(config, mesh)?;
+    if matches!(plan.bake, Bake::Interreflected { .. }) {
+        return Err(Error::JobInterreflected);
+    }
+    let vertices = job.vertices(mesh.positions.len());
+    let transfer = per_vertex(config, mesh, &plan, vertices.clone(), progress);
+    Ok(Part::new(Recipe::new(config, mesh), vertices, plan.per_vertex, transfer))
+}
+
+/// Joins the parts of a `transfer` split into jobs (`(file, part)`, in any order) and does what
+/// follows the per-vertex integration as [`run`] does: the same outputs, byte for byte.
+pub fn run_joined(
+    config: &Config,
+    mesh: &Mesh,
+    parts: impl IntoIterator<Item = Result<(String, Part), Error>>,
+    progress: &dyn Progress,
+) -> Result<Output, Error> {
+    let plan = Plan::new(config, mesh)?;
+    if matches!(plan.bake, Bake::Interreflected { .. }) {
+        return Err(Error::JobInterreflected);
+    }
+    let mut joined = Joined::new(Recipe::new(config, mesh), plan.per_vertex);
+    for part in parts {
+        let (file, part) = part?;
+        joined.add(part).map_err(|reason| Error::Part { file, reason })?;
+    }
+    let transfer =
+        joined.finish().map_err(|missing| Error::PartsMissing { source_name: config.source.clone(), missing })?;
+    let baked = baked(config, mesh, &plan, transfer, 0.0);
+    finish(config, mesh, &plan, baked, 0.0, progress)
+}
+
+/// The per-vertex transfer of `vertices` for a bake other than interreflected.
+fn per_vertex(config: &Config, mesh: &Mesh, plan: &Plan, vertices: Range<usize>, progress: &dyn Progress) -> Transfer {
+    match &plan.bake {
+        Bake::Unshadowed => Transfer::Values(unshadowed(config, mesh, vertices, progress)),
+        Bake::Shadowed => Transfer::Points(shadowed(config, mesh, vertices, plan.offset, progress)),
+        Bake::Glossy { integrator, shadowed } => {
+            Transfer::Values(glossy(mesh, integrator, shadowed.then_some(plan.offset), vertices, progress))
+        }
+        Bake::Interreflected { .. } => unreachable!("interreflections gather every vertex: not a per-vertex bake"),
+    }
+}
+
+/// Every vertex's transfer with the manifest's account of it, `seconds` of integration.
+fn baked(config: &Config, mesh: &Mesh, plan: &Plan, transfer: Transfer, seconds: f64) -> Baked {
+    let (transfer, error) = match transfer {
+        Transfer::Values(values) => (values, None),
+        Transfer::Points(points) => {
+            let error = integration_error(mesh, &points, config.order, config.rays, config.albedo);
+            (points.into_iter().flat_map(|p| p.shadowed).collect(), Some(error))
+        }
+    };
+    let integration = match &plan.bake {
+        Bake::Unshadowed => Integration {
+            method: "exact quadrature".into(),
+            rays: 0,
+            seed: config.seed,
+            description: "8 Gauss-Legendre nodes in n.w times 18 equally spaced azimuths about the normal: exact for \
+                          the band-limited integrand, so T_lm = (albedo/pi) A_l Y_lm(n) to rounding"
+                .into(),
+        },
+        Bake::Glossy { integrator, shadowed } => Integration {
+            method: "factor grid cells".into(),
+            rays: if *shadowed { integrator.rays() } else { 0 },
+            seed: config.seed,
+            description: glossy_description(
+                config.glossy.as_ref().expect("a glossy bake has a glossy config"),
+                config.mode,
+                integrator.rays(),
+            ),
+        },
+        _ => stratified_rays(config),
+    };
+    let trace_seconds = if integration.rays > 0 { seconds } else { 0.0 };
+    Baked { transfer, integration, error, interreflection: None, trace_seconds, bounce_seconds: 0.0 }
+}
+
+/// What follows the per-vertex integration: clustered PCA, the lightmap, quantization, the
+/// manifest, the `.glb` and the snippets.
+fn finish(
+    config: &Config,
+    mesh: &Mesh,
+    plan: &Plan,
+    baked: Baked,
+    seconds: f64,
+    progress: &dyn Progress,
+) -> Result<Output, Error> {
     let cpca = match plan.compression {
         Some(c) => {
             progress.start("clustered PCA", 1);
@@ -634,7 +751,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
         None => None,
     };
     let quantized = quantize(config.quantization, &baked.transfer, plan.per_vertex, cpca.as_ref());
-    let mut body = manifest(config, mesh, &plan, &baked, cpca.as_ref(), lightmap.as_ref().map(|l| l.info.clone()));
+    let mut body = manifest(config, mesh, plan, &baked, cpca.as_ref(), lightmap.as_ref().map(|l| l.info.clone()));
     if let Some(q) = &quantized {
         let info = quantization_info(config.quantization, q, &baked.transfer, plan.per_vertex, cpca.as_ref());
         body.glb.packing +=
@@ -678,44 +795,41 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     })
 }
 
-/// Diffuse transfer without visibility, by the exact quadrature ([`unshadowed_exact`]).
-fn unshadowed(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Baked {
-    let (n, vertices) = (config.order, mesh.positions.len());
-    let coeffs = n * n;
-    let mut transfer = vec![0.0; vertices * coeffs];
-    progress.start("transfer (unshadowed)", vertices as u64);
+/// Diffuse transfer without visibility of `vertices`, by the exact quadrature
+/// ([`unshadowed_exact`]).
+fn unshadowed(config: &Config, mesh: &Mesh, vertices: Range<usize>, progress: &dyn Progress) -> Vec<f64> {
+    let coeffs = config.order * config.order;
+    let mut transfer = vec![0.0; vertices.len() * coeffs];
+    progress.start("transfer (unshadowed)", vertices.len() as u64);
     transfer.par_chunks_mut(CHUNK * coeffs).enumerate().for_each(|(c, out)| {
         for (k, t) in out.chunks_exact_mut(coeffs).enumerate() {
-            unshadowed_exact(mesh.normals[c * CHUNK + k], n, config.albedo, t);
+            unshadowed_exact(mesh.normals[vertices.start + c * CHUNK + k], config.order, config.albedo, t);
         }
         progress.advance((out.len() / coeffs) as u64);
     });
     progress.finish();
-    let integration = Integration {
-        method: "exact quadrature".into(),
-        rays: 0,
-        seed: config.seed,
-        description: "8 Gauss-Legendre nodes in n.w times 18 equally spaced azimuths about the normal: exact for the \
-                      band-limited integrand, so T_lm = (albedo/pi) A_l Y_lm(n) to rounding"
-            .into(),
-    };
-    Baked { transfer, integration, error: None, interreflection: None, trace_seconds: 0.0, bounce_seconds: 0.0 }
+    transfer
 }
 
-/// Diffuse transfer with visibility, by stratified rays ([`Shadowed`]).
-fn shadowed(config: &Config, mesh: &Mesh, offset: f64, progress: &dyn Progress) -> Baked {
-    let start = Instant::now();
-    let (n, vertices) = (config.order, mesh.positions.len());
+/// Diffuse transfer with visibility of `vertices`, by stratified rays ([`Shadowed`]) through a
+/// BVH of the whole scene.
+fn shadowed(
+    config: &Config,
+    mesh: &Mesh,
+    vertices: Range<usize>,
+    offset: f64,
+    progress: &dyn Progress,
+) -> Vec<PointTransfer> {
     let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
     let directions = Stratified::new(config.rays, config.seed);
-    let integrator = Shadowed::new(&directions, n, &occluders);
-    progress.start("visibility", vertices as u64);
+    let integrator = Shadowed::new(&directions, config.order, &occluders);
+    progress.start("visibility", vertices.len() as u64);
     // One work item per chunk of vertices; each vertex's sums run in the directions' fixed order,
-    // so the bits do not depend on which thread ran which chunk.
-    let points: Vec<PointTransfer> = (0..vertices.div_ceil(CHUNK))
+    // so the bits do not depend on which thread ran which chunk, nor on the vertices' range.
+    let points: Vec<PointTransfer> = (0..vertices.len().div_ceil(CHUNK))
         .into_par_iter()
         .flat_map_iter(|c| {
-            let range = c * CHUNK..((c + 1) * CHUNK).min(vertices);
+            let range = vertices.start + c * CHUNK..(vertices.start + (c + 1) * CHUNK).min(vertices.end);
             let done: Vec<PointTransfer> = range
                 .map(|v| integrator.integrate(mesh.positions[v], mesh.normals[v], offset, config.albedo))
                 .collect();
@@ -724,16 +838,7 @@ fn shadowed(config: &Config, mesh: &Mesh, offset: f64, progress: &dyn Progress) 
         })
         .collect();
     progress.finish();
-    let trace_seconds = start.elapsed().as_secs_f64();
-    let transfer = points.iter().flat_map(|p| p.shadowed.iter().copied()).collect();
-    Baked {
-        transfer,
-        integration: stratified_rays(config),
-        error: Some(integration_error(mesh, &points, n, config.rays, config.albedo)),
-        interreflection: None,
-        trace_seconds,
-        bounce_seconds: 0.0,
-    }
+    points
 }
 
 /// Diffuse shadowed transfer plus `bounces` interreflections gathered over the same rays
@@ -799,40 +904,30 @@ fn stratified_rays(config: &Config) -> Integration {
     }
 }
 
-/// Glossy transfer over the factors' grid ([`Glossy`]); shadowed when `offset` is given (the ray
-/// origin offset in the mesh's units).
-fn glossy(config: &Config, mesh: &Mesh, integrator: &Glossy, offset: Option<f64>, progress: &dyn Progress) -> Baked {
-    let start = Instant::now();
-    let vertices = mesh.positions.len();
+/// Glossy transfer of `vertices` over the factors' grid ([`Glossy`]); shadowed when `offset` is
+/// given (the ray origin offset in the mesh's units), through a BVH of the whole scene.
+fn glossy(
+    mesh: &Mesh,
+    integrator: &Glossy,
+    offset: Option<f64>,
+    vertices: Range<usize>,
+    progress: &dyn Progress,
+) -> Vec<f64> {
     let per_vertex = integrator.values_per_vertex();
     let occluders = offset.map(|offset| (Occluders::new(&mesh.positions, &mesh.triangles), offset));
-    let mut transfer = vec![0.0; vertices * per_vertex];
-    progress.start(if occluders.is_some() { "visibility" } else { "transfer (unshadowed)" }, vertices as u64);
+    let mut transfer = vec![0.0; vertices.len() * per_vertex];
+    progress.start(if occluders.is_some() { "visibility" } else { "transfer (unshadowed)" }, vertices.len() as u64);
     // Chunks of vertices side by side; each vertex's sums run in the cells' fixed order.
     transfer.par_chunks_mut(CHUNK * per_vertex).enumerate().for_each(|(c, out)| {
         for (k, t) in out.chunks_exact_mut(per_vertex).enumerate() {
-            let v = c * CHUNK + k;
+            let v = vertices.start + c * CHUNK + k;
             let occluders = occluders.as_ref().map(|(o, offset)| (o, *offset));
             integrator.integrate(mesh.positions[v], mesh.normals[v], occluders, t);
         }
         progress.advance((out.len() / per_vertex) as u64);
     });
     progress.finish();
-    let g = config.glossy.as_ref().expect("a glossy bake has a glossy config");
-    let integration = Integration {
-        method: "factor grid cells".into(),
-        rays: if occluders.is_some() { integrator.rays() } else { 0 },
-        seed: config.seed,
-        description: glossy_description(g, config.mode, integrator.rays()),
-    };
-    Baked {
-        transfer,
-        integration,
-        error: None,
-        interreflection: None,
-        trace_seconds: start.elapsed().as_secs_f64(),
-        bounce_seconds: 0.0,
-    }
+    transfer
 }
 
 /// The manifest's body of a bake (`docs/formats/transfer.md`).

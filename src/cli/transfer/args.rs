@@ -26,8 +26,8 @@ pub struct Args {
     pub mesh: PathBuf,
 
     /// The `.glb` to write: the mesh with the transfer as vertex attributes.
-    #[arg(long, value_name = "FILE", value_parser = parse_output)]
-    pub glb: Output,
+    #[arg(long, value_name = "FILE", value_parser = parse_output, required_unless_present = "job")]
+    pub glb: Option<Output>,
 
     /// The manifest (`prtkit.transfer` JSON; `-` for stdout).
     #[arg(short, long, default_value = "-", value_parser = parse_output)]
@@ -117,11 +117,24 @@ pub struct Args {
     #[arg(long, value_enum, value_name = "KIND", default_value_t = Quantization::None)]
     pub quantize: Quantization,
 
-    /// Also bake the transfer per texel of the mesh's UV set (OBJ vt, glTF TEXCOORD_1 else TEXCOORD_0) into a W×H grid, written as
+    /// Also bake the transfer per texel of the mesh's UV set (OBJ vt, glTF TEXCOORD_1 else
+    /// TEXCOORD_0, PLY s t or u v) into a W×H grid, written as
     /// one multi-layer EXR (layers T0… per coefficient and coverage); unshadowed or shadowed,
     /// with the same integrator as the vertices. Example: --lightmap 256x256 floor.exr
     #[arg(long, num_args = 2, value_names = ["WxH", "FILE.exr"])]
     pub lightmap: Option<Vec<String>>,
+
+    /// Bake only job I of N (1 ≤ I ≤ N): the per-vertex transfer of the I-th of N equal vertex
+    /// ranges, against the whole scene, written to FILE.part for --join. Not for
+    /// interreflected bakes. Example: --job 3/8 bowl-3.part
+    #[arg(long, num_args = 2, value_names = ["I/N", "FILE.part"],
+          conflicts_with_all = ["join", "glb", "glsl", "hlsl", "wgsl", "clusters", "quantize", "lightmap", "json"])]
+    pub job: Option<Vec<String>>,
+
+    /// Join the parts of a bake split by --job (every part, in any order; the other options as
+    /// the jobs had them) and write what one run writes, byte for byte.
+    #[arg(long, num_args = 1.., value_name = "FILE.part")]
+    pub join: Option<Vec<PathBuf>>,
 
     /// Print a JSON summary (vertices, rays, seconds, rays per second) on stdout.
     #[arg(long)]
