@@ -13,6 +13,7 @@ use crate::limits::{
 use crate::mesh::Mesh;
 use crate::transfer::jobs::{read_part, Job};
 use crate::transfer::lightmap::LightmapConfig;
+use crate::transfer::order;
 use crate::transfer::stage::{self, Compression, Config, Error, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES};
 use anyhow::{Context as _, Result};
 pub use args::*;
@@ -40,6 +41,13 @@ impl TryFrom<&Args> for Config {
                 None
             }
         };
+        let (order, order_reason) = match args.sh_energy {
+            None => (args.order, None),
+            Some(fraction) => {
+                let chosen = order::for_energy(fraction, glossy.as_ref()).map_err(flagged)?;
+                (chosen.order, Some(format!("{} (--sh-energy {fraction})", chosen.reason)))
+            }
+        };
         let compression = match (args.clusters, args.pca) {
             (Some(clusters), Some(components)) => Some(Compression { clusters, components }),
             _ => None,
@@ -54,7 +62,8 @@ impl TryFrom<&Args> for Config {
             glossy,
             compression,
             quantization: args.quantize,
-            order: args.order,
+            order,
+            order_reason,
             mode: args.mode,
             rays: args.rays,
             bounces: args.bounces.unwrap_or(Config::default().bounces),
@@ -154,6 +163,7 @@ fn flagged(error: Error) -> anyhow::Error {
         Error::NoTexels { source_name, width, height } => {
             format!("{source_name}: --lightmap {width}x{height} has no texels")
         }
+        Error::ShEnergy(fraction) => format!("--sh-energy {fraction} must be in (0, 1]"),
         Error::JobInterreflected => {
             "--job and --join split diffuse unshadowed or shadowed and glossy bakes; interreflected transfer is \
              baked in one run (each bounce gathers the transfer of every vertex)"

@@ -14,7 +14,8 @@
 //! the stratified ray directions, [`visibility`] the BVH the rays are cast through,
 //! [`interreflect`] the bounces, [`shaders`] the run-time dot product and SH rotation (GLSL,
 //! HLSL, WGSL), [`lightmap`] the same diffuse transfer per texel of a UV set, [`cpca`] and
-//! [`quantize`] the compressed and quantized storage, [`jobs`] a bake split into jobs whose
+//! [`quantize`] the compressed and quantized storage, [`order`] the SH order an energy fraction
+//! needs, [`jobs`] a bake split into jobs whose
 //! parts join into one run's outputs, and [`stage`] the `transfer` stage.
 
 pub mod cpca;
@@ -24,6 +25,7 @@ pub mod glossy;
 pub mod interreflect;
 pub mod jobs;
 pub mod lightmap;
+pub mod order;
 pub mod quantize;
 pub mod shaders;
 pub mod stage;

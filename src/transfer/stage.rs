@@ -61,6 +61,8 @@ pub enum Mode {
 pub struct Config {
     /// SH order n: bands 0..n−1, n² coefficients (1 ≤ n ≤ [`MAX_TRANSFER_ORDER`]).
     pub order: usize,
+    /// Why n is what it is, when an energy fraction chose it ([`super::order::for_energy`]).
+    pub order_reason: Option<String>,
     /// Unshadowed or shadowed.
     pub mode: Mode,
     /// Ray directions per vertex (shadowed and interreflected modes).
@@ -122,6 +124,7 @@ impl Default for Config {
     fn default() -> Self {
         Config {
             order: 3,
+            order_reason: None,
             mode: Mode::Shadowed,
             rays: 1024,
             bounces: 2,
@@ -144,6 +147,9 @@ impl Default for Config {
 pub struct TransferBody {
     /// SH order n (bands), as in Sloan et al. 2002.
     pub order: usize,
+    /// Why n is what it is, when an energy fraction chose it (absent: given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub order_reason: Option<String>,
     /// n² coefficients per vertex.
     pub coefficients: usize,
     /// `unshadowed`, `shadowed` or `interreflected`.
@@ -501,6 +507,9 @@ pub enum Error {
     /// A part file cannot be read.
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    /// The energy fraction that chooses the SH order is outside (0, 1].
+    #[error("the SH energy fraction {0} must be in (0, 1]")]
+    ShEnergy(f64),
     /// A bake split into jobs is interreflected.
     #[error("interreflected transfer is not split into jobs: each bounce gathers the transfer of every vertex")]
     JobInterreflected,
@@ -949,6 +958,7 @@ fn manifest(
     };
     TransferBody {
         order: n,
+        order_reason: config.order_reason.clone(),
         coefficients: plan.per_vertex,
         mode: config.mode,
         interreflection: baked.interreflection.clone(),
@@ -1261,6 +1271,13 @@ fn glossy_integrator(config: &Config, g: &GlossyConfig) -> Result<Glossy, Error>
     if config.mode == Mode::Interreflected {
         return Err(Error::GlossyInterreflected);
     }
+    check_glossy(g)?;
+    Ok(Glossy::new(&g.factorization, g.terms, g.cosine, config.order, g.cell_samples))
+}
+
+/// Checks the terms a glossy bake keeps against those the factorization holds, and its basis
+/// samples per cell against [`MAX_CELL_SAMPLES`].
+pub(super) fn check_glossy(g: &GlossyConfig) -> Result<(), Error> {
     let stored = g.factorization.g.len().min(g.factorization.h.len());
     if g.terms == 0 || g.terms > stored {
         return Err(Error::Terms { factors: g.factors.clone(), terms: g.terms, stored });
@@ -1268,7 +1285,7 @@ fn glossy_integrator(config: &Config, g: &GlossyConfig) -> Result<Glossy, Error>
     if !(1..=MAX_CELL_SAMPLES).contains(&g.cell_samples) {
         return Err(Error::CellSamples(g.cell_samples));
     }
-    Ok(Glossy::new(&g.factorization, g.terms, g.cosine, config.order, g.cell_samples))
+    Ok(())
 }
 
 /// How a glossy bake integrates, in words.

@@ -50,6 +50,12 @@ pub struct Args {
     #[arg(short = 'n', long, default_value_t = 3)]
     pub order: usize,
 
+    /// Instead of -n: the fewest bands (at most 8) holding this fraction of the transfer
+    /// kernel's energy — the clamped cosine's, or with --factors the kept terms' factors' (0.99:
+    /// 3 bands for diffuse transfer); the manifest says what it chose and why.
+    #[arg(long, value_name = "F", conflicts_with = "order")]
+    pub sh_energy: Option<f64>,
+
     /// unshadowed (exact quadrature, no rays), shadowed (visibility by ray casting) or
     /// interreflected (shadowed plus --bounces bounces of light off the mesh itself).
     #[arg(long, value_enum, default_value_t = Mode::Shadowed)]
