@@ -26,7 +26,8 @@ if [ "${1:-}" != "--assemble" ]; then
   scripts/ring-free-table.sh
   scripts/windows-table.sh
   scripts/fuzz.sh
-  # scripts/bench-peers.sh (Filament's cmgen) is not run here: it installs a package.
+  # scripts/bench-peers.sh (Filament's cmgen) and scripts/visibility-vs-embree.sh (Embree) are not
+  # run here: their peers are packages to install.
 fi
 {
   echo "# Results"
@@ -36,7 +37,7 @@ fi
   echo "\`docs/results/*.md\`. Speeds are ratios measured in one run (the machine is shared and"
   echo "noisy); absolute times are for orientation only."
   echo
-  for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader render render-bright render-fig7 render-bench transfer ibl-accuracy ibl-grid ibl-scaling peers viewer ring-free windows fuzz; do
+  for section in sh-project probes prefilter-table4 prefilter-table5 terms normals shader render render-bright render-fig7 render-bench transfer visibility ibl-accuracy ibl-grid ibl-scaling peers viewer ring-free windows fuzz; do
     f="$docs/results/$section.md"
     if [ -f "$f" ]; then
       # Sections link their figures relative to docs/results/; this file lives in docs/.

@@ -23,7 +23,8 @@
 //! ([`skip`] prints "SKIPPED" and why): the benchmarks (`cargo bench` builds; the test checks that
 //! they say so under `PRTKIT_BIN`), `fuzz.sh` (its harness is a cargo test, which CI runs itself),
 //! `ring-free-table.sh` and `windows-table.sh` (30 minutes of references), `bench-peers.sh`
-//! without Filament's `cmgen`, and what needs `../shared/testdata` when it is absent.
+//! without Filament's `cmgen`, `visibility-vs-embree.sh` without Embree, and what needs
+//! `../shared/testdata` when it is absent.
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -508,6 +509,29 @@ fn bench_peers() {
         // Without cmgen the script would install it (apt-get, as root): not in a test.
         skip("bench-peers", "Filament's cmgen is not installed (the script installs it; not part of CI)");
     }
+}
+
+#[test]
+fn visibility_vs_embree() {
+    if example("visibility-vs-embree", "visibility_vs_embree").is_none() {
+        return;
+    }
+    let found = Command::new("sh").args(["-c", "ldconfig -p | grep -q libembree3.so.3"]).status();
+    if !found.is_ok_and(|s| s.success()) {
+        // The peer is a package (Debian's libembree-dev), not part of CI.
+        skip("visibility-vs-embree", "Embree 3 is not installed (apt-get install libembree-dev)");
+        return;
+    }
+    let Some(run) = run("visibility-vs-embree") else { return };
+    let traces: Vec<&Value> = run.rows.iter().filter(|r| r["check"] == "trace").collect();
+    assert_eq!(traces.len(), 2, "{:?}", run.rows);
+    for row in traces {
+        // The same rays: the answers agree but for single-precision ties, and both tracers run.
+        assert!(row["differ_fraction"].as_f64().unwrap() < 1e-3, "{row}");
+        assert!(row["prtkit_rays_per_second"].as_f64().unwrap() > 0.0, "{row}");
+        assert!(row["embree_rays_per_second"].as_f64().unwrap() > 0.0, "{row}");
+    }
+    assert_eq!(markdown_table(&run.section("visibility.md")).len(), 2);
 }
 
 #[test]
