@@ -443,6 +443,7 @@ async function prtMesh(uniforms) {
   docs.prt.scene.traverse((o) => { if (o.isMesh) mesh = o; });
   if (!mesh) throw new Error(`${url}: no mesh`);
   const bake = mesh.userData['prtkit.transfer'];
+  if (bake?.quantization) await dequantizeTransfer(url, mesh, bake.quantization);
   if (bake?.cpca) return prtCpcaMesh(url, mesh, bake, uniforms);
   let K = 0;
   while (mesh.geometry.attributes[prtAttribute(K)]) K++;
@@ -457,6 +458,36 @@ async function prtMesh(uniforms) {
   object.matrixAutoUpdate = false;
   object.matrix.setFromMatrix3(prtkitFromWorld(state.frame).transpose());
   return object;
+}
+// A quantized bake (transfer --quantize i16|i8): GLTFLoader gives its _PRT_k (compressed: _PRT_W_k)
+// as normalized SHORT/BYTE attributes, read as max(code / q, −1); each value is that times its
+// scale, per value index, or per cluster with CPCA (docs/formats/transfer.md, "Quantized
+// bakes"). Applied once, on load, into float attributes, so every relighting path below takes
+// the values as from a float bake; an engine would rather fold the scales into the lighting or
+// dequantize in its shader (the bake's snippets do).
+async function dequantizeTransfer(url, mesh, quant) {
+  const geometry = mesh.geometry;
+  if (geometry.userData.prtkitDequantized) return;
+  const blob = mesh.userData['prtkit.blobs']?.[quant.scales];
+  if (!blob) throw new Error(`${url}: a quantized bake without its ${quant.scales} blob`);
+  const scales = new Float32Array(await docs.prt.parser.getDependency('bufferView', blob.bufferView), 0, blob.count);
+  const attrs = geometry.attributes;
+  const cluster = quant.scale_per === 'cluster' ? attrs[PRT_CLUSTER_ATTRIBUTE] : null;
+  if (quant.scale_per === 'cluster' && !cluster) throw new Error(`${url}: scales per cluster but no ${PRT_CLUSTER_ATTRIBUTE}`);
+  const name = cluster ? prtWeightAttribute : prtAttribute;
+  for (let k = 0; attrs[name(k)]; k++) {
+    const a = attrs[name(k)];
+    if (!a.normalized) throw new Error(`${url}: ${name(k)} is not a normalized attribute, though the extras say ${quant.type}`);
+    const values = new Float32Array(4 * a.count);
+    for (let v = 0; v < a.count; v++) {
+      for (let j = 0; j < 4; j++) {
+        const scale = cluster ? scales[cluster.getX(v)] : scales[4 * k + j] ?? 0;
+        values[4 * v + j] = Math.max(a.getComponent(v, j), -1) * scale;
+      }
+    }
+    geometry.setAttribute(name(k), new THREE.BufferAttribute(values, 4));
+  }
+  geometry.userData.prtkitDequantized = true;
 }
 // mode=prt with a glossy bake (extras.prtkit.transfer.glossy): Mahajan, Tseng & Ramamoorthi
 // 2008's eq. 4, B(x, ω_o) = Σ_k h_k(Fᵀω_o) c_k(x). The K·n² values per vertex go to a float

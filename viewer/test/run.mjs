@@ -651,6 +651,47 @@ async function cpcaPrtTests() {
   figures.prt_cpca = fig;
 }
 
+// ---- Quantized PRT bakes (transfer --quantize) against render --shading transfer ---------------
+// The page dequantizes on load (normalized codes times the .glb's scales, per value index or per
+// cluster); render reads the same quantized .glb on the CPU. Diffuse (the knot, i16 and i8),
+// glossy (the bowl with its ball, Phong s = 8, K = 10, n = 4, i8) and compressed (8 clusters × 4,
+// i8), each turned 60° in the three frame, over the mesh less a rim.
+async function quantizedPrtTests() {
+  const { dir, sky } = skyIn('prt-quantized');
+  const knot = 'testdata/meshes/torus-knot.obj', bowl = 'testdata/meshes/bowl-ball.obj';
+  run('factor-brdf', ['phong:s=8', '--domain', 'hemisphere', '--resolution', '16', '--cosine',
+    '--factors', join(dir, 'p.exr'), '--terms', '16', '-o', join(dir, 'p.json'), '-q']);
+  const bakes = [
+    { name: 'knot-i16', mesh: knot, n: 5, exp: '-2', eye: [2.2, -3.4, 2.4], target: [0, 0, 0], brdf: [],
+      args: ['-n', '5', '--rays', '256', '--quantize', 'i16'] },
+    { name: 'knot-i8', mesh: knot, n: 5, exp: '-2', eye: [2.2, -3.4, 2.4], target: [0, 0, 0], brdf: [],
+      args: ['-n', '5', '--rays', '256', '--quantize', 'i8'] },
+    { name: 'glossy-i8', mesh: bowl, n: 4, exp: '-3.5', eye: [1.3, -2.2, 2.4], target: [0, 0, -0.45], brdf: ['--brdf', 'phong:s=8'],
+      args: ['-n', '4', '--factors', join(dir, 'p.json'), '-K', '10', '--quantize', 'i8'] },
+    { name: 'cpca-i8', mesh: bowl, n: 3, exp: '-2.5', eye: [1.3, -2.2, 2.4], target: [0, 0, -0.45], brdf: [],
+      args: ['-n', '3', '--rays', '256', '--clusters', '8', '--pca', '4', '--quantize', 'i8'] },
+  ];
+  const fig = {};
+  for (const b of bakes) {
+    const glb = join(dir, `${b.name}.glb`), glsl = join(dir, `${b.name}.glsl`), png = join(out, `prt-quantized-${b.name}-60-render.png`);
+    run('transfer', [b.mesh, ...b.args, '--glb', glb, '-o', join(dir, `${b.name}.json`), '--glsl', glsl, '-q']);
+    const sh = join(dir, `sky${b.n - 1}.sh.json`);
+    if (!existsSync(sh)) run('sh-project', [sky, '-F', String(b.n - 1), '-o', sh, '-q']);
+    run('render', [sky, '--scene', b.mesh, ...b.brdf, '--shading', 'transfer', '--transfer', glb, '--env-rotation', '60',
+      '--eye', b.eye.join(','), '--target', b.target.join(','), '--fov', String(FOV), '--res', '200x200', '--png', png, '--exposure', b.exp, '-q']);
+    const ref = readPng(png);
+    const params = { mode: 'prt', glb: url(glb), sh: url(sh), ...(b.brdf.length ? { glsl: url(glsl) } : {}) };
+    const img = mirrorX((await view({ ...params, rotate: '60', eye: toPage(b.eye, 'three'), target: toPage(b.target, 'three'),
+      fov: String(FOV), res: '200x200', exposure: b.exp })).image);
+    writePng(join(out, `prt-quantized-${b.name}-60-viewer-three.png`), img);
+    const c = compare(img, ref, meshMask(img));
+    fig[b.name] = c.psnr;
+    check(`prt quantized ${b.name} (transfer ${b.args.join(' ')}), turned 60° (three frame) vs render --shading transfer`, c.psnr >= 35,
+      `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+  }
+  figures.prt_quantized = fig;
+}
+
 // ---- Every ibl --format and --container (the loader's decoders) ------------------------------
 // The same bake written as each format and container, drawn by the page in the grid and one-sphere
 // views (three frame), against the page's own rgba16f KTX2 drawing of it: what may differ is the
@@ -959,8 +1000,8 @@ async function dropTests() {
   figures.drop = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|lookup|cpca runs one group (development; prt includes glossy, lookup
-// and cpca; glossy includes lookup); all by default.
+// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|lookup|cpca|quantized runs one group (development; prt includes
+// glossy, lookup, cpca and quantized; glossy includes lookup); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
   if (!only || only === 'ibl') {
@@ -1067,6 +1108,7 @@ try {
   if (!only || only === 'prt' || only === 'glossy') await glossyPrtTests();
   if (!only || only === 'prt' || only === 'glossy' || only === 'lookup') await glossyLookupTests();
   if (!only || only === 'prt' || only === 'cpca') await cpcaPrtTests();
+  if (!only || only === 'prt' || only === 'quantized') await quantizedPrtTests();
 } catch (e) {
   check('viewer pages', false, e.stack ?? String(e));
 } finally {
