@@ -37,7 +37,7 @@ import { MTLLoader } from 'three/addons/loaders/MTLLoader.js';
 import { loadPrtkitIbl, PRTKIT_IBL_GLSL, prtkitUniforms } from './prtkit-loader.js';
 import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, loadPrtkitShrm, SHRM_GLSL, loadNormalCodes,
   prtAttribute, transferLightingUniform, prtVertexShader, PRT_FRAGMENT,
-  glossyTransferTexture, glossyHTexture, prtGlossyVertexShader, prtGlossyFragmentShader,
+  transferTexture, glossyHTexture, prtGlossyVertexShader, prtGlossyFragmentShader, prtTextureVertexShader,
   PRT_CLUSTER_ATTRIBUTE, prtWeightAttribute, cpcaBake, projectCpcaLighting, prtCpcaVertexShader } from './prtkit-sh.js';
 
 const q = new URLSearchParams(location.search);
@@ -449,11 +449,16 @@ async function prtMesh(uniforms) {
   while (mesh.geometry.attributes[prtAttribute(K)]) K++;
   if (!bake || K === 0) throw new Error(`${url}: not a transfer bake (no prtkit.transfer extras or _PRT_k attributes)`);
   if (bake.glossy) return prtGlossyMesh(url, mesh, bake, uniforms);
-  if (K > 15) throw new Error(`${url}: ${K} _PRT_k attributes; position + 15 is WebGL2's guaranteed 16 (n ≤ 7 bands here)`);
   if (docs.sh.coefficients.length < bake.order ** 2) throw new Error(`sh: order ${docs.sh.order} < the bake's ${bake.order} bands − 1`);
-  document.getElementById('source').textContent = `${url.split('/').pop()}: n = ${bake.order}, ${bake.mode}`;
   uniforms.shLighting = { value: transferLightingUniform([], 4 * K) };
-  shMaterial = new THREE.ShaderMaterial({ uniforms, vertexShader: prtVertexShader(K), fragmentShader: PRT_FRAGMENT, side: THREE.DoubleSide });
+  // Position and K four-vectors within the attributes the device draws (16 guaranteed: n ≤ 7);
+  // past that, the transfer is read from a texture by gl_VertexID.
+  const inAttributes = K + 1 <= gl.getParameter(gl.MAX_VERTEX_ATTRIBS);
+  document.getElementById('source').textContent =
+    `${url.split('/').pop()}: n = ${bake.order}, ${bake.mode}${inAttributes ? '' : `, transfer read from a texture (${K} texels a vertex)`}`;
+  if (!inAttributes) uniforms.prtTransfer = { value: (docs.prtTexture ??= transferTexture(mesh.geometry, K)) };
+  const vertexShader = inAttributes ? prtVertexShader(K) : prtTextureVertexShader(K);
+  shMaterial = new THREE.ShaderMaterial({ uniforms, vertexShader, fragmentShader: PRT_FRAGMENT, side: THREE.DoubleSide });
   const object = new THREE.Mesh(mesh.geometry, shMaterial);
   object.matrixAutoUpdate = false;
   object.matrix.setFromMatrix3(prtkitFromWorld(state.frame).transpose());
@@ -512,7 +517,7 @@ async function prtGlossyMesh(url, mesh, bake, uniforms) {
       throw new Error(`${q.get('glsl')}: not the glossy snippet of this bake (K = ${K}, ${g.resolution}² cells)`);
     }
     docs.glossy = {
-      transfer: glossyTransferTexture(mesh.geometry, Math.ceil((K * coeffs) / 4)),
+      transfer: transferTexture(mesh.geometry, Math.ceil((K * coeffs) / 4)),
       h: glossyHTexture(new Float32Array(view, 0, blob.count), g.resolution, K),
       snippet,
     };

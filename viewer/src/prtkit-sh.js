@@ -326,7 +326,8 @@ export function transferLightingUniform(coefficients, count) {
  * GLSL vertex shader of PRT relighting (docs/formats/transfer.md): B = Σ_i T_i L_i at the vertex,
  * four coefficients per attribute (one mat4x3 of lighting times one vec4 of transfer), passed on
  * as a varying and interpolated over the triangle (Gouraud, as `render --shading transfer`).
- * K attributes beside position: WebGL2 guarantees 16 vertex attributes, so K ≤ 15 (n ≤ 7 bands).
+ * K attributes beside position: WebGL2 guarantees 16 vertex attributes, so K ≤ 15 (n ≤ 7 bands;
+ * prtTextureVertexShader past that).
  */
 export function prtVertexShader(K) {
   const attributes = Array.from({ length: K }, (_, k) => `attribute vec4 ${prtAttribute(k)};`).join('\n');
@@ -343,6 +344,27 @@ ${sum}
   gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
 }`;
 }
+/**
+ * The same diffuse relighting as prtVertexShader for a bake of more four-vectors than WebGL 2's
+ * guaranteed attributes leave (K > 15: n = 8 bands, 16 four-vectors), the transfer read from
+ * transferTexture by gl_VertexID: B = Σ_i T_i L_i, one mat4x3 per texel.
+ */
+export function prtTextureVertexShader(K) {
+  const sum = Array.from({ length: K }, (_, k) =>
+    `  c += mat4x3(shLighting[${4 * k}], shLighting[${4 * k + 1}], shLighting[${4 * k + 2}], shLighting[${4 * k + 3}]) * transferTexel(base + ${k});`).join('\n');
+  return /* glsl */ `
+uniform sampler2D prtTransfer; // RGBA32F, ${TRANSFER_TEXTURE_WIDTH} wide: vertex v's ${K} texels from v·${K}
+uniform vec3 shLighting[${4 * K}]; // L_i, turned by the environment rotation
+varying vec3 vRadiance;
+vec4 transferTexel(int q) { return texelFetch(prtTransfer, ivec2(q % ${TRANSFER_TEXTURE_WIDTH}, q / ${TRANSFER_TEXTURE_WIDTH}), 0); }
+void main() {
+  int base = gl_VertexID * ${K};
+  vec3 c = vec3(0.0);
+${sum}
+  vRadiance = c;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+}`;
+}
 export const PRT_FRAGMENT = /* glsl */ `
 uniform float exposureScale;
 varying vec3 vRadiance;
@@ -350,23 +372,25 @@ void main() { gl_FragColor = linearToOutputTexel(vec4(vRadiance * exposureScale,
 
 // ---- Glossy PRT (transfer --factors --glb) --------------------------------------------------
 
-/** Width of the glossy transfer texture: vertex v's P texels start at linear texel v·P. */
-export const GLOSSY_TRANSFER_WIDTH = 2048;
+/** Width of the transfer texture: vertex v's P texels start at linear texel v·P. */
+export const TRANSFER_TEXTURE_WIDTH = 2048;
 
 /**
- * A glossy bake's transfer as an RGBA32F THREE.DataTexture: the K·n² values of each vertex (the
- * `_PRT_k` stream, term-major, σ_k folded in) as P = ⌈K·n²/4⌉ consecutive texels, vertex v's
- * texel p at linear index v·P + p of a GLOSSY_TRANSFER_WIDTH-wide image (row-major). WebGL 2
- * draws at most 16 attributes per vertex; the vertex shader reads these by gl_VertexID instead.
+ * A bake's transfer as an RGBA32F THREE.DataTexture: the values of each vertex (the `_PRT_k`
+ * stream: n² of a diffuse bake, K·n² term-major of a glossy one, σ_k folded in) as
+ * P = ⌈values/4⌉ consecutive texels, vertex v's texel p at linear index v·P + p of a
+ * TRANSFER_TEXTURE_WIDTH-wide image (row-major). WebGL 2 draws at most 16 attributes per vertex;
+ * the vertex shaders of glossy bakes and of diffuse bakes past 15 four-vectors (n = 8) read these
+ * by gl_VertexID instead.
  */
-export function glossyTransferTexture(geometry, texelsPerVertex) {
+export function transferTexture(geometry, texelsPerVertex) {
   const vertices = geometry.attributes.position.count;
-  const W = GLOSSY_TRANSFER_WIDTH;
+  const W = TRANSFER_TEXTURE_WIDTH;
   const H = Math.ceil((vertices * texelsPerVertex) / W);
   const data = new Float32Array(W * H * 4);
   for (let p = 0; p < texelsPerVertex; p++) {
     const a = geometry.attributes[prtAttribute(p)];
-    if (!a || a.count !== vertices) throw new Error(`the glossy bake lacks ${prtAttribute(p)} for its ${vertices} vertices`);
+    if (!a || a.count !== vertices) throw new Error(`the bake lacks ${prtAttribute(p)} for its ${vertices} vertices`);
     for (let v = 0; v < vertices; v++) {
       const o = 4 * (v * texelsPerVertex + p);
       data[o] = a.getX(v); data[o + 1] = a.getY(v); data[o + 2] = a.getZ(v); data[o + 3] = a.getW(v);
@@ -428,12 +452,12 @@ export function prtGlossyVertexShader(K, coeffs) {
     }
   }
   return /* glsl */ `
-uniform sampler2D prtTransfer; // RGBA32F, ${GLOSSY_TRANSFER_WIDTH} wide: vertex v's ${P} texels from v·${P}
+uniform sampler2D prtTransfer; // RGBA32F, ${TRANSFER_TEXTURE_WIDTH} wide: vertex v's ${P} texels from v·${P}
 uniform vec3 shLighting[${coeffs}]; // L_i, turned by the environment rotation
 varying vec4 vC[${Q}];
 varying vec3 vNormal;
 varying vec3 vPosition;
-vec4 transferTexel(int q) { return texelFetch(prtTransfer, ivec2(q % ${GLOSSY_TRANSFER_WIDTH}, q / ${GLOSSY_TRANSFER_WIDTH}), 0); }
+vec4 transferTexel(int q) { return texelFetch(prtTransfer, ivec2(q % ${TRANSFER_TEXTURE_WIDTH}, q / ${TRANSFER_TEXTURE_WIDTH}), 0); }
 void main() {
   vec3 c[${K}];
   for (int t = 0; t < ${K}; t++) c[t] = vec3(0.0);

@@ -692,6 +692,33 @@ async function quantizedPrtTests() {
   figures.prt_quantized = fig;
 }
 
+// ---- Diffuse PRT at n = 8 (16 four-vectors: past WebGL 2's 16 attributes with the position) ----
+// The knot baked at n = 8 (64 coefficients), relit from a texture of the transfer read by
+// gl_VertexID, against render --shading transfer of the same .glb, turned 60° in the three frame.
+async function order8PrtTests() {
+  const { dir, sky } = skyIn('prt-n8');
+  const mesh = 'testdata/meshes/torus-knot.obj', glb = join(dir, 'knot8.glb'), sh = join(dir, 'sky7.sh.json');
+  const png = join(out, 'prt-n8-60-render.png');
+  run('transfer', [mesh, '-n', '8', '--rays', '256', '--glb', glb, '-o', join(dir, 'knot8.json'), '-q']);
+  run('sh-project', [sky, '-F', '7', '-o', sh, '-q']);
+  const eye = [2.2, -3.4, 2.4], EXP = '-2';
+  run('render', [sky, '--scene', mesh, '--shading', 'transfer', '--transfer', glb, '--env-rotation', '60',
+    '--eye', eye.join(','), '--target', '0,0,0', '--fov', String(FOV), '--res', '200x200', '--png', png, '--exposure', EXP, '-q']);
+  const ref = readPng(png);
+  const params = { mode: 'prt', glb: url(glb), sh: url(sh), rotate: '60', eye: toPage(eye, 'three'), target: '0,0,0', fov: String(FOV), res: '200x200', exposure: EXP };
+  const r = await view(params, { evaluate: () => document.getElementById('source').textContent });
+  const img = mirrorX(r.image);
+  writePng(join(out, 'prt-n8-60-viewer-three.png'), img);
+  const c = compare(img, ref, meshMask(img));
+  check('prt knot n = 8 reads its 16 four-vectors from a texture', /read from a texture \(16 texels/.test(r.value), r.value);
+  check('prt knot n = 8, turned 60° (three frame) vs render --shading transfer', c.psnr >= 35,
+    `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+  const b = await view({ ...params, rotate: '30', src: url(sky), eye: toPage([2.6, -4, 2.8], 'three'), res: '640x360' }, { bench: 20 });
+  writePng(join(out, 'mode-prt-n8.png'), b.image);
+  console.log(`     frame time prt (n = 8, knot, transfer from a texture) 640×360: ${b.ms.toFixed(1)} ms (CPU, SwiftShader)`);
+  figures.prt_n8 = { turned60_three: c.psnr, frame_ms_640x360: b.ms };
+}
+
 // ---- Every ibl --format and --container (the loader's decoders) ------------------------------
 // The same bake written as each format and container, drawn by the page in the grid and one-sphere
 // views (three frame), against the page's own rgba16f KTX2 drawing of it: what may differ is the
@@ -1000,8 +1027,8 @@ async function dropTests() {
   figures.drop = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|lookup|cpca|quantized runs one group (development; prt includes
-// glossy, lookup, cpca and quantized; glossy includes lookup); all by default.
+// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|lookup|cpca|quantized|n8 runs one group (development; prt
+// includes glossy, lookup, cpca, quantized and n8; glossy includes lookup); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
   if (!only || only === 'ibl') {
@@ -1109,6 +1136,7 @@ try {
   if (!only || only === 'prt' || only === 'glossy' || only === 'lookup') await glossyLookupTests();
   if (!only || only === 'prt' || only === 'cpca') await cpcaPrtTests();
   if (!only || only === 'prt' || only === 'quantized') await quantizedPrtTests();
+  if (!only || only === 'prt' || only === 'n8') await order8PrtTests();
 } catch (e) {
   check('viewer pages', false, e.stack ?? String(e));
 } finally {
