@@ -824,8 +824,8 @@ fn row_moments(row: &RowFactors, width: f64, sums: &[f64; 5]) -> (DVec3, DMat3) 
 /// What a coarse texel T keeps of its fine texels t (per channel, ΔL_t = L_t − L̄_T and e = ω −
 /// c_T, c_T the centre): D_T = Σ Ω_t |ΔL_t|, M_T = Σ ΔL_t ∫_t e dω (= Σ ΔL_t ∫_t ω dω, as
 /// Σ ΔL_t Ω_t = 0), Q_T = Σ ΔL_t ∫_t e eᵀ dω and A_T = Σ |ΔL_t| ∫_t e eᵀ dω. The second moments
-/// about the centre are the moments about the origin shifted: Σ w ∫ e eᵀ = Σ w ∫ ω ωᵀ − m cᵀ − c mᵀ
-/// + (Σ w Ω) c cᵀ with m = Σ w ∫ ω. (The shift cancels all but a share ~ (block size)² of the
+/// about the centre are the moments about the origin shifted: Σ w ∫ e eᵀ = Σ w ∫ ω ωᵀ − m cᵀ −
+/// c mᵀ plus (Σ w Ω) c cᵀ, with m = Σ w ∫ ω. (The shift cancels all but a share ~ (block size)² of the
 /// terms: f64 keeps ~1e-9 of A_T, far below any bound here.)
 struct BlockMoments {
     mean: [f64; 3],
