@@ -24,7 +24,7 @@ fn main() {
          r > 0 is compared on {samples} texels at a fixed stride with the angular integral of the input \
          (`ibl::reference`: every input texel within the kernel's support, texel integrals by a rule \
          misplacing at most 1e-5 of the kernel's weight; 8 × 8 blocks of texels taken whole with their \
-         first moments where the remainder bound allows, which keeps the reference within 1e-4 of the \
+         first and second moments where the remainder bound allows, which keeps the reference within 1e-4 of the \
          texel-by-texel sum); relative error ‖a − r‖/‖r‖ over the texels \
          whose reference is above 1 % of the mean. Inputs that are not lat-long are first resampled to a \
          1024 × 512 lat-long (2 × 2 supersampling), which both the bake and the reference read. Errors are \
