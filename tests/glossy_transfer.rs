@@ -103,10 +103,14 @@ fn a_glossy_bake_relit_by_band_limited_light_is_the_factored_render() {
     let other_k = relit("f5.exr");
     eprintln!("glossy bake (K = 10, n = 4) vs factored render: K = 10 {same_k:.2e}, K = 5 {other_k:.2e}");
     // What separates them: the factored render's bilinear lookups of the 128 × 64 map against
-    // the SH of its texels, and rays of single against double precision at grazing cells.
-    assert!(same_k < 1e-3, "{same_k:e}");
+    // the SH of its texels, and rays of single against double precision at grazing cells. Most
+    // of it (measured 2.6e-3) is at 16 of the bowl's 64 rim vertices, whose shortest-arc frames
+    // put a column of cell centres exactly in the rim's plane: those rays skim the far rim and
+    // the two ray casts decide them differently. The same bowl turned by 1° about +Z (no such
+    // coincidence) agrees to 2.6e-4.
+    assert!(same_k < 4e-3, "{same_k:e}");
     // Not vacuous: the terms K = 5 leaves out are visible.
-    assert!(other_k > 10.0 * same_k && other_k > 1e-2, "{other_k:e}");
+    assert!(other_k > 20.0 * same_k && other_k > 1e-2, "{other_k:e}");
 }
 
 #[test]
@@ -164,6 +168,78 @@ fn a_lambertian_factorization_at_one_term_is_the_diffuse_transfer() {
     assert_eq!(manifest["glossy"]["terms"], 1);
     assert!(manifest["glossy"]["energy"].as_f64().unwrap() > 0.999_999, "{manifest}");
     assert_eq!(manifest["coefficients"], 9);
+}
+
+#[test]
+fn the_pole_of_a_sphere_relights_as_the_brute_force_reference() {
+    // sphere.obj has a vertex at +Z in a fan of 32 triangles. Frames of normals around it that
+    // are twisted far apart about the normal (R_z(φ_n)·R_y(θ_n) turns by φ_n, the whole circle
+    // around the fan) blend c_k of differently turned terms: a dark dot. The shortest-arc frame
+    // is continuous there. Relit by a sky of bands 0–2 (exact at n = 4: what the image misses
+    // is the K terms and the interpolation), a view of the cap around the pole is compared with
+    // `--shading reference`, which integrates ρ cos over every texel per pixel with no frame.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    band_limited_sky(d);
+    run_in(
+        d,
+        "factor-brdf",
+        &[
+            "phong:s=8",
+            "--domain",
+            "hemisphere",
+            "--resolution",
+            "16",
+            "--cosine",
+            "--factors",
+            "p.exr",
+            "--terms",
+            "16",
+            "-o",
+            "p.json",
+        ],
+    );
+    let sphere = test_mesh("sphere.obj");
+    run_in(
+        d,
+        "transfer",
+        &[
+            &sphere,
+            "-n",
+            "4",
+            "--mode",
+            "unshadowed",
+            "--factors",
+            "p.json",
+            "-K",
+            "13",
+            "--glb",
+            "g.glb",
+            "-o",
+            "g.json",
+        ],
+    );
+    let view = [
+        "--scene",
+        sphere.as_str(),
+        "--brdf",
+        "phong:s=8",
+        "--res",
+        "64x64",
+        "--eye",
+        "0,-0.6,2.2",
+        "--target",
+        "0,0,1",
+    ];
+    let view = [&view[..], &["--fov", "14"]].concat();
+    run_in(d, "render", &[&["sky.pfm"][..], &view, &["-o", "reference.exr"]].concat());
+    let relit =
+        [&["sky.pfm"][..], &view, &["--shading", "transfer", "--transfer", "g.glb", "--compare", "reference.exr"]];
+    let err = relative_error(d, &relit.concat());
+    eprintln!("glossy bake of sphere.obj (K = 13, n = 4), the cap around +Z vs the reference: {err:.2e}");
+    // Measured: 0.97 % (the K = 13 terms and the interpolation); the frame R_z(φ_n)·R_y(θ_n)
+    // in its place: 3.8 %.
+    assert!(err < 0.02, "{err:e}");
 }
 
 #[test]
@@ -245,12 +321,32 @@ fn mismatched_bakes_factors_and_brdfs_exit_2_naming_the_file() {
     let bowl = test_mesh("bowl.obj");
     run_in(d, "transfer", &[&bowl, "-n", "2", "--factors", "p.json", "-K", "3", "--glb", "g.glb", "-o", "g.json"]);
     run_in(d, "transfer", &[&bowl, "-n", "2", "--rays", "16", "--glb", "diffuse.glb", "-o", "diffuse.json"]);
-    let render: [(&[&str], &str); 3] = [
+    // A bake of the earlier frame R_z(φ_n)·R_y(θ_n) names no frame (here: its key renamed, the
+    // bytes' length kept); one naming another frame is refused alike.
+    let glb = std::fs::read(d.join("g.glb")).unwrap();
+    let word = format!("\"frame\":\"{}\"", prtkit::transfer::glossy::FRAME);
+    let at = glb.windows(word.len()).position(|w| w == word.as_bytes()).expect("the frame in the .glb's extras");
+    let mut old = glb.clone();
+    old[at..at + 8].copy_from_slice(b"\"fr_me\":");
+    std::fs::write(d.join("old.glb"), &old).unwrap();
+    let mut other = glb;
+    let minus = at + word.find("-phi").unwrap();
+    other[minus] = b'+';
+    std::fs::write(d.join("other.glb"), &other).unwrap();
+    let render: [(&[&str], &str); 5] = [
         (&["--transfer", "g.glb", "--brdf", "phong:s=8", "--factors", "q.json"], "g.glb was baked from p.json"),
         (&["--transfer", "g.glb", "--brdf", "phong:s=9", "--factors", "p.json"], "g.glb: the transfer holds phong:s=8"),
         (
             &["--transfer", "diffuse.glb", "--factors", "p.json"],
             "diffuse.glb: a diffuse transfer; --factors is for glossy",
+        ),
+        (
+            &["--transfer", "old.glb", "--brdf", "phong:s=8"],
+            "old.glb: a glossy bake in the normal's frame Rz(phi_n) Ry(theta_n) (extras",
+        ),
+        (
+            &["--transfer", "other.glb", "--brdf", "phong:s=8"],
+            "other.glb: a glossy bake in the normal's frame Rz(phi_n) Ry(theta_n) Rz(+phi_n), not",
         ),
     ];
     for (args, says) in render {

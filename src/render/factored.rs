@@ -12,7 +12,11 @@
 //! normals, whose rings are turns of one another about +Z (the lighting is gathered once per
 //! ring and shifted, [`RingLighting`]); for meshes it is computed per vertex with visibility by ray casting (the
 //! visibility bits are kept, so relighting under a new environment only redoes the sums) and
-//! interpolated across triangles. ω_i, ω_o are expressed in the frame of [`sphere::frame_of`].
+//! interpolated across triangles. ω_i, ω_o are expressed in the normal's frame: the table's
+//! R_z(φ)·R_y(θ) ([`sphere::frame_of`], whose rings are the turns above) for the sphere; for
+//! meshes the shortest-arc turn of +Z onto the normal ([`sphere::shortest_arc_frame`]), whose
+//! twist about the normal varies smoothly wherever the normal is not −Z, because c_k of
+//! neighbouring vertices are blended before the sum over k (`transfer::glossy`, "The frame").
 
 use super::{Hit, Scene, Shade};
 use crate::envmap::EnvMap;
@@ -66,7 +70,7 @@ impl Transport {
         };
         let cells = grid.len();
         let words = cells.div_ceil(64);
-        let frames: Vec<DMat3> = mesh.normals.iter().map(|n| sphere::frame_of(*n)).collect();
+        let frames: Vec<DMat3> = mesh.normals.iter().map(|n| sphere::shortest_arc_frame(*n)).collect();
         progress.start("visibility", mesh.positions.len() as u64);
         let visible: Vec<u64> = (0..mesh.positions.len())
             .into_par_iter()
@@ -430,15 +434,17 @@ impl Shade for Factored {
     fn shade(&self, hit: &Hit, wo: DVec3) -> [f64; 3] {
         let kk = self.terms();
         // Interpolation weights over points.
-        let taps: Vec<(usize, f64)> = match (&self.transport.support, hit.triangle) {
+        let (taps, frame): (Vec<(usize, f64)>, DMat3) = match (&self.transport.support, hit.triangle) {
             (Support::Vertices, Some((t, u, v))) => {
                 let [a, b, c] = self.transport.triangles[t].map(|i| i as usize);
-                vec![(a, 1.0 - u - v), (b, u), (c, v)]
+                (vec![(a, 1.0 - u - v), (b, u), (c, v)], sphere::shortest_arc_frame(hit.n))
             }
-            (Support::NormalTable { width, height }, _) => LatLong::new(*width, *height).taps(hit.n).to_vec(),
+            (Support::NormalTable { width, height }, _) => {
+                (LatLong::new(*width, *height).taps(hit.n).to_vec(), sphere::frame_of(hit.n))
+            }
             _ => return [0.0; 3],
         };
-        let wo_l = sphere::frame_of(hit.n).transpose() * wo;
+        let wo_l = frame.transpose() * wo;
         let wo_taps = h_taps(&self.grid, wo_l);
         let mut out = [0.0; 3];
         for k in 0..kk {

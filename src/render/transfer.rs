@@ -77,6 +77,10 @@ pub struct GlossyBake {
     pub cosine: bool,
     /// σ_0 … σ_{K−1}, folded into the transfer.
     pub singular_values: Vec<f64>,
+    /// The normal's frame the bake is in ([`crate::transfer::glossy::FRAME`]; absent in bakes
+    /// of the earlier frame R_z(φ_n)·R_y(θ_n)).
+    #[serde(default)]
+    pub frame: Option<String>,
     /// h_0 … h_{K−1} on the grid, n² values each (the `.glb`'s `glossy.h` blob).
     #[serde(skip)]
     pub h: Vec<Vec<f64>>,
@@ -203,6 +207,32 @@ pub enum OtherMesh {
         /// The first vertex that differs.
         vertex: usize,
     },
+}
+
+/// A glossy bake in another normal's frame than [`crate::transfer::glossy::FRAME`]: its c_k and
+/// h_k would be read in the wrong frame and relit wrong.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{file}: a glossy bake in the normal's frame {}, not {}: made by an earlier prtkit; bake it again",
+    frame.as_deref().unwrap_or("Rz(phi_n) Ry(theta_n) (extras.prtkit.transfer.glossy names no frame)"),
+    crate::transfer::glossy::FRAME
+)]
+pub struct OtherFrame {
+    /// The file.
+    pub file: String,
+    /// The frame it names, if any.
+    pub frame: Option<String>,
+}
+
+/// Why a `.glb` cannot be relit.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadBakeError {
+    /// Not a transfer bake, or a damaged one.
+    #[error(transparent)]
+    NotATransfer(#[from] NotATransfer),
+    /// A glossy bake of another frame.
+    #[error(transparent)]
+    OtherFrame(#[from] OtherFrame),
 }
 
 /// A `.glb` that is not a transfer bake `render` can read.
@@ -478,7 +508,7 @@ impl Glb<'_> {
 
 impl TransferBake {
     /// Reads the `.glb` bytes of the file `name`. Every fault names the file.
-    pub fn from_glb(name: &str, bytes: &[u8]) -> Result<TransferBake, NotATransfer> {
+    pub fn from_glb(name: &str, bytes: &[u8]) -> Result<TransferBake, ReadBakeError> {
         let bad = |why: &str| NotATransfer { file: name.to_string(), reason: why.to_string() };
         let gltf = glb::json_chunk(bytes).ok_or_else(|| bad("no glTF 2 header and JSON chunk"))?;
         let bin = glb::bin_chunk(bytes).ok_or_else(|| bad("no BIN chunk"))?;
@@ -487,10 +517,15 @@ impl TransferBake {
         let extras = &mesh["extras"]["prtkit.transfer"];
         let order = extras["order"].as_u64().ok_or_else(|| bad("no extras.prtkit.transfer.order"))? as usize;
         if !(1..=crate::limits::MAX_TRANSFER_ORDER).contains(&order) {
-            return Err(bad(&format!("order {order} is outside 1..={}", crate::limits::MAX_TRANSFER_ORDER)));
+            return Err(bad(&format!("order {order} is outside 1..={}", crate::limits::MAX_TRANSFER_ORDER)).into());
         }
         let mode = extras["mode"].as_str().ok_or_else(|| bad("no extras.prtkit.transfer.mode"))?.to_string();
         let glossy = extras.get("glossy").map(|g| glb.glossy(g)).transpose()?;
+        if let Some(frame) = glossy.as_ref().map(|g| &g.frame) {
+            if frame.as_deref() != Some(crate::transfer::glossy::FRAME) {
+                return Err(OtherFrame { file: name.to_string(), frame: frame.clone() }.into());
+            }
+        }
         let terms = glossy.as_ref().map_or(1, |g| g.terms);
         let albedo = extras["albedo"].as_f64().filter(|a| a.is_finite()).ok_or_else(|| bad("no finite albedo"))?;
         let primitive = &mesh["primitives"][0];

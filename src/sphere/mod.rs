@@ -66,6 +66,25 @@ pub fn frame(theta: f64, phi: f64) -> DMat3 {
     DMat3::from_rotation_z(phi) * DMat3::from_rotation_y(theta)
 }
 
+/// The frame of the shortest-arc rotation carrying +Z to the unit direction `d`: the turn by θ
+/// about +Z × d, R_z(φ)·R_y(θ)·R_z(−φ). Its third column is `d`. Unlike [`frame_of`], whose
+/// twist φ about `d` jumps at both poles, it varies smoothly with `d` everywhere but at −Z (at
+/// +Z it is the identity from every side; at −Z it takes φ = 0, R_y(π)): by the hairy-ball
+/// theorem a tangent frame over the whole sphere of directions has a singular point, and this
+/// one has exactly one. Shading frames of meshes use it (glossy transfer, the factored render),
+/// so that frames of neighbouring normals differ by small turns wherever the normal is not −Z.
+///
+/// Written without angles: with v = +Z × d, the rotation is I + [v]× + [v]×²/(1 + d_z)
+/// (Rodrigues), and x²/(1 + d_z) = cos²φ (1 − d_z) for unit `d`, which stays accurate where
+/// 1 + d_z cancels.
+#[inline]
+pub fn shortest_arc_frame(d: DVec3) -> DMat3 {
+    let s = (d.x * d.x + d.y * d.y).sqrt();
+    let (c, t) = if s > 0.0 { (d.x / s, d.y / s) } else { (1.0, 0.0) };
+    let a = 1.0 - d.z;
+    DMat3::from_cols(DVec3::new(1.0 - a * c * c, -a * c * t, -d.x), DVec3::new(-a * c * t, 1.0 - a * t * t, -d.y), d)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -99,5 +118,35 @@ mod tests {
         // The first column is ∂d/∂θ.
         let dt = (direction(1.1 + 1e-6, 4.0) - direction(1.1 - 1e-6, 4.0)) / 2e-6;
         assert!((r * DVec3::X - dt).length() < 1e-8);
+    }
+
+    #[test]
+    fn shortest_arc_frame_is_the_turn_about_z_cross_d_and_smooth_at_the_north_pole() {
+        // R_z(φ)·R_y(θ)·R_z(−φ) by its angles, everywhere including both poles (φ = 0 there).
+        for i in 0..=24 {
+            for j in 0..16 {
+                let (t, p) = (PI * i as f64 / 24.0, TAU * (j as f64 + 0.3) / 16.0);
+                let d = direction(t, p);
+                let (theta, phi) = angles(d);
+                let want = frame(theta, phi) * DMat3::from_rotation_z(-phi);
+                let got = shortest_arc_frame(d);
+                assert!((got - want).abs().to_cols_array().iter().all(|e| *e < 1e-12), "θ {t} φ {p}: {got} vs {want}");
+                assert!((got * DVec3::Z - d).length() < 1e-15);
+                assert!((got.transpose() * got - DMat3::IDENTITY).abs().to_cols_array().iter().all(|e| *e < 1e-14));
+                // It fixes the axis of the turn, +Z × d.
+                let axis = DVec3::Z.cross(d);
+                assert!((got * axis - axis).length() < 1e-14);
+            }
+        }
+        // Near +Z the frame is near the identity from every side: the twist has no jump there,
+        // where frame_of's first column turns with φ. Near −Z it depends on the side.
+        for p in [0.1, 1.7, 3.0, 5.9] {
+            let near = direction(1e-9, p);
+            let off = (shortest_arc_frame(near) - DMat3::IDENTITY).abs().to_cols_array();
+            assert!(off.iter().all(|e| *e < 2e-9), "φ {p}: {off:?}");
+        }
+        let (a, b) =
+            (shortest_arc_frame(direction(PI - 1e-6, 0.0)), shortest_arc_frame(direction(PI - 1e-6, PI / 2.0)));
+        assert!((a * DVec3::X - b * DVec3::X).length() > 1.0);
     }
 }

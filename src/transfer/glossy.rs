@@ -2,9 +2,10 @@
 //! Ramamoorthi 2008, eq. 3–4: the factorization PRT uses to relight glossy objects under
 //! changing lighting and view).
 //!
-//! In the frame F_x = R_z(φ_n)·R_y(θ_n) of a vertex's normal ([`sphere::frame_of`]), the BRDF
-//! is factored as ρ(ω_i, ω_o) [max(cos θ_i, 0)] ≈ Σ_k σ_k h_k(ω_o) g_k(ω_i) (`factor-brdf`,
-//! the cosine in brackets when the factors do not hold it). The outgoing radiance under distant
+//! In the frame F_x = R_z(φ_n)·R_y(θ_n)·R_z(−φ_n) of a vertex's normal, the shortest-arc turn
+//! of +Z onto it ([`sphere::shortest_arc_frame`], [`FRAME`]), the BRDF is factored as
+//! ρ(ω_i, ω_o) [max(cos θ_i, 0)] ≈ Σ_k σ_k h_k(ω_o) g_k(ω_i) (`factor-brdf`, the cosine in
+//! brackets when the factors do not hold it). The outgoing radiance under distant
 //! lighting L(ω) = Σ_j L_j Y_j(ω) is then
 //!
 //!   B(x, ω_o) = Σ_k h_k(F_xᵀ ω_o) c_k(x),   c_k(x) = Σ_j T_kj(x) L_j,
@@ -13,6 +14,14 @@
 //! a K × n² transfer matrix per vertex (the glossy analogue of Sloan, Kautz & Snyder 2002's
 //! transfer vector, with the K terms of eq. 4 in place of their n² × n² BRDF matrix): at run
 //! time K dot products with the lighting's SH per vertex, and K lookups of h_k per pixel.
+//!
+//! **The frame** matters although the BRDF is isotropic: c_k(x) is interpolated across each
+//! triangle before the sum over k, and the terms' φ structure turns with F's twist about the
+//! normal (an azimuthal frequency m turns by m·Δψ). The sum over k at one vertex does not see the
+//! twist; a blend of vertices whose frames are twisted far apart does. R_z(φ_n)·R_y(θ_n) twists
+//! by φ_n, which turns fast near both poles (a dark dot at the top of a ball); the shortest arc
+//! twists smoothly everywhere but at n = −Z, where objects resting on the ground (prtkit's +Z up)
+//! hide it.
 //!
 //! **The integral** runs over the factor grid's cells, as `render --shading factored` does
 //! ([`CellSamples`]): one visibility ray per cell, along its centre, and `sub`² samples of
@@ -30,6 +39,10 @@ use crate::sh::legendre::LegendreTable;
 use crate::sh::rotate::ShRotation;
 use crate::sphere;
 use glam::DVec3;
+
+/// The shading frame of glossy bakes, as the `.glb`'s extras and the manifest name it: bakes
+/// without it used R_z(φ_n)·R_y(θ_n) and are not relit.
+pub const FRAME: &str = "Rz(phi_n) Ry(theta_n) Rz(-phi_n)";
 
 /// The per-vertex integrator of glossy transfer for one factorization, order and cell sampling.
 pub struct Glossy {
@@ -106,7 +119,7 @@ impl Glossy {
     ) -> usize {
         let coeffs = self.order * self.order;
         let cells = self.grid.len();
-        let frame = sphere::frame_of(normal);
+        let frame = sphere::shortest_arc_frame(normal);
         let mut local = vec![0.0; self.terms * coeffs];
         let mut seen = 0;
         for &c in &self.cells {
@@ -196,7 +209,7 @@ mod tests {
         for normal in [DVec3::Z, DVec3::new(0.2, 0.9, -0.3).normalize(), DVec3::new(-0.7, 0.1, 0.1).normalize()] {
             let mut t = vec![0.0; order * order];
             glossy.integrate(DVec3::ZERO, normal, None, &mut t);
-            let frame = sphere::frame_of(normal);
+            let frame = sphere::shortest_arc_frame(normal);
             let mut want = vec![0.0; order * order];
             for c in 0..grid.len() {
                 eval_basis_dir(&table, frame * grid.direction(c), &mut y);

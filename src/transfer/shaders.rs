@@ -231,10 +231,11 @@ pub fn glossy_snippet(order: usize, terms: usize, grid: Grid, lang: Language) ->
 // c_t: per vertex, {dot} applied to term t's {coeffs} values (the _PRT_k stream holds
 // K x {coeffs} values term-major: value t*{coeffs} + i is T_ti, sigma_t folded in{repack}), then
 // interpolated over the triangle.
-// F = R_z(phi_n) R_y(theta_n): the frame of the unit shading normal's spherical angles in the
-// mesh's axes (columns: the direction of increasing theta, of increasing phi, the normal;
-// phi_n = 0 on the poles). It matters: the factors have structure in phi. w_o: unit, from the
-// surface towards the eye, in the mesh's axes.
+// F = R_z(phi_n) R_y(theta_n) R_z(-phi_n): the shortest-arc rotation carrying +Z to the unit
+// shading normal n, in the mesh's axes (the turn by theta_n about +Z x n; its third column is n;
+// the identity at n = +Z, R_y(pi) at n = -Z). It matters: the factors have structure in phi, and
+// c_t blends vertices, so F's twist about n must vary smoothly (it does but at n = -Z). w_o:
+// unit, from the surface towards the eye, in the mesh's axes.
 // {local_view}(n, w_o): F^T w_o.
 // {angles}(w): (cos theta, phi) of it, phi in [0, 2 pi).
 // {taps}(ct_phi): where h is read, the same for every term: bilinear between the cell
@@ -296,8 +297,9 @@ pub fn glossy_snippet(order: usize, terms: usize, grid: Grid, lang: Language) ->
         cp = n.x / s;
         sp = n.y / s;
     }}
-    {v3} u = {v3}(n.z * cp, n.z * sp, -s); // F's columns: increasing theta, increasing phi, n
-    {v3} v = {v3}(-sp, cp, 0.0);
+    float a = 1.0 - n.z; // F = I + [z x n]x + [z x n]x^2 / (1 + n.z): columns u, v, n
+    {v3} u = {v3}(1.0 - a * cp * cp, -a * cp * sp, -n.x);
+    {v3} v = {v3}(-a * cp * sp, 1.0 - a * sp * sp, -n.y);
     return {v3}(dot(u, wo), dot(v, wo), dot(n, wo));
 }}
 
@@ -389,8 +391,9 @@ fn {local_view}(n: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {{
         cp = n.x / s;
         sp = n.y / s;
     }}
-    let u = vec3<f32>(n.z * cp, n.z * sp, -s); // F's columns: increasing theta, increasing phi, n
-    let v = vec3<f32>(-sp, cp, 0.0);
+    let a = 1.0 - n.z; // F = I + [z x n]x + [z x n]x^2 / (1 + n.z): columns u, v, n
+    let u = vec3<f32>(1.0 - a * cp * cp, -a * cp * sp, -n.x);
+    let v = vec3<f32>(-a * cp * sp, 1.0 - a * sp * sp, -n.y);
     return vec3<f32>(dot(u, wo), dot(v, wo), dot(n, wo));
 }}
 

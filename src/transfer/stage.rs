@@ -11,7 +11,7 @@
 use super::cpca::Cpca;
 use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
-use super::glossy::Glossy;
+use super::glossy::{Glossy, FRAME};
 use super::interreflect::{Hits, Storage, Tracer};
 use super::jobs::{Job, Joined, Part, Recipe, Transfer};
 use super::lightmap::{self, Lightmap, LightmapConfig, LightmapInfo};
@@ -267,6 +267,9 @@ pub struct GlossyInfo {
     pub cell_samples: usize,
     /// How B is evaluated at run time, in words.
     pub relighting: String,
+    /// The normal's frame F the transfer and h_k are in, [`FRAME`] (bakes that do not name it
+    /// used R_z(φ_n)·R_y(θ_n), which `render` does not relight).
+    pub frame: String,
 }
 
 /// How T was integrated.
@@ -1071,6 +1074,7 @@ fn glb_mesh(mesh: &Mesh, stored: &Stored, body: &TransferBody, h: Option<Vec<f32
             "resolution": g.resolution,
             "cosine": g.cosine,
             "singular_values": g.singular_values,
+            "frame": g.frame,
         });
     }
     let vertices = mesh.positions.len();
@@ -1292,8 +1296,8 @@ pub(super) fn check_glossy(g: &GlossyConfig) -> Result<(), Error> {
 fn glossy_description(g: &GlossyConfig, mode: Mode, cells: usize) -> String {
     let (n, sub) = (g.factorization.grid.n, g.cell_samples);
     format!(
-        "over the {cells} cells of the factors' {n}x{n} (cos theta, phi) grid in the normal's frame F = Rz(phi_n) \
-         Ry(theta_n): T_kj = sigma_k sum_c V(c) g_k(c) sum_s w_s Y_j(F w_cs), {sub}x{sub} basis samples per cell \
+        "over the {cells} cells of the factors' {n}x{n} (cos theta, phi) grid in the normal's frame F = {FRAME}: \
+         T_kj = sigma_k sum_c V(c) g_k(c) sum_s w_s Y_j(F w_cs), {sub}x{sub} basis samples per cell \
          weighted by the cell's solid angle{}; {}",
         if g.cosine { "" } else { " times max(cos theta, 0)" },
         if mode == Mode::Shadowed { "V(c) by one ray along the cell's centre" } else { "V = 1 (unshadowed)" }
@@ -1318,10 +1322,11 @@ fn glossy_info(g: &GlossyConfig, order: usize) -> GlossyInfo {
         cell_samples: g.cell_samples,
         relighting: format!(
             "B(x, w_o) = sum_k h_k(F^T w_o) c_k(x), c_k = sum_i T_ki L_i over the {} coefficients of the lighting; \
-             F = Rz(phi_n) Ry(theta_n) of the normal's spherical angles (its columns: the direction of increasing \
-             theta, of increasing phi, the normal); h_k bilinear on the factor file's grid",
+             F = {FRAME}, the shortest-arc rotation carrying +Z to the unit normal (the turn by theta_n about +Z x \
+             n; its third column the normal); h_k bilinear on the factor file's grid",
             order * order
         ),
+        frame: FRAME.to_string(),
     }
 }
 
