@@ -473,7 +473,7 @@ ${pack}
 
 /**
  * Fragment shader of glossy PRT: `snippet` is `transfer --glsl`'s output for the bake (its
- * prtkitGlossyRadiance: the view direction in the normal's frame F = R_z(φ_n) R_y(θ_n) and the
+ * prtkitGlossyRadiance: the view direction in the normal's frame F = R_z(φ_n) R_y(θ_n) R_z(−φ_n) and the
  * h_k lookup with render's bilinear/pole rule, reading the uniform prtkitGlossyHTexture). The normal is
  * turned towards the viewer first, as render shades the side it sees.
  */
