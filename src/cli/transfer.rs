@@ -140,9 +140,6 @@ fn flagged(error: Error) -> anyhow::Error {
         Error::Bounces(n) => format!("--bounces {n} is outside 1..={MAX_TRANSFER_BOUNCES}"),
         Error::Albedo(albedo) => format!("--albedo {albedo} must be a finite number ≥ 0"),
         Error::Offset(offset) => format!("--offset {offset} must be in [0, 0.1)"),
-        Error::GlossyInterreflected => {
-            "glossy transfer (--factors) is unshadowed or shadowed; its interreflections are not built".into()
-        }
         Error::Terms { factors, terms, stored } => {
             format!("{factors}: --terms {terms} is outside 1..={stored}, the terms the factor file holds")
         }
@@ -165,7 +162,7 @@ fn flagged(error: Error) -> anyhow::Error {
         }
         Error::ShEnergy(fraction) => format!("--sh-energy {fraction} must be in (0, 1]"),
         Error::JobInterreflected => {
-            "--job and --join split diffuse unshadowed or shadowed and glossy bakes; interreflected transfer is \
+            "--job and --join split unshadowed and shadowed bakes, diffuse or glossy; interreflected transfer is \
              baked in one run (each bounce gathers the transfer of every vertex)"
                 .into()
         }

@@ -31,9 +31,19 @@
 //! Y_j(ω_cs); a vertex adds σ_k g_k(c) P_c over its visible cells and turns each of the K rows
 //! onto its frame with one SH rotation (Y_j(F l) = Σ_i M_ji(F) Y_i(l) within a band, as the
 //! diffuse integrator does): no basis evaluations per vertex.
+//!
+//! **Interreflections** ([`Visibility::Interreflected`]). A cell whose ray meets the front of a
+//! surface y receives y's outgoing radiance, itself a dot product with the lighting: y's diffuse
+//! transfer T(y) (Sloan, Kautz & Snyder 2002, eq. 9, [`super::interreflect`]). So the cell adds
+//! σ_k g_k(c) W_c T_j(y) to row k, W_c = Σ_s w_s its weight, with the radiance taken constant
+//! over the cell as its visibility is, and T(y) interpolated at the hit; it is added in world
+//! axes, after the rows are turned. The surfaces the light comes off reflect diffusely: light
+//! between two glossy surfaces is carried as if the far one were diffuse.
 
+use super::interreflect::{cast, Outcome};
 use super::visibility::Occluders;
 use crate::factor::{CellSamples, Factorization, Grid};
+use crate::mesh::Mesh;
 use crate::sh::basis::eval_basis_dir;
 use crate::sh::legendre::LegendreTable;
 use crate::sh::rotate::ShRotation;
@@ -53,6 +63,8 @@ pub struct Glossy {
     g: Vec<f64>,
     /// P_cj = Σ_s w_s Y_j(ω_cs) in the local frame, cell-major (cells × n²).
     basis: Vec<f64>,
+    /// W_c = Σ_s w_s: the cell's solid angle, times the cosine when the transport applies it.
+    weights: Vec<f64>,
     /// The cells with a non-zero weight (all of them but those below the horizon when the
     /// transport applies the cosine).
     cells: Vec<usize>,
@@ -69,6 +81,7 @@ impl Glossy {
         let samples = CellSamples::new(&grid, sub.max(1), !cosine_in_factors);
         let table = LegendreTable::new(order - 1);
         let mut basis = vec![0.0; grid.len() * coeffs];
+        let mut weights = vec![0.0; grid.len()];
         let mut y = vec![0.0; coeffs];
         let mut cells = Vec::with_capacity(grid.len());
         for (c, row) in basis.chunks_exact_mut(coeffs).enumerate() {
@@ -78,6 +91,7 @@ impl Glossy {
                     continue;
                 }
                 weighted = true;
+                weights[c] += w;
                 eval_basis_dir(&table, *d, &mut y);
                 for (p, yj) in row.iter_mut().zip(&y) {
                     *p += w * yj;
@@ -88,7 +102,7 @@ impl Glossy {
             }
         }
         let g = (0..terms).flat_map(|k| f.g[k].iter().map(move |gk| f.singular_values[k] * gk)).collect();
-        Glossy { terms, order, grid, g, basis, cells }
+        Glossy { terms, order, grid, g, basis, weights, cells }
     }
 
     /// Terms K.
@@ -107,41 +121,118 @@ impl Glossy {
     }
 
     /// The transfer matrix of the vertex at `position` with unit `normal` into `out`
-    /// ([`Glossy::values_per_vertex`] values), in world axes. With `occluders`, a cell is seen
-    /// when the ray from position + offset·normal along its centre escapes; without, every cell
-    /// is. Returns how many cells were seen. The sums run in the cells' fixed order.
-    pub fn integrate(
-        &self,
-        position: DVec3,
-        normal: DVec3,
-        occluders: Option<(&Occluders, f64)>,
-        out: &mut [f64],
-    ) -> usize {
+    /// ([`Glossy::values_per_vertex`] values), in world axes, one ray per cell along its centre
+    /// as `visibility` says. Returns how many cells saw the lighting. The sums run in the cells'
+    /// fixed order.
+    pub fn integrate(&self, position: DVec3, normal: DVec3, visibility: &Visibility, out: &mut [f64]) -> usize {
         let coeffs = self.order * self.order;
         let cells = self.grid.len();
         let frame = sphere::shortest_arc_frame(normal);
         let mut local = vec![0.0; self.terms * coeffs];
+        // The light gathered off other surfaces, already in world axes.
+        let mut gathered = vec![0.0; self.terms * coeffs];
+        let mut radiance = vec![0.0; coeffs];
         let mut seen = 0;
         for &c in &self.cells {
-            if let Some((occluders, offset)) = occluders {
-                if occluders.occluded(position + offset * normal, frame * self.grid.direction(c)) {
-                    continue;
+            match visibility.sees(position, normal, frame * self.grid.direction(c), &mut radiance) {
+                Sight::Lighting => {
+                    seen += 1;
+                    let p = &self.basis[c * coeffs..(c + 1) * coeffs];
+                    for (k, row) in local.chunks_exact_mut(coeffs).enumerate() {
+                        let gk = self.g[k * cells + c];
+                        for (t, pj) in row.iter_mut().zip(p) {
+                            *t += gk * pj;
+                        }
+                    }
                 }
-            }
-            seen += 1;
-            let p = &self.basis[c * coeffs..(c + 1) * coeffs];
-            for (k, row) in local.chunks_exact_mut(coeffs).enumerate() {
-                let gk = self.g[k * cells + c];
-                for (t, pj) in row.iter_mut().zip(p) {
-                    *t += gk * pj;
+                // The surface's outgoing radiance L_y along the ray, taken as constant over the
+                // cell: σ_k g_k(c) W_c L_y.
+                Sight::Surface => {
+                    for (k, row) in gathered.chunks_exact_mut(coeffs).enumerate() {
+                        let gk = self.g[k * cells + c] * self.weights[c];
+                        for (t, r) in row.iter_mut().zip(&radiance) {
+                            *t += gk * r;
+                        }
+                    }
                 }
+                Sight::Dark => {}
             }
         }
         let rotation = ShRotation::new(frame, self.order - 1);
-        for (row, world) in local.chunks_exact(coeffs).zip(out.chunks_exact_mut(coeffs)) {
+        for ((row, world), extra) in
+            local.chunks_exact(coeffs).zip(out.chunks_exact_mut(coeffs)).zip(gathered.chunks_exact(coeffs))
+        {
             world.copy_from_slice(&rotation.apply_scalar(row));
+            for (w, e) in world.iter_mut().zip(extra) {
+                *w += e;
+            }
         }
         seen
+    }
+}
+
+/// What a glossy vertex's cell rays see.
+pub enum Visibility<'a> {
+    /// Nothing: every cell sees the lighting (V ≡ 1).
+    None,
+    /// A cell sees the lighting when its ray from position + offset·normal escapes `occluders`.
+    Shadowed {
+        /// The scene's BVH.
+        occluders: &'a Occluders,
+        /// The rays' origin offset along the normal, in the mesh's units.
+        offset: f64,
+    },
+    /// Shadowed, and a cell whose ray meets the front of a surface of `mesh` receives that
+    /// surface's outgoing radiance: its diffuse transfer `radiance` (n² values per vertex of
+    /// `mesh`, as [`super::interreflect`] bakes it), interpolated at the hit (Sloan, Kautz &
+    /// Snyder 2002, eq. 9, with the glossy vertex's factored BRDF in place of ρ/π).
+    Interreflected {
+        /// The scene's BVH.
+        occluders: &'a Occluders,
+        /// The rays' origin offset along the normal, in the mesh's units.
+        offset: f64,
+        /// The scene (the BVH's triangles).
+        mesh: &'a Mesh,
+        /// The outgoing radiance transfer of every vertex of `mesh`.
+        radiance: &'a [f64],
+    },
+}
+
+/// What one cell's ray sees.
+enum Sight {
+    /// The distant lighting.
+    Lighting,
+    /// The front of a surface, whose outgoing radiance transfer it gathered.
+    Surface,
+    /// Nothing that shines: the back of a surface, or any surface when only shadows are traced.
+    Dark,
+}
+
+impl Visibility<'_> {
+    /// What the ray from `position` (offset along `normal`) along `d` sees; for a front hit of
+    /// an interreflected bake, the surface's radiance transfer is written to `radiance`.
+    fn sees(&self, position: DVec3, normal: DVec3, d: DVec3, radiance: &mut [f64]) -> Sight {
+        match *self {
+            Visibility::None => Sight::Lighting,
+            Visibility::Shadowed { occluders, offset } => {
+                if occluders.occluded(position + offset * normal, d) {
+                    Sight::Dark
+                } else {
+                    Sight::Lighting
+                }
+            }
+            Visibility::Interreflected { occluders, offset, mesh, radiance: source } => {
+                match cast(mesh, occluders, position + offset * normal, d) {
+                    Outcome::Escaped => Sight::Lighting,
+                    Outcome::Back => Sight::Dark,
+                    Outcome::Front(hit) => {
+                        radiance.fill(0.0);
+                        hit.gather(&mesh.triangles, source, radiance);
+                        Sight::Surface
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -185,7 +276,7 @@ mod tests {
                 2,
             );
             let mut t = vec![0.0; order * order];
-            assert_eq!(glossy.integrate(DVec3::ZERO, normal, None, &mut t), grid.len());
+            assert_eq!(glossy.integrate(DVec3::ZERO, normal, &Visibility::None, &mut t), grid.len());
             let err = t.iter().zip(&exact).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             errors.push(err);
         }
@@ -208,7 +299,7 @@ mod tests {
         let mut y = vec![0.0; order * order];
         for normal in [DVec3::Z, DVec3::new(0.2, 0.9, -0.3).normalize(), DVec3::new(-0.7, 0.1, 0.1).normalize()] {
             let mut t = vec![0.0; order * order];
-            glossy.integrate(DVec3::ZERO, normal, None, &mut t);
+            glossy.integrate(DVec3::ZERO, normal, &Visibility::None, &mut t);
             let frame = sphere::shortest_arc_frame(normal);
             let mut want = vec![0.0; order * order];
             for c in 0..grid.len() {

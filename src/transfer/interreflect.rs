@@ -66,6 +66,46 @@ impl FrontHit {
         let (u, v) = (self.u as f64 / QUANT, self.v as f64 / QUANT);
         [(u16::MAX - self.u - self.v) as f64 / QUANT, u, v]
     }
+
+    /// Adds the per-vertex `values` (`out.len()` per vertex) interpolated at the hit to `out`:
+    /// Σ_j w_j values(v_j), vertices in the triangle's order.
+    pub fn gather(&self, triangles: &[[u32; 3]], values: &[f64], out: &mut [f64]) {
+        let n = out.len();
+        let w = self.weights();
+        for (j, &i) in triangles[self.triangle as usize].iter().enumerate() {
+            for (a, p) in out.iter_mut().zip(&values[i as usize * n..(i as usize + 1) * n]) {
+                *a += w[j] * p;
+            }
+        }
+    }
+}
+
+/// Where one ray went.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// Nothing hit: the lighting is visible.
+    Escaped,
+    /// The back of a surface: blocked, and nothing reflected.
+    Back,
+    /// The front of a surface.
+    Front(FrontHit),
+}
+
+/// Casts the ray from `origin` along the unit `d` through `occluders` (built from `mesh`) and
+/// tells where it went: the closest hit's side by the hit triangle's [`front_normal`].
+pub fn cast(mesh: &Mesh, occluders: &Occluders, origin: DVec3, d: DVec3) -> Outcome {
+    match occluders.closest(origin, d) {
+        None => Outcome::Escaped,
+        Some((triangle, t)) => {
+            let tri = &mesh.triangles[triangle as usize];
+            if front_normal(&mesh.positions, &mesh.normals, tri).dot(d) >= 0.0 {
+                Outcome::Back
+            } else {
+                let (u, w) = barycentrics(&mesh.positions, tri, origin + t as f64 * d);
+                Outcome::Front(FrontHit::new(triangle, u, w))
+            }
+        }
+    }
 }
 
 /// Traces the rays of a vertex with closest hits: its shadowed transfer, as
@@ -99,16 +139,6 @@ pub enum Hits {
     Recorded(Vec<(Vec<FrontHit>, Vec<u32>)>),
     /// Traced again in every bounce.
     Retraced,
-}
-
-/// Where one ray went.
-enum Ray {
-    /// Nothing hit: the lighting is visible.
-    Escaped,
-    /// The back of a surface: blocked, and nothing reflected.
-    Back,
-    /// The front of a surface.
-    Front(FrontHit),
 }
 
 /// Ray counts of a chunk of vertices.
@@ -152,13 +182,13 @@ impl<'a> Tracer<'a> {
     pub fn trace(&self, v: usize, albedo: f64, hits: &mut Vec<FrontHit>) -> (PointTransfer, u32) {
         let mut local = vec![0.0; self.order * self.order];
         let (mut visible, mut back) = (0u32, 0u32);
-        self.each_ray(v, |k, _, outcome| match outcome {
-            Ray::Escaped => {
+        self.each_ray(v, |k, outcome| match outcome {
+            Outcome::Escaped => {
                 visible += 1;
                 self.basis.add_row(k, &mut local);
             }
-            Ray::Back => back += 1,
-            Ray::Front(hit) => hits.push(hit),
+            Outcome::Back => back += 1,
+            Outcome::Front(hit) => hits.push(hit),
         });
         let scale = albedo / self.directions.len() as f64;
         let (shadowed, unshadowed) = self.basis.to_world(self.mesh.normals[v], &local, scale);
@@ -168,32 +198,20 @@ impl<'a> Tracer<'a> {
     /// Vertex `v`'s front hits alone, appended to `hits` in the rays' order (the bounces'
     /// re-tracing: the same rays as [`Tracer::trace`], so the same hits).
     fn trace_hits(&self, v: usize, hits: &mut Vec<FrontHit>) {
-        self.each_ray(v, |_, _, outcome| {
-            if let Ray::Front(hit) = outcome {
+        self.each_ray(v, |_, outcome| {
+            if let Outcome::Front(hit) = outcome {
                 hits.push(hit);
             }
         });
     }
 
-    /// Casts vertex `v`'s rays in order, from x + offset · n, and tells `f` each one's index,
-    /// direction and where it went.
-    fn each_ray(&self, v: usize, mut f: impl FnMut(usize, DVec3, Ray)) {
+    /// Casts vertex `v`'s rays in order, from x + offset · n, and tells `f` each one's index
+    /// and where it went.
+    fn each_ray(&self, v: usize, mut f: impl FnMut(usize, Outcome)) {
         let normal = self.mesh.normals[v];
         let origin = self.mesh.positions[v] + self.offset * normal;
         for (k, d) in self.directions.about(normal).enumerate() {
-            let outcome = match self.occluders.closest(origin, d) {
-                None => Ray::Escaped,
-                Some((triangle, t)) => {
-                    let tri = &self.mesh.triangles[triangle as usize];
-                    let (u, w) = barycentrics(&self.mesh.positions, tri, origin + t as f64 * d);
-                    if front_normal(&self.mesh.positions, &self.mesh.normals, tri).dot(d) >= 0.0 {
-                        Ray::Back
-                    } else {
-                        Ray::Front(FrontHit::new(triangle, u, w))
-                    }
-                }
-            };
-            f(k, d, outcome);
+            f(k, cast(self.mesh, self.occluders, origin, d));
         }
     }
 
@@ -291,14 +309,7 @@ impl<'a> Tracer<'a> {
                         }
                     };
                     for hit in list {
-                        let w = hit.weights();
-                        let tri = self.mesh.triangles[hit.triangle as usize];
-                        for (j, &i) in tri.iter().enumerate() {
-                            let from = &previous[i as usize * coeffs..(i as usize + 1) * coeffs];
-                            for (a, p) in t.iter_mut().zip(from) {
-                                *a += w[j] * p;
-                            }
-                        }
+                        hit.gather(&self.mesh.triangles, previous, t);
                     }
                     for a in t.iter_mut() {
                         *a *= scale;

@@ -10,7 +10,7 @@
 //! their grid, whose band energies are those of an unshadowed vertex's transfer rows (rotation
 //! keeps each band's energy) and whose whole energy is Σ_k σ_k² ∫ g_k² [cos²] dω.
 
-use super::glossy::Glossy;
+use super::glossy::{Glossy, Visibility};
 use super::stage::{check_glossy, Error, GlossyConfig};
 use crate::factor::CellSamples;
 use crate::limits::MAX_TRANSFER_ORDER;
@@ -54,7 +54,7 @@ fn glossy_bands(g: &GlossyConfig) -> (Vec<f64>, f64) {
     let n = MAX_TRANSFER_ORDER;
     let integrator = Glossy::new(f, g.terms, g.cosine, n, g.cell_samples);
     let mut rows = vec![0.0; integrator.values_per_vertex()];
-    integrator.integrate(DVec3::ZERO, DVec3::Z, None, &mut rows);
+    integrator.integrate(DVec3::ZERO, DVec3::Z, &Visibility::None, &mut rows);
     let bands = (0..n)
         .map(|l| {
             rows.chunks_exact(n * n).map(|row| row[l * l..(l + 1) * (l + 1)].iter().map(|t| t * t).sum::<f64>()).sum()

@@ -11,7 +11,7 @@
 use super::cpca::Cpca;
 use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
-use super::glossy::{Glossy, FRAME};
+use super::glossy::{Glossy, Visibility, FRAME};
 use super::interreflect::{Hits, Storage, Tracer};
 use super::jobs::{Job, Joined, Part, Recipe, Transfer};
 use super::lightmap::{self, Lightmap, LightmapConfig, LightmapInfo};
@@ -300,8 +300,12 @@ pub struct Interreflection {
     /// Share of all rays that hit the back of a surface (blocked, and nothing reflected).
     pub back_hit_fraction: f64,
     /// Mean over vertices of each pass's response to a uniform white sky of radiance 1
-    /// (√(4π) T_0), direct first then bounce 1..B: how fast the bounces fall off.
+    /// (√(4π) T_0), direct first then bounce 1..B: how fast the bounces fall off (for a glossy
+    /// bake, the diffuse passes its cells gather).
     pub white_sky_response: Vec<f64>,
+    /// For a glossy bake, how its cells gather the diffuse passes, in words.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glossy_gather: Option<String>,
 }
 
 /// The shadow rays' origin offset.
@@ -427,9 +431,6 @@ pub enum Error {
         /// Which ceiling.
         error: LimitError,
     },
-    /// Glossy transfer with interreflections, which is not built.
-    #[error("glossy transfer is unshadowed or shadowed; its interreflections are not built")]
-    GlossyInterreflected,
     /// The glossy bake keeps more terms than the factor file holds, or none.
     #[error("{factors}: {terms} terms is outside 1..={stored}, the terms the factor file holds")]
     Terms {
@@ -546,12 +547,12 @@ enum Bake {
         bounces: usize,
     },
     /// Glossy through the factorization (Mahajan et al. 2008, eq. 4): a K × n² matrix per vertex,
-    /// one ray per cell of the factors' grid when shadowed.
+    /// one ray per cell of the factors' grid when shadowed or interreflected.
     Glossy {
         /// The integrator over the factors' grid.
         integrator: Glossy,
-        /// Whether visibility is traced.
-        shadowed: bool,
+        /// Unshadowed, shadowed, or interreflected with the configuration's bounces.
+        mode: Mode,
     },
 }
 
@@ -602,9 +603,7 @@ impl<'a> Plan<'a> {
             lightmap::check(l, config, mesh)?;
         }
         let bake = match (&config.glossy, config.mode) {
-            (Some(g), mode) => {
-                Bake::Glossy { integrator: glossy_integrator(config, g)?, shadowed: mode == Mode::Shadowed }
-            }
+            (Some(g), mode) => Bake::Glossy { integrator: glossy_integrator(config, g)?, mode },
             (None, Mode::Unshadowed) => Bake::Unshadowed,
             (None, Mode::Shadowed) => Bake::Shadowed,
             (None, Mode::Interreflected) => Bake::Interreflected { bounces: config.bounces },
@@ -624,6 +623,14 @@ impl<'a> Plan<'a> {
             zero_area,
             offset: config.offset * mesh.extent(),
         })
+    }
+}
+
+impl Plan<'_> {
+    /// Whether the bake gathers light off the mesh itself: each bounce reads every vertex's
+    /// transfer, so it runs whole, not as jobs over vertex ranges.
+    fn gathers(&self) -> bool {
+        matches!(self.bake, Bake::Interreflected { .. } | Bake::Glossy { mode: Mode::Interreflected, .. })
     }
 }
 
@@ -649,7 +656,13 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     let start = Instant::now();
     let all = 0..mesh.positions.len();
     let baked = match &plan.bake {
-        Bake::Interreflected { bounces } => interreflected(config, mesh, *bounces, plan.offset, progress),
+        Bake::Interreflected { bounces } => {
+            let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
+            interreflected(config, mesh, &occluders, *bounces, plan.offset, progress)
+        }
+        Bake::Glossy { integrator, mode: Mode::Interreflected } => {
+            glossy_interreflected(config, mesh, &plan, integrator, progress)
+        }
         _ => {
             let transfer = per_vertex(config, mesh, &plan, all, progress);
             baked(config, mesh, &plan, transfer, start.elapsed().as_secs_f64())
@@ -662,7 +675,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
 /// vertex range, as a part for [`run_joined`].
 pub fn run_job(config: &Config, mesh: &Mesh, job: Job, progress: &dyn Progress) -> Result<Part, Error> {
     let plan = Plan::new(config, mesh)?;
-    if matches!(plan.bake, Bake::Interreflected { .. }) {
+    if plan.gathers() {
         return Err(Error::JobInterreflected);
     }
     let vertices = job.vertices(mesh.positions.len());
@@ -679,7 +692,7 @@ pub fn run_joined(
     progress: &dyn Progress,
 ) -> Result<Output, Error> {
     let plan = Plan::new(config, mesh)?;
-    if matches!(plan.bake, Bake::Interreflected { .. }) {
+    if plan.gathers() {
         return Err(Error::JobInterreflected);
     }
     let mut joined = Joined::new(Recipe::new(config, mesh), plan.per_vertex);
@@ -698,10 +711,17 @@ fn per_vertex(config: &Config, mesh: &Mesh, plan: &Plan, vertices: Range<usize>,
     match &plan.bake {
         Bake::Unshadowed => Transfer::Values(unshadowed(config, mesh, vertices, progress)),
         Bake::Shadowed => Transfer::Points(shadowed(config, mesh, vertices, plan.offset, progress)),
-        Bake::Glossy { integrator, shadowed } => {
-            Transfer::Values(glossy(mesh, integrator, shadowed.then_some(plan.offset), vertices, progress))
+        Bake::Glossy { integrator, mode: Mode::Unshadowed } => {
+            Transfer::Values(glossy(mesh, integrator, &Visibility::None, vertices, progress))
         }
-        Bake::Interreflected { .. } => unreachable!("interreflections gather every vertex: not a per-vertex bake"),
+        Bake::Glossy { integrator, mode: Mode::Shadowed } => {
+            let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
+            let visibility = Visibility::Shadowed { occluders: &occluders, offset: plan.offset };
+            Transfer::Values(glossy(mesh, integrator, &visibility, vertices, progress))
+        }
+        Bake::Interreflected { .. } | Bake::Glossy { mode: Mode::Interreflected, .. } => {
+            unreachable!("interreflections gather every vertex: not a per-vertex bake")
+        }
     }
 }
 
@@ -723,9 +743,9 @@ fn baked(config: &Config, mesh: &Mesh, plan: &Plan, transfer: Transfer, seconds:
                           the band-limited integrand, so T_lm = (albedo/pi) A_l Y_lm(n) to rounding"
                 .into(),
         },
-        Bake::Glossy { integrator, shadowed } => Integration {
+        Bake::Glossy { integrator, mode } => Integration {
             method: "factor grid cells".into(),
-            rays: if *shadowed { integrator.rays() } else { 0 },
+            rays: if *mode == Mode::Unshadowed { 0 } else { integrator.rays() },
             seed: config.seed,
             description: glossy_description(
                 config.glossy.as_ref().expect("a glossy bake has a glossy config"),
@@ -785,7 +805,7 @@ fn finish(
     let summary = Summary {
         vertices,
         rays: baked.integration.rays,
-        bounces: if let Bake::Interreflected { bounces } = plan.bake { bounces } else { 0 },
+        bounces: if config.mode == Mode::Interreflected { config.bounces } else { 0 },
         seconds,
         rays_per_second: if baked.trace_seconds > 0.0 {
             (vertices * baked.integration.rays) as f64 / baked.trace_seconds
@@ -855,13 +875,19 @@ fn shadowed(
 
 /// Diffuse shadowed transfer plus `bounces` interreflections gathered over the same rays
 /// ([`Tracer`]): T = T^0 + T^1 + … + T^B.
-fn interreflected(config: &Config, mesh: &Mesh, bounces: usize, offset: f64, progress: &dyn Progress) -> Baked {
+fn interreflected(
+    config: &Config,
+    mesh: &Mesh,
+    occluders: &Occluders,
+    bounces: usize,
+    offset: f64,
+    progress: &dyn Progress,
+) -> Baked {
     let start = Instant::now();
     let (n, vertices) = (config.order, mesh.positions.len());
     let coeffs = n * n;
-    let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
     let directions = Stratified::new(config.rays, config.seed);
-    let tracer = Tracer::new(mesh, &occluders, &directions, n, offset);
+    let tracer = Tracer::new(mesh, occluders, &directions, n, offset);
     let first = tracer.first_pass(config.albedo, Storage::Auto, progress);
     let trace_seconds = start.elapsed().as_secs_f64();
     let mut transfer: Vec<f64> = first.points.iter().flat_map(|p| p.shadowed.iter().copied()).collect();
@@ -890,6 +916,7 @@ fn interreflected(config: &Config, mesh: &Mesh, bounces: usize, offset: f64, pro
         front_hit_fraction: first.front_fraction,
         back_hit_fraction: first.back_fraction,
         white_sky_response,
+        glossy_gather: None,
     };
     Baked {
         transfer,
@@ -916,25 +943,28 @@ fn stratified_rays(config: &Config) -> Integration {
     }
 }
 
-/// Glossy transfer of `vertices` over the factors' grid ([`Glossy`]); shadowed when `offset` is
-/// given (the ray origin offset in the mesh's units), through a BVH of the whole scene.
+/// Glossy transfer of `vertices` over the factors' grid ([`Glossy`]), the cells' rays seeing
+/// what `visibility` says.
 fn glossy(
     mesh: &Mesh,
     integrator: &Glossy,
-    offset: Option<f64>,
+    visibility: &Visibility,
     vertices: Range<usize>,
     progress: &dyn Progress,
 ) -> Vec<f64> {
     let per_vertex = integrator.values_per_vertex();
-    let occluders = offset.map(|offset| (Occluders::new(&mesh.positions, &mesh.triangles), offset));
     let mut transfer = vec![0.0; vertices.len() * per_vertex];
-    progress.start(if occluders.is_some() { "visibility" } else { "transfer (unshadowed)" }, vertices.len() as u64);
+    let stage = match visibility {
+        Visibility::None => "transfer (unshadowed)",
+        Visibility::Shadowed { .. } => "visibility",
+        Visibility::Interreflected { .. } => "glossy gather",
+    };
+    progress.start(stage, vertices.len() as u64);
     // Chunks of vertices side by side; each vertex's sums run in the cells' fixed order.
     transfer.par_chunks_mut(CHUNK * per_vertex).enumerate().for_each(|(c, out)| {
         for (k, t) in out.chunks_exact_mut(per_vertex).enumerate() {
             let v = vertices.start + c * CHUNK + k;
-            let occluders = occluders.as_ref().map(|(o, offset)| (o, *offset));
-            integrator.integrate(mesh.positions[v], mesh.normals[v], occluders, t);
+            integrator.integrate(mesh.positions[v], mesh.normals[v], visibility, t);
         }
         progress.advance((out.len() / per_vertex) as u64);
     });
@@ -1270,11 +1300,43 @@ fn check_compression(c: &Compression, vertices: usize, per_vertex: usize) -> Res
     Ok(())
 }
 
+/// Glossy transfer with B = `config.bounces` bounces: the surfaces the cells' rays meet shine
+/// with their diffuse interreflected transfer of B − 1 bounces (albedo ρ), so that light reaches
+/// the glossy vertex after 1 to B diffuse bounces, as the diffuse bake's T^1 … T^B do.
+fn glossy_interreflected(
+    config: &Config,
+    mesh: &Mesh,
+    plan: &Plan,
+    integrator: &Glossy,
+    progress: &dyn Progress,
+) -> Baked {
+    let start = Instant::now();
+    let bounces = config.bounces;
+    let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
+    let diffuse = interreflected(config, mesh, &occluders, bounces - 1, plan.offset, progress);
+    let visibility =
+        Visibility::Interreflected { occluders: &occluders, offset: plan.offset, mesh, radiance: &diffuse.transfer };
+    let transfer = glossy(mesh, integrator, &visibility, 0..mesh.positions.len(), progress);
+    let mut baked = baked(config, mesh, plan, Transfer::Values(transfer), start.elapsed().as_secs_f64());
+    baked.interreflection = diffuse.interreflection.map(|i| Interreflection {
+        bounces,
+        glossy_gather: Some(format!(
+            "a cell whose ray meets the front of a surface receives that surface's outgoing radiance, its diffuse \
+             interreflected transfer (albedo {}, {} bounce(s): the passes white_sky_response lists, traced with \
+             {} stratified rays per vertex) interpolated at the hit, times sigma_k g_k(c) and the cell's weight; \
+             light between glossy surfaces is carried as if they were diffuse",
+            config.albedo,
+            bounces - 1,
+            config.rays
+        )),
+        ..i
+    });
+    baked.bounce_seconds = diffuse.trace_seconds + diffuse.bounce_seconds;
+    baked
+}
+
 /// The integrator of a glossy bake, after checking what the factorization can give.
 fn glossy_integrator(config: &Config, g: &GlossyConfig) -> Result<Glossy, Error> {
-    if config.mode == Mode::Interreflected {
-        return Err(Error::GlossyInterreflected);
-    }
     check_glossy(g)?;
     Ok(Glossy::new(&g.factorization, g.terms, g.cosine, config.order, g.cell_samples))
 }
@@ -1300,7 +1362,13 @@ fn glossy_description(g: &GlossyConfig, mode: Mode, cells: usize) -> String {
          T_kj = sigma_k sum_c V(c) g_k(c) sum_s w_s Y_j(F w_cs), {sub}x{sub} basis samples per cell \
          weighted by the cell's solid angle{}; {}",
         if g.cosine { "" } else { " times max(cos theta, 0)" },
-        if mode == Mode::Shadowed { "V(c) by one ray along the cell's centre" } else { "V = 1 (unshadowed)" }
+        match mode {
+            Mode::Unshadowed => "V = 1 (unshadowed)",
+            Mode::Shadowed => "V(c) by one ray along the cell's centre",
+            Mode::Interreflected =>
+                "V(c) by one ray along the cell's centre, which gathers the light of the surface it \
+                                     meets (interreflection)",
+        }
     )
 }
 

@@ -75,7 +75,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
 
-    /// Constant albedo baked into the transfer.
+    /// Constant albedo baked into diffuse transfer; for a glossy bake (--factors) with --mode
+    /// interreflected, the albedo of the surfaces the light bounces off.
     #[arg(long, default_value_t = 1.0)]
     pub albedo: f64,
 
