@@ -152,10 +152,10 @@ struct Floor {
     picture: Vec<Option<usize>>,
 }
 
-fn relit_floor(dir: &Path, k: usize, side: usize) -> Floor {
+fn relit_floor(dir: &Path, k: usize, side: usize, mode: Mode) -> Floor {
     let obj = write_floor_and_ball(dir, k);
     let mesh = Mesh::load(&obj).unwrap();
-    let config = lightmap_config(Mode::Shadowed, 3, side, &obj);
+    let config = lightmap_config(mode, 3, side, &obj);
     let out = stage::run(&config, &mesh, &NoProgress).unwrap();
     let lightmap = out.lightmap.unwrap();
     let coverage = rasterize(mesh.uvs.as_ref().unwrap(), &mesh.triangles, side, side);
@@ -187,8 +187,8 @@ fn rms(a: &[f64], b: &[f64]) -> f64 {
 fn the_lightmap_finds_the_shadow_that_vertices_miss() {
     let dir = tempfile::tempdir().unwrap();
     let side = 128;
-    let coarse = relit_floor(dir.path(), 1, side);
-    let dense = relit_floor(dir.path(), 32, side);
+    let coarse = relit_floor(dir.path(), 1, side, Mode::Shadowed);
+    let dense = relit_floor(dir.path(), 32, side, Mode::Shadowed);
     let darkest = coarse.exact.iter().copied().fold(f64::INFINITY, f64::min);
     let figures = [
         ("2-triangle floor, lightmap vs exact", rms(&coarse.lightmap, &coarse.exact)),
@@ -223,6 +223,63 @@ fn the_lightmap_finds_the_shadow_that_vertices_miss() {
         }
         prtkit::io::png::write_tonemapped(Path::new(&out), &image, 0.0).unwrap();
     }
+}
+
+#[test]
+fn an_interreflected_texel_at_a_vertex_is_that_vertex_transfer() {
+    // A texel's gather (its shadowed transfer plus, at its rays' front hits, the vertices'
+    // T^0 + … + T^{B−1}) is eq. 9 summed over the bounces: at a vertex's own position and normal
+    // it casts that vertex's rays and must give the per-vertex interreflected transfer, T^0 plus
+    // the bounces added one by one, to rounding.
+    use prtkit::transfer::directions::Stratified;
+    use prtkit::transfer::interreflect::{Storage, Tracer};
+    use prtkit::transfer::visibility::Occluders;
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = Mesh::load(&write_floor_and_ball(dir.path(), 4)).unwrap();
+    let (order, albedo, bounces) = (3, 0.8, 2);
+    let coeffs = order * order;
+    let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
+    let directions = Stratified::new(256, 0);
+    let tracer = Tracer::new(&mesh, &occluders, &directions, order, 1e-4 * mesh.extent());
+    let first = tracer.first_pass(albedo, Storage::Record, &NoProgress);
+    let direct: Vec<f64> = first.points.iter().flat_map(|p| p.shadowed.clone()).collect();
+    let passes = tracer.bounces(&direct, bounces, albedo, &first.hits, &NoProgress);
+    let sum = |passes: &[Vec<f64>]| -> Vec<f64> {
+        passes.iter().fold(direct.clone(), |acc, p| acc.iter().zip(p).map(|(a, b)| a + b).collect())
+    };
+    let (total, gathered) = (sum(&passes), sum(&passes[..bounces - 1]));
+    let (mut worst, mut bounced) = (0.0f64, 0.0f64);
+    for v in 0..mesh.positions.len() {
+        let t = tracer.gather_at(mesh.positions[v], mesh.normals[v], albedo, &gathered);
+        for i in 0..coeffs {
+            worst = worst.max((t[i] - total[v * coeffs + i]).abs());
+            bounced = bounced.max((total[v * coeffs + i] - direct[v * coeffs + i]).abs());
+        }
+    }
+    eprintln!("texel gather at the vertices vs the per-vertex bounces: largest difference {worst:.1e}, bounces add up to {bounced:.3}");
+    assert!(bounced > 0.01 && worst < 1e-12, "{worst} {bounced}");
+}
+
+#[test]
+fn an_interreflected_lightmap_holds_the_bounce_off_the_ball() {
+    // The ball lights the floor around its foot; a dense floor's vertices see that bounce, and
+    // the lightmap must agree with them as the shadowed bakes do, while differing from its own
+    // shadowed bake by the bounce.
+    let dir = tempfile::tempdir().unwrap();
+    let side = 128;
+    let shadowed = relit_floor(dir.path(), 32, side, Mode::Shadowed);
+    let bounced = relit_floor(dir.path(), 32, side, Mode::Interreflected);
+    let gained: Vec<f64> = bounced.lightmap.iter().zip(&shadowed.lightmap).map(|(b, s)| b - s).collect();
+    let most = gained.iter().copied().fold(0.0f64, f64::max);
+    let least = gained.iter().copied().fold(f64::INFINITY, f64::min);
+    let figures = [rms(&bounced.lightmap, &bounced.vertex), rms(&bounced.lightmap, &shadowed.lightmap)];
+    eprintln!(
+        "interreflected floor (2 bounces): lightmap vs per-vertex RMS {:.4}; the bounces add {least:.4} to {most:.4} \
+         (RMS {:.4}) over the shadowed lightmap",
+        figures[0], figures[1]
+    );
+    assert!(least >= 0.0 && most > 0.05 && figures[1] > 0.01, "{least} {most} {figures:?}");
+    assert!(figures[0] < 0.01, "{figures:?}");
 }
 
 fn bake_cli(dir: &Path, obj: &Path, extra: &[&str], tag: &str) -> (std::process::Output, PathBuf, PathBuf, PathBuf) {
@@ -314,7 +371,7 @@ fn bad_lightmap_requests_exit_2_naming_the_file_and_write_nothing() {
         (&with_uvs, &["0x64"], "has no texels"),
         (&with_uvs, &["100000x100000"], "16384"),
         (&with_uvs, &["16384x16384", "--order", "8"], "268435456"),
-        (&with_uvs, &["64x64", "--mode", "interreflected"], "interreflected"),
+        (&with_uvs, &["64x64", "--clusters", "2", "--pca", "2"], "compressed"),
         (&with_uvs, &["64"], "the size must be WxH"),
     ];
     for (mesh, args, reason) in cases {

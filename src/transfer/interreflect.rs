@@ -205,11 +205,36 @@ impl<'a> Tracer<'a> {
         });
     }
 
-    /// Casts vertex `v`'s rays in order, from x + offset · n, and tells `f` each one's index
-    /// and where it went.
-    fn each_ray(&self, v: usize, mut f: impl FnMut(usize, Outcome)) {
-        let normal = self.mesh.normals[v];
-        let origin = self.mesh.positions[v] + self.offset * normal;
+    /// The interreflected transfer at a point of the surface that is not a vertex (a lightmap
+    /// texel's): its shadowed transfer plus, over its rays' front hits, `gathered` — every
+    /// vertex's T^0 + … + T^{B−1} — interpolated at the hit, so that
+    /// T = T^0 + Σ_{b=1..B} (ρ/N) Σ_hits T^{b−1}(y), eq. 9 summed over the bounces.
+    pub fn gather_at(&self, position: DVec3, normal: DVec3, albedo: f64, gathered: &[f64]) -> Vec<f64> {
+        let coeffs = self.order * self.order;
+        let mut local = vec![0.0; coeffs];
+        let mut bounced = vec![0.0; coeffs];
+        self.each_ray_from(position, normal, |k, outcome| match outcome {
+            Outcome::Escaped => self.basis.add_row(k, &mut local),
+            Outcome::Back => {}
+            Outcome::Front(hit) => hit.gather(&self.mesh.triangles, gathered, &mut bounced),
+        });
+        let scale = albedo / self.directions.len() as f64;
+        let (mut transfer, _) = self.basis.to_world(normal, &local, scale);
+        for (t, b) in transfer.iter_mut().zip(&bounced) {
+            *t += scale * b;
+        }
+        transfer
+    }
+
+    /// Casts vertex `v`'s rays in order ([`Tracer::each_ray_from`]).
+    fn each_ray(&self, v: usize, f: impl FnMut(usize, Outcome)) {
+        self.each_ray_from(self.mesh.positions[v], self.mesh.normals[v], f)
+    }
+
+    /// Casts the rays about `normal` in order, from `position` + offset · n, and tells `f` each
+    /// one's index and where it went.
+    fn each_ray_from(&self, position: DVec3, normal: DVec3, mut f: impl FnMut(usize, Outcome)) {
+        let origin = position + self.offset * normal;
         for (k, d) in self.directions.about(normal).enumerate() {
             f(k, cast(self.mesh, self.occluders, origin, d));
         }

@@ -27,6 +27,7 @@
 
 use super::diffuse::{unshadowed_exact, Shadowed};
 use super::directions::Stratified;
+use super::interreflect::Tracer;
 use super::stage::{Config, Error, Mode};
 use super::visibility::Occluders;
 use crate::limits::{LimitError, MAX_IMAGE_TEXELS, MAX_LIGHTMAP_SIDE, MAX_LIGHTMAP_VALUES};
@@ -238,9 +239,6 @@ pub fn check(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<
     crate::limits::check_memory("the lightmap", values as u128 * 12 + (w * h) as u128 * 48).map_err(limit)?;
     let unbuilt = if config.glossy.is_some() {
         Some("glossy")
-    } else if config.mode == Mode::Interreflected {
-        // Its bounces gather the per-vertex transfer at the rays' hits.
-        Some("interreflected")
     } else if config.compression.is_some() {
         Some("compressed")
     } else {
@@ -265,11 +263,14 @@ pub struct Lightmap {
     pub coverage: Vec<f32>,
 }
 
-/// Bakes the lightmap of `mesh` (checked by [`check`]) with `config`'s integrator.
+/// Bakes the lightmap of `mesh` (checked by [`check`]) with `config`'s integrator. Given
+/// `gathered` (an interreflected bake: every vertex's T^0 + … + T^{B−1}), each texel gathers it
+/// at its rays' front hits ([`Tracer::gather_at`]).
 pub fn bake(
     lightmap: &LightmapConfig,
     config: &Config,
     mesh: &Mesh,
+    gathered: Option<&[f64]>,
     progress: &dyn Progress,
 ) -> Result<Lightmap, Error> {
     check(lightmap, config, mesh)?;
@@ -302,12 +303,16 @@ pub fn bake(
         _ => {
             let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
             let directions = Stratified::new(config.rays, config.seed);
-            let integrator = Shadowed::new(&directions, n, &occluders);
+            let shadowed = Shadowed::new(&directions, n, &occluders);
+            let tracer = Tracer::new(mesh, &occluders, &directions, n, offset);
             progress.start("lightmap (visibility)", covered.len() as u64);
             values.par_chunks_mut(CHUNK * coeffs).zip(covered.par_chunks(CHUNK)).for_each(|(out, texels)| {
                 for (t, (_, s)) in out.chunks_exact_mut(coeffs).zip(texels) {
                     let (p, normal) = point(s);
-                    t.copy_from_slice(&integrator.integrate(p, normal, offset, config.albedo).shadowed);
+                    match gathered {
+                        Some(g) => t.copy_from_slice(&tracer.gather_at(p, normal, config.albedo, g)),
+                        None => t.copy_from_slice(&shadowed.integrate(p, normal, offset, config.albedo).shadowed),
+                    }
                 }
                 progress.advance(texels.len() as u64);
             });

@@ -648,6 +648,8 @@ struct Baked {
     trace_seconds: f64,
     /// Seconds of the bounces.
     bounce_seconds: f64,
+    /// Every vertex's T^0 + … + T^{B−1}, which an interreflected lightmap's texels gather.
+    gathered: Option<Vec<f64>>,
 }
 
 /// Runs `transfer` on `mesh`.
@@ -756,7 +758,7 @@ fn baked(config: &Config, mesh: &Mesh, plan: &Plan, transfer: Transfer, seconds:
         _ => stratified_rays(config),
     };
     let trace_seconds = if integration.rays > 0 { seconds } else { 0.0 };
-    Baked { transfer, integration, error, interreflection: None, trace_seconds, bounce_seconds: 0.0 }
+    Baked { transfer, integration, error, interreflection: None, trace_seconds, bounce_seconds: 0.0, gathered: None }
 }
 
 /// What follows the per-vertex integration: clustered PCA, the lightmap, quantization, the
@@ -779,7 +781,7 @@ fn finish(
         None => None,
     };
     let lightmap = match plan.lightmap {
-        Some(l) => Some(lightmap::bake(l, config, mesh, progress)?),
+        Some(l) => Some(lightmap::bake(l, config, mesh, baked.gathered.as_deref(), progress)?),
         None => None,
     };
     let quantized = quantize(config.quantization, &baked.transfer, plan.per_vertex, cpca.as_ref());
@@ -897,7 +899,11 @@ fn interreflected(
         |t: &[f64]| (4.0 * std::f64::consts::PI).sqrt() * t.iter().step_by(coeffs).sum::<f64>() / vertices as f64;
     let mut white_sky_response = vec![white(&transfer)];
     // Total = T^0 + Σ_b T^b, added bounce after bounce in a fixed order.
-    for pass in &passes {
+    let mut gathered = None;
+    for (b, pass) in passes.iter().enumerate() {
+        if b + 1 == bounces && config.lightmap.is_some() {
+            gathered = Some(transfer.clone());
+        }
         white_sky_response.push(white(pass));
         for (t, b) in transfer.iter_mut().zip(pass) {
             *t += b;
@@ -925,6 +931,7 @@ fn interreflected(
         interreflection: Some(interreflection),
         trace_seconds,
         bounce_seconds,
+        gathered,
     }
 }
 

@@ -88,7 +88,7 @@ pub struct Args {
     /// Glossy, view-dependent transfer: the `prtkit.factor` document `factor-brdf --factors
     /// FILE.exr` wrote (the BRDF's in-out factorization, read back as `render --factors` reads
     /// it). Per vertex a K × n² matrix T with B(x,ω_o) = Σ_k h_k(ω_o) (T_k · L) (Mahajan et al.
-    /// 2008, eq. 4); unshadowed or shadowed (one ray per cell of the factors' grid)
+    /// 2008, eq. 4); unshadowed, shadowed (one ray per cell of the factors' grid) or interreflected
     #[arg(long, value_name = "FACTOR.json")]
     pub factors: Option<PathBuf>,
 
@@ -126,8 +126,8 @@ pub struct Args {
 
     /// Also bake the transfer per texel of the mesh's UV set (OBJ vt, glTF TEXCOORD_1 else
     /// TEXCOORD_0, PLY s t or u v) into a W×H grid, written as
-    /// one multi-layer EXR (layers T0… per coefficient and coverage); unshadowed or shadowed,
-    /// with the same integrator as the vertices. Example: --lightmap 256x256 floor.exr
+    /// one multi-layer EXR (layers T0… per coefficient and coverage); unshadowed, shadowed or
+    /// interreflected, with the same integrator as the vertices. Example: --lightmap 256x256 floor.exr
     #[arg(long, num_args = 2, value_names = ["WxH", "FILE.exr"])]
     pub lightmap: Option<Vec<String>>,
 
