@@ -65,6 +65,8 @@ struct Embree {
     commit_geometry: unsafe extern "C" fn(Handle),
     attach_geometry: unsafe extern "C" fn(Handle, Handle) -> u32,
     release_geometry: unsafe extern "C" fn(Handle),
+    release_scene: unsafe extern "C" fn(Handle),
+    release_device: unsafe extern "C" fn(Handle),
     commit_scene: unsafe extern "C" fn(Handle),
     occluded1: unsafe extern "C" fn(Handle, *mut RtcIntersectContext, *mut RtcRay),
 }
@@ -92,6 +94,8 @@ impl Embree {
                 commit_geometry: *library.get(b"rtcCommitGeometry\0")?,
                 attach_geometry: *library.get(b"rtcAttachGeometry\0")?,
                 release_geometry: *library.get(b"rtcReleaseGeometry\0")?,
+                release_scene: *library.get(b"rtcReleaseScene\0")?,
+                release_device: *library.get(b"rtcReleaseDevice\0")?,
                 commit_scene: *library.get(b"rtcCommitScene\0")?,
                 occluded1: *library.get(b"rtcOccluded1\0")?,
                 _library: library,
@@ -118,7 +122,7 @@ impl Embree {
             (self.attach_geometry)(scene, geometry);
             (self.release_geometry)(geometry);
             (self.commit_scene)(scene);
-            Scene { embree: self, scene }
+            Scene { embree: self, device, scene }
         }
     }
 }
@@ -126,7 +130,20 @@ impl Embree {
 /// A committed Embree scene; `rtcOccluded1` may be called on it from any thread.
 struct Scene<'a> {
     embree: &'a Embree,
+    device: Handle,
     scene: Handle,
+}
+
+/// The scene and its device are released, which stops Embree's worker threads, before the
+/// library can be unloaded (unloading it under running threads crashes at exit).
+impl Drop for Scene<'_> {
+    fn drop(&mut self) {
+        // SAFETY: both handles are Embree's own, released once, after every query returned.
+        unsafe {
+            (self.embree.release_scene)(self.scene);
+            (self.embree.release_device)(self.device);
+        }
+    }
 }
 
 // SAFETY: a committed Embree scene is read-only and its queries are thread-safe (Embree's API
