@@ -36,8 +36,13 @@ for (const exe of ['ibl', 'render']) {
 }
 let map = process.env.PRTKIT_VIEWER_MAP ?? resolve(repo, '../shared/testdata/envmaps/uffizi_ict_latlong_256x128.hdr');
 if (!existsSync(map)) {
+  // The stand-in for the probe. Its sun is dimmed from the shader's 2000 to 200: the SH-diffuse
+  // check compares order-2 SH irradiance with the exact irradiance cube, and a near-delta sun of
+  // 2000 puts the truncation alone at 27 dB, below that check's bar, where the Uffizi probe's
+  // broad windows leave it at 38 dB. At 200 the truncation is 42 dB and every other check is as
+  // demanding.
   map = join(out, 'sky.exr');
-  run('sample-shader', ['testdata/shaders/sky.sl', '--latlong', '256x128', '-o', map, '-q']);
+  run('sample-shader', ['testdata/shaders/sky.sl', '--latlong', '256x128', '-p', 'sun_radiance=200', '-o', map, '-q']);
 }
 if (!map.startsWith(repo + '/')) { // the server serves the repository: copy the map in
   const copy = join(out, 'source' + map.slice(map.lastIndexOf('.')));
