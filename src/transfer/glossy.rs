@@ -129,8 +129,10 @@ impl Glossy {
         let cells = self.grid.len();
         let frame = sphere::shortest_arc_frame(normal);
         let mut local = vec![0.0; self.terms * coeffs];
-        // The light gathered off other surfaces, already in world axes.
-        let mut gathered = vec![0.0; self.terms * coeffs];
+        // The light gathered off other surfaces, already in world axes (interreflected only: an
+        // added zero would turn a −0 of the other bakes into +0).
+        let mut gathered =
+            vec![0.0; if matches!(visibility, Visibility::Interreflected { .. }) { self.terms * coeffs } else { 0 }];
         let mut radiance = vec![0.0; coeffs];
         let mut seen = 0;
         for &c in &self.cells {
@@ -159,13 +161,11 @@ impl Glossy {
             }
         }
         let rotation = ShRotation::new(frame, self.order - 1);
-        for ((row, world), extra) in
-            local.chunks_exact(coeffs).zip(out.chunks_exact_mut(coeffs)).zip(gathered.chunks_exact(coeffs))
-        {
+        for (row, world) in local.chunks_exact(coeffs).zip(out.chunks_exact_mut(coeffs)) {
             world.copy_from_slice(&rotation.apply_scalar(row));
-            for (w, e) in world.iter_mut().zip(extra) {
-                *w += e;
-            }
+        }
+        for (world, extra) in out.iter_mut().zip(&gathered) {
+            *world += extra;
         }
         seen
     }
