@@ -147,6 +147,7 @@ async function view(params, { bench = 0, evaluate = null, arg = null, page: path
     // Driver performance notes ("GPU stall due to ReadPixels") are not errors.
     if (/GL Driver Message \(OpenGL, Performance/.test(text)) return;
     if (/^BJS - \[[0-9:]+\]: Babylon\.js v[0-9.]+ - WebGL2$/.test(text)) return; // Babylon's start-up banner
+    if (/^\[WebKit\], \[WebKit WebGL\], \[OpenGL ES 3\.0 \(WebGL 2\.0/.test(text)) return; // Filament's start-up banner
     if (m.type() === 'error' || /WebGL|GL_INVALID|GL ERROR/i.test(text)) logs.push(`${m.type()}: ${text}`);
   });
   page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
@@ -1071,6 +1072,28 @@ async function engineTests() {
       check(`Babylon.js skybox ${v.name} (${hand}-handed, no flip) differs from render's view`, c.mean > 4 * Math.max(a.mean, 0.5),
         `mean |Δ| = ${c.mean.toFixed(3)} sRGB codes (must be far above ${a.mean.toFixed(3)})`);
     }
+  }
+  // Filament (right-handed, +Y up: the glTF frame) with prtkit's cube as it is; the negative
+  // control turns the IndirectLight (and so the skybox) 90° about +Y, the turn between cmgen's
+  // lat-long frame and ibl's.
+  for (const v of views) {
+    const ref = readPng(join(dir, `sky-${v.name}-reference.png`));
+    const eye = mul(M, v.eye).map((x) => +x.toFixed(6)).join(',');
+    const shot = async (turn) => {
+      const requests = [];
+      const img = (await view({ ibl: url(bake) + '/', turn, eye, target: '0,0,0', fov: String(v.fov), res: '192x192' },
+        { page: '/viewer/engines/filament.html', requests })).image;
+      writePng(join(dir, `sky-${v.name}-filament-turn-${turn}.png`), img);
+      return { img, foreign: requests.filter((r) => !r.startsWith(origin) && !r.startsWith('data:')) };
+    };
+    const good = await shot('0'), bad = await shot('90');
+    writePng(join(dir, `sky-${v.name}-filament-diff-x8.png`), diffImage(good.img, ref));
+    const a = compare(good.img, ref), c = compare(bad.img, ref);
+    figures[`filament_sky_${v.name}`] = { turn_0: a.mean, turn_90: c.mean };
+    check(`Filament skybox ${v.name} (specular.ktx2 faces via Texture.setImageCube, no flip) vs render's view`, a.mean <= 1 && good.foreign.length === 0,
+      `mean |Δ| = ${a.mean.toFixed(3)} sRGB codes (≤ 1); requests outside 127.0.0.1: ${good.foreign.length}`);
+    check(`Filament skybox ${v.name} turned 90° about +Y differs from render's view`, c.mean > 4 * Math.max(a.mean, 0.5),
+      `mean |Δ| = ${c.mean.toFixed(3)} sRGB codes (must be far above ${a.mean.toFixed(3)})`);
   }
   // A metallic PBR sphere lit by the same cube, for the eye only (Babylon's lod ↔ roughness is
   // not prtkit's linear map: see docs/ibl.md), kept as an artifact.
