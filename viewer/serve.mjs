@@ -10,7 +10,7 @@ import { fileURLToPath } from 'node:url';
 const TYPES = {
   '.html': 'text/html; charset=utf-8', '.js': 'text/javascript', '.mjs': 'text/javascript',
   '.json': 'application/json', '.png': 'image/png', '.css': 'text/css', '.glsl': 'text/plain',
-  '.ktx2': 'image/ktx2', '.hdr': 'application/octet-stream', '.exr': 'application/octet-stream',
+  '.ktx2': 'image/ktx2', '.dds': 'application/octet-stream', '.wasm': 'application/wasm', '.hdr': 'application/octet-stream', '.exr': 'application/octet-stream',
 };
 
 export function serve({ root, bake = null, port = 0, quiet = true } = {}) {

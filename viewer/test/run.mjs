@@ -144,25 +144,28 @@ const browser = await puppeteer.launch({
 });
 const pageErrors = [];
 let gpuName = '';
-async function view(params, { bench = 0, evaluate = null, arg = null } = {}) {
+async function view(params, { bench = 0, evaluate = null, arg = null, page: path = '/viewer/', requests = null } = {}) {
   const page = await browser.newPage();
   const logs = [];
   page.on('console', (m) => {
     const text = m.text();
     // Driver performance notes ("GPU stall due to ReadPixels") are not errors.
     if (/GL Driver Message \(OpenGL, Performance/.test(text)) return;
+    if (/^BJS - \[[0-9:]+\]: Babylon\.js v[0-9.]+ - WebGL2$/.test(text)) return; // Babylon's start-up banner
+    if (/^\[WebKit\], \[WebKit WebGL\], \[OpenGL ES 3\.0 \(WebGL 2\.0/.test(text)) return; // Filament's start-up banner
     if (m.type() === 'error' || /WebGL|GL_INVALID|GL ERROR/i.test(text)) logs.push(`${m.type()}: ${text}`);
   });
   page.on('pageerror', (e) => logs.push(`pageerror: ${e.message}`));
+  if (requests) page.on('request', (r) => requests.push(r.url()));
   const [w, h] = params.res.split('x').map(Number);
   await page.setViewport({ width: w, height: h, deviceScaleFactor: 1 });
   const query = new URLSearchParams({ test: '1', ...params }).toString();
-  await page.goto(`${origin}/viewer/?${query}`, { waitUntil: 'load' });
+  await page.goto(`${origin}${path}?${query}`, { waitUntil: 'load' });
   const ok = await page.evaluate(() => window.prtkit.ready);
   const pixels = ok ? await page.evaluate(() => window.prtkit.pixels()) : null;
   const ms = ok && bench ? await page.evaluate((n) => window.prtkit.bench(n), bench) : null;
   const value = ok && evaluate ? await page.evaluate(evaluate, arg) : null;
-  if (!gpuName && ok) gpuName = await page.evaluate(() => window.prtkit.gpu());
+  if (!gpuName && ok && path === '/viewer/') gpuName = await page.evaluate(() => window.prtkit.gpu());
   const errors = await page.evaluate(() => window.prtkit.errors.slice());
   await page.close();
   const all = [...logs, ...errors];
@@ -1032,7 +1035,91 @@ async function dropTests() {
   figures.drop = fig;
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|formats|model|drop|sh|prt|glossy|lookup|cpca|quantized|n8 runs one group (development; prt
+// ---- other engines: Babylon.js and Filament (viewer/engines/) ------------------------------------
+// The reference is render's picture for a camera in the glTF frame: three.js's equirectangular view
+// of the source map from the x-mirrored camera, mirrored back (the skybox tests above check that
+// this view is the one prtkit's cube gives).
+async function engineTests() {
+  const dir = join(out, 'engines');
+  rmSync(dir, { recursive: true, force: true });
+  mkdirSync(dir, { recursive: true });
+  const dds = join(dir, 'bake-dds');
+  run('ibl', [map, '-o', dds, '--size', '128', '--samples', '0', '--container', 'dds', '-q']);
+  const views = [
+    { name: 'front', eye: [0, -4, 0.3], fov: 60 },
+    { name: 'side', eye: [4, 1.5, -0.5], fov: 60 },
+  ];
+  for (const v of views) {
+    const res = '192x192', fov = String(v.fov);
+    const ref = mirrorX((await view({ mode: 'equirect', src: url(map), eye: toPage(v.eye, 'three'), target: '0,0,0', fov, res, exposure: '0' })).image);
+    writePng(join(dir, `sky-${v.name}-reference.png`), ref);
+    const g = mul(M, v.eye);
+    // Babylon's left-handed world (its default) holds a glTF point (x, y, z) at (−x, y, z) (what
+    // its glTF loader's root does: 180° about +Y, then z mirrored); the right-handed one
+    // (scene.useRightHandedSystem) holds it unchanged. The flip is the CubeTexture's reflection
+    // matrix; the wrong one (none) must fail.
+    for (const [hand, right, wrong] of [['left', 'x', 'none'], ['right', 'z', 'none']]) {
+      const eye = (hand === 'left' ? [-g[0], g[1], g[2]] : g).map((x) => +x.toFixed(6)).join(',');
+      const shot = async (flip) => {
+        const requests = [];
+        const img = (await view({ ibl: url(dds) + '/', hand, flip, mode: 'sky', eye, target: '0,0,0', fov, res },
+          { page: '/viewer/engines/babylon.html', requests })).image;
+        writePng(join(dir, `sky-${v.name}-babylon-${hand}-flip-${flip}.png`), img);
+        return { img, foreign: requests.filter((r) => !r.startsWith(origin) && !r.startsWith('data:')) };
+      };
+      const good = await shot(right), bad = await shot(wrong);
+      writePng(join(dir, `sky-${v.name}-babylon-${hand}-diff-x8.png`), diffImage(good.img, ref));
+      const a = compare(good.img, ref), c = compare(bad.img, ref);
+      figures[`babylon_sky_${v.name}_${hand}`] = { [`flip_${right}`]: a.mean, [`flip_${wrong}`]: c.mean };
+      check(`Babylon.js skybox ${v.name} (${hand}-handed scene, cube looked up with ${right} negated) vs render's view`, a.mean <= 1 && good.foreign.length === 0,
+        `mean |Δ| = ${a.mean.toFixed(3)} sRGB codes (≤ 1); requests outside 127.0.0.1: ${good.foreign.length}`);
+      check(`Babylon.js skybox ${v.name} (${hand}-handed, no flip) differs from render's view`, c.mean > 4 * Math.max(a.mean, 0.5),
+        `mean |Δ| = ${c.mean.toFixed(3)} sRGB codes (must be far above ${a.mean.toFixed(3)})`);
+    }
+  }
+  // Filament (right-handed, +Y up: the glTF frame) with prtkit's cube as it is; the negative
+  // control turns the IndirectLight (and so the skybox) 90° about +Y, the turn between cmgen's
+  // lat-long frame and ibl's.
+  for (const v of views) {
+    const ref = readPng(join(dir, `sky-${v.name}-reference.png`));
+    const eye = mul(M, v.eye).map((x) => +x.toFixed(6)).join(',');
+    const shot = async (turn) => {
+      const requests = [];
+      const img = (await view({ ibl: url(bake) + '/', turn, eye, target: '0,0,0', fov: String(v.fov), res: '192x192' },
+        { page: '/viewer/engines/filament.html', requests })).image;
+      writePng(join(dir, `sky-${v.name}-filament-turn-${turn}.png`), img);
+      return { img, foreign: requests.filter((r) => !r.startsWith(origin) && !r.startsWith('data:')) };
+    };
+    const good = await shot('0'), bad = await shot('90');
+    writePng(join(dir, `sky-${v.name}-filament-diff-x8.png`), diffImage(good.img, ref));
+    const a = compare(good.img, ref), c = compare(bad.img, ref);
+    figures[`filament_sky_${v.name}`] = { turn_0: a.mean, turn_90: c.mean };
+    check(`Filament skybox ${v.name} (specular.ktx2 faces via Texture.setImageCube, no flip) vs render's view`, a.mean <= 1 && good.foreign.length === 0,
+      `mean |Δ| = ${a.mean.toFixed(3)} sRGB codes (≤ 1); requests outside 127.0.0.1: ${good.foreign.length}`);
+    check(`Filament skybox ${v.name} turned 90° about +Y differs from render's view`, c.mean > 4 * Math.max(a.mean, 0.5),
+      `mean |Δ| = ${c.mean.toFixed(3)} sRGB codes (must be far above ${a.mean.toFixed(3)})`);
+  }
+  // A metallic PBR sphere lit by the same cube, left-handed scene, x flipped, beside
+  // `render --shading ibl` of the same sphere and camera: a figure, not a check (Babylon picks
+  // its mip per roughness by its own rule and adds its own BRDF terms; see docs/results/viewer.md).
+  const eye = [0, -4, 0.6], g = mul(M, eye), res = '192x192';
+  for (const r of ['0.05', '0.3']) {
+    const refPng = join(dir, `sphere-r${r}-render.png`);
+    run('render', [map, '--shading', 'ibl', '--ibl', join(bake, 'ibl.json'), '--brdf', `gltf:base=1/1/1,metalness=1,roughness=${r}`,
+      '--eye', eye.join(','), '--target', '0,0,0', '--fov', '32', '--res', res, '--png', refPng, '--exposure', '0', '-q']);
+    const sphere = (await view({ ibl: url(dds) + '/', hand: 'left', flip: 'x', mode: 'sphere', r, base: '1,1,1',
+      eye: [-g[0], g[1], g[2]].map((x) => +x.toFixed(6)).join(','), target: '0,0,0', fov: '32', res },
+    { page: '/viewer/engines/babylon.html' })).image;
+    writePng(join(dir, `sphere-r${r}-babylon-left-flip-x.png`), sphere);
+    const ref = readPng(refPng);
+    writePng(join(dir, `sphere-r${r}-babylon-diff-x8.png`), diffImage(sphere, ref));
+    const c = compare(sphere, ref, sphereMask(eye, [0, 0, 0], 32, 192, 192));
+    figures[`babylon_sphere_r${r}_vs_render`] = { psnr_sphere: c.psnr, mean_sphere: c.mean };
+    console.log(`     Babylon.js PBR sphere (metal, r = ${r}) vs render --shading ibl: PSNR ${c.psnr.toFixed(2)} dB, mean |Δ| ${c.mean.toFixed(2)} codes over the sphere (a figure, no bar)`);
+  }
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|engines|formats|model|drop|sh|prt|glossy|lookup|cpca|quantized|n8 runs one group (development; prt
 // includes glossy, lookup, cpca, quantized and n8; glossy includes lookup); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
@@ -1132,6 +1219,7 @@ try {
   }
   figures.frame_ms_640x360 = times;
   }
+  if (!only || only === 'engines') await engineTests();
   if (!only || only === 'formats') await formatTests();
   if (!only || only === 'model') await modelTests();
   if (!only || only === 'drop') await dropTests();
