@@ -18,7 +18,7 @@ use prtkit::mesh::{uv_sphere, Mesh};
 use prtkit::progress::NoProgress;
 use prtkit::sh::basis::eval_basis_dir;
 use prtkit::sh::legendre::LegendreTable;
-use prtkit::transfer::lightmap::{rasterize, LightmapConfig, LightmapInfo};
+use prtkit::transfer::lightmap::{rasterize, LightmapConfig, LightmapInfo, LightmapUvs};
 use prtkit::transfer::stage::{self, Config, Mode};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -90,7 +90,12 @@ fn lightmap_config(mode: Mode, order: usize, side: usize, source: &Path) -> Conf
         rays: 1024,
         albedo: 0.8,
         source: source.display().to_string(),
-        lightmap: Some(LightmapConfig { width: side, height: side, file: "lightmap.exr".into() }),
+        lightmap: Some(LightmapConfig {
+            width: side,
+            height: side,
+            file: "lightmap.exr".into(),
+            uvs: LightmapUvs::Mesh,
+        }),
         ..Config::default()
     }
 }

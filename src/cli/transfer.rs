@@ -12,7 +12,7 @@ use crate::limits::{
 };
 use crate::mesh::Mesh;
 use crate::transfer::jobs::{read_part, Job};
-use crate::transfer::lightmap::LightmapConfig;
+use crate::transfer::lightmap::{LightmapConfig, LightmapUvs};
 use crate::transfer::order;
 use crate::transfer::stage::{self, Compression, Config, Error, GlossyConfig, Mode, DEFAULT_CELL_SAMPLES};
 use anyhow::{Context as _, Result};
@@ -52,10 +52,11 @@ impl TryFrom<&Args> for Config {
             (Some(clusters), Some(components)) => Some(Compression { clusters, components }),
             _ => None,
         };
-        let lightmap = lightmap_request(args)?.map(|(width, height, path)| LightmapConfig {
+        let lightmap = lightmap_request(args)?.map(|(width, height, path, uvs)| LightmapConfig {
             width,
             height,
             file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+            uvs,
         });
         Ok(Config {
             lightmap,
@@ -77,17 +78,22 @@ impl TryFrom<&Args> for Config {
     }
 }
 
-/// `--lightmap WxH FILE.exr`: the grid's size and the file.
-fn lightmap_request(args: &Args) -> Result<Option<(usize, usize, std::path::PathBuf)>> {
-    let Some(values) = &args.lightmap else { return Ok(None) };
-    let [size, file] = values.as_slice() else { anyhow::bail!("--lightmap takes WxH and FILE.exr") };
+/// `--lightmap WxH FILE.exr` or `--texels WxH FILE.exr`: the grid's size, the file and where
+/// the UVs come from.
+fn lightmap_request(args: &Args) -> Result<Option<(usize, usize, std::path::PathBuf, LightmapUvs)>> {
+    let (values, flag, uvs) = match (&args.lightmap, &args.texels) {
+        (Some(v), _) => (v, "--lightmap", LightmapUvs::Mesh),
+        (None, Some(v)) => (v, "--texels", LightmapUvs::Atlas),
+        (None, None) => return Ok(None),
+    };
+    let [size, file] = values.as_slice() else { anyhow::bail!("{flag} takes WxH and FILE.exr") };
     let parsed = size
         .split_once(['x', 'X'])
         .and_then(|(w, h)| Some((w.trim().parse::<usize>().ok()?, h.trim().parse::<usize>().ok()?)));
     let Some((width, height)) = parsed else {
-        anyhow::bail!("--lightmap {size:?}: the size must be WxH, e.g. 256x256");
+        anyhow::bail!("{flag} {size:?}: the size must be WxH, e.g. 256x256");
     };
-    Ok(Some((width, height, std::path::PathBuf::from(file))))
+    Ok(Some((width, height, std::path::PathBuf::from(file), uvs)))
 }
 
 /// Default energy fraction K must reach when -K is not given.
@@ -158,8 +164,10 @@ fn flagged(error: Error) -> anyhow::Error {
              set on every vertex"
         ),
         Error::NoTexels { source_name, width, height } => {
-            format!("{source_name}: --lightmap {width}x{height} has no texels")
+            format!("{source_name}: a {width}x{height} lightmap (--lightmap or --texels) has no texels")
         }
+        Error::Atlas { source_name, error } => format!("{source_name}: --texels makes no atlas: {error}"),
+        Error::JobAtlas => "--texels is not baked as jobs: its atlas splits the vertices that --job numbers".into(),
         Error::ShEnergy(fraction) => format!("--sh-energy {fraction} must be in (0, 1]"),
         Error::JobInterreflected => {
             "--job and --join split unshadowed and shadowed bakes, diffuse or glossy; interreflected transfer is \
@@ -197,7 +205,7 @@ impl Stage for Args {
                 .into_iter()
                 .chain([&self.glsl, &self.hlsl, &self.wgsl].into_iter().flatten().map(|g| (g, Holds::Text))),
         )?;
-        let lightmap_file = lightmap_request(&self)?.map(|(_, _, path)| Output::File(path));
+        let lightmap_file = lightmap_request(&self)?.map(|(_, _, path, _)| Output::File(path));
         if let Some(file) = &lightmap_file {
             check_outputs([(file, Holds::Exr)])?;
         }

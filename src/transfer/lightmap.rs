@@ -25,6 +25,7 @@
 //! directions, BVH and offset as the per-vertex bake: a texel at a vertex's UV gets that
 //! vertex's T to rounding.
 
+use super::atlas::{Atlas, AtlasInfo};
 use super::diffuse::{unshadowed_exact, Shadowed};
 use super::directions::Stratified;
 use super::interreflect::Tracer;
@@ -46,7 +47,16 @@ const CHUNK: usize = 256;
 /// The value of a dilated texel in the `coverage` layer (covered 1, empty 0).
 pub const DILATED: f32 = 0.5;
 
-/// What `transfer --lightmap WxH FILE.exr` asks for.
+/// Where a lightmap's UVs come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightmapUvs {
+    /// The mesh's own UV set (`--lightmap`).
+    Mesh,
+    /// A generated atlas ([`Atlas`]); the mesh's own UVs are ignored (`--texels`).
+    Atlas,
+}
+
+/// What `transfer --lightmap WxH FILE.exr` (or `--texels`) asks for.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LightmapConfig {
     /// Texels across (W).
@@ -55,6 +65,8 @@ pub struct LightmapConfig {
     pub height: usize,
     /// The EXR's file name, for the manifest.
     pub file: String,
+    /// The UV set baked.
+    pub uvs: LightmapUvs,
 }
 
 /// The manifest's account of the lightmap (`docs/formats/transfer.md`).
@@ -81,6 +93,9 @@ pub struct LightmapInfo {
     pub uvs: String,
     /// The layout in words.
     pub layout: String,
+    /// The generated atlas (`--texels`; absent for the mesh's own UVs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atlas: Option<AtlasInfo>,
 }
 
 /// One covered texel: its triangle and the barycentric weights of the triangle's vertices at
@@ -204,11 +219,12 @@ pub fn dilate(coverage: &Coverage, rounds: usize) -> Vec<Option<usize>> {
     source
 }
 
-/// Checks a lightmap request before anything is baked: the mesh has UVs, the grid is within
-/// [`MAX_LIGHTMAP_SIDE`] and [`MAX_LIGHTMAP_VALUES`], and the mode is one the lightmap bakes.
+/// Checks a lightmap request before anything is baked: the mesh has UVs (unless an atlas makes
+/// them), the grid is within [`MAX_LIGHTMAP_SIDE`] and [`MAX_LIGHTMAP_VALUES`], and the mode is
+/// one the lightmap bakes.
 pub fn check(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<(), Error> {
     let name = &config.source;
-    if mesh.uvs.is_none() {
+    if mesh.uvs.is_none() && lightmap.uvs == LightmapUvs::Mesh {
         return Err(Error::NoUvs(name.clone()));
     }
     let (w, h) = (lightmap.width, lightmap.height);
@@ -248,6 +264,24 @@ pub fn check(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<
         return Err(Error::LightmapOf { source_name: name.clone(), bake });
     }
     Ok(())
+}
+
+/// The mesh a lightmap bakes: `mesh` itself for its own UVs; for a generated atlas (after
+/// [`check`]), `mesh` split along the atlas's seams with the atlas's UVs, and the atlas's account.
+pub fn atlas_mesh(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Result<Option<(Mesh, AtlasInfo)>, Error> {
+    if lightmap.uvs == LightmapUvs::Mesh {
+        return Ok(None);
+    }
+    check(lightmap, config, mesh)?;
+    let atlas = Atlas::new(&mesh.positions, &mesh.triangles, lightmap.width, lightmap.height)
+        .map_err(|error| Error::Atlas { source_name: config.source.clone(), error })?;
+    let copy = |v: &[DVec3]| atlas.vertex_of.iter().map(|&i| v[i as usize]).collect();
+    // The split triangles index the copies, so they are in range.
+    let mut split = Mesh::new(copy(&mesh.positions), Some(copy(&mesh.normals)), atlas.triangles)
+        .expect("the atlas's triangles index its vertices");
+    split.normals_computed = mesh.normals_computed;
+    split.uvs = Some(atlas.uvs);
+    Ok(Some((split, atlas.info)))
 }
 
 /// A baked lightmap: the EXR's bytes and the manifest's account.
@@ -350,12 +384,18 @@ pub fn bake(
         texels_dilated: dilated,
         dilation: DILATION,
         texels_overlapping: coverage.overlapping,
-        uvs: "the mesh's UV set: OBJ vt, or glTF TEXCOORD_1 (else TEXCOORD_0)".into(),
+        uvs: match lightmap.uvs {
+            LightmapUvs::Mesh => "the mesh's UV set: OBJ vt, or glTF TEXCOORD_1 (else TEXCOORD_0)".into(),
+            LightmapUvs::Atlas => {
+                "a generated atlas (the mesh's own UVs ignored), written as the .glb's TEXCOORD_0".into()
+            }
+        },
         layout: format!(
             "one grey layer (channel T<i>.Y, f32) per coefficient i = l(l+1)+m, {coeffs} of them, and coverage.Y (1: \
              the texel centre lies in a triangle, {DILATED}: filled by dilation from a neighbour, 0: empty); texel \
              (x, y), row y from the top of the image, is the point of UV ((x+0.5)/{width}, (y+0.5)/{height})"
         ),
+        atlas: None,
     };
     Ok(Lightmap { exr, info, transfer, coverage: coverage_layer })
 }

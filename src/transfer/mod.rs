@@ -18,6 +18,7 @@
 //! needs, [`jobs`] a bake split into jobs whose
 //! parts join into one run's outputs, and [`stage`] the `transfer` stage.
 
+pub mod atlas;
 pub mod cpca;
 pub mod diffuse;
 pub mod directions;

@@ -8,13 +8,14 @@
 //! ray casts (2⁻²⁴ ≈ 6·10⁻⁸ of the coordinates), far below any feature a mesh is modelled with.
 //! The manifest states both numbers.
 
+use super::atlas::AtlasInfo;
 use super::cpca::Cpca;
 use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
 use super::directions::Stratified;
 use super::glossy::{Glossy, Visibility, FRAME};
 use super::interreflect::{Hits, Storage, Tracer};
 use super::jobs::{Job, Joined, Part, Recipe, Transfer};
-use super::lightmap::{self, Lightmap, LightmapConfig, LightmapInfo};
+use super::lightmap::{self, Lightmap, LightmapConfig, LightmapInfo, LightmapUvs};
 use super::quantize::{Quantization, Quantized};
 use super::shaders::{dequantize_snippet, glossy_snippet, snippet, Language};
 use super::visibility::{triangle_area, Occluders};
@@ -502,6 +503,21 @@ pub enum Error {
         /// `interreflected`, `glossy` or `compressed`.
         bake: &'static str,
     },
+    /// The mesh gets no lightmap atlas.
+    #[error("{source_name}: no lightmap atlas: {error}")]
+    Atlas {
+        /// The mesh.
+        source_name: String,
+        /// Why.
+        #[source]
+        error: super::atlas::AtlasError,
+    },
+    /// A bake split into jobs with a generated atlas.
+    #[error(
+        "a lightmap atlas is not baked as jobs: the atlas splits vertices along its seams, and the parts number the \
+         mesh's own vertices"
+    )]
+    JobAtlas,
     /// The lightmap's EXR cannot be encoded.
     #[error("cannot encode the lightmap's EXR: {0}")]
     LightmapEncoding(String),
@@ -566,6 +582,8 @@ struct Plan<'a> {
     compression: Option<Compression>,
     /// The per-texel bake of the same diffuse transfer.
     lightmap: Option<&'a LightmapConfig>,
+    /// The lightmap's generated atlas, when it has one.
+    atlas: Option<AtlasInfo>,
     /// Triangles of zero area (kept in the `.glb`, left out of the BVH).
     zero_area: usize,
     /// The ray origin offset in the mesh's units.
@@ -620,6 +638,7 @@ impl<'a> Plan<'a> {
             per_vertex,
             compression: config.compression,
             lightmap: config.lightmap.as_ref(),
+            atlas: None,
             zero_area,
             offset: config.offset * mesh.extent(),
         })
@@ -654,7 +673,16 @@ struct Baked {
 
 /// Runs `transfer` on `mesh`.
 pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Output, Error> {
-    let plan = Plan::new(config, mesh)?;
+    let atlas = match &config.lightmap {
+        Some(l) => lightmap::atlas_mesh(l, config, mesh)?,
+        None => None,
+    };
+    let (mesh, atlas) = match &atlas {
+        Some((split, info)) => (split, Some(info.clone())),
+        None => (mesh, None),
+    };
+    let mut plan = Plan::new(config, mesh)?;
+    plan.atlas = atlas;
     let start = Instant::now();
     let all = 0..mesh.positions.len();
     let baked = match &plan.bake {
@@ -673,9 +701,19 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     finish(config, mesh, &plan, baked, start.elapsed().as_secs_f64(), progress)
 }
 
+/// A generated atlas splits the mesh's vertices, so parts over the mesh's own vertex ranges
+/// cannot be joined into its bake.
+fn refuse_atlas_jobs(config: &Config) -> Result<(), Error> {
+    match &config.lightmap {
+        Some(l) if l.uvs == LightmapUvs::Atlas => Err(Error::JobAtlas),
+        _ => Ok(()),
+    }
+}
+
 /// Runs job `job` of a `transfer` split into jobs ([`jobs`]): the per-vertex transfer of its
 /// vertex range, as a part for [`run_joined`].
 pub fn run_job(config: &Config, mesh: &Mesh, job: Job, progress: &dyn Progress) -> Result<Part, Error> {
+    refuse_atlas_jobs(config)?;
     let plan = Plan::new(config, mesh)?;
     if plan.gathers() {
         return Err(Error::JobInterreflected);
@@ -693,6 +731,7 @@ pub fn run_joined(
     parts: impl IntoIterator<Item = Result<(String, Part), Error>>,
     progress: &dyn Progress,
 ) -> Result<Output, Error> {
+    refuse_atlas_jobs(config)?;
     let plan = Plan::new(config, mesh)?;
     if plan.gathers() {
         return Err(Error::JobInterreflected);
@@ -781,11 +820,18 @@ fn finish(
         None => None,
     };
     let lightmap = match plan.lightmap {
-        Some(l) => Some(lightmap::bake(l, config, mesh, baked.gathered.as_deref(), progress)?),
+        Some(l) => {
+            let mut baked = lightmap::bake(l, config, mesh, baked.gathered.as_deref(), progress)?;
+            baked.info.atlas = plan.atlas.clone();
+            Some(baked)
+        }
         None => None,
     };
     let quantized = quantize(config.quantization, &baked.transfer, plan.per_vertex, cpca.as_ref());
     let mut body = manifest(config, mesh, plan, &baked, cpca.as_ref(), lightmap.as_ref().map(|l| l.info.clone()));
+    if lightmap.is_some() {
+        body.glb.packing += "; TEXCOORD_0: the lightmap's UVs (texel (x, y) at ((x+0.5)/W, (y+0.5)/H))";
+    }
     if let Some(q) = &quantized {
         let info = quantization_info(config.quantization, q, &baked.transfer, plan.per_vertex, cpca.as_ref());
         body.glb.packing +=
@@ -1120,6 +1166,15 @@ fn glb_mesh(mesh: &Mesh, stored: &Stored, body: &TransferBody, h: Option<Vec<f32
         components: 3,
         values: Values::Float(mesh.normals.iter().flat_map(|n| n.as_vec3().to_array()).collect()),
     }];
+    // The lightmap's UVs, so that an engine can look the EXR up: as TEXCOORD_0, since glTF asks
+    // for indexed semantics from 0 on (the Khronos validator rejects TEXCOORD_1 alone).
+    if let (Some(_), Some(uvs)) = (&body.lightmap, &mesh.uvs) {
+        attributes.push(Attribute {
+            name: "TEXCOORD_0".into(),
+            components: 2,
+            values: Values::Float(uvs.iter().flat_map(|uv| uv.map(|c| c as f32)).collect()),
+        });
+    }
     let mut blobs: Vec<Blob> = h.map(|values| Blob { name: GLOSSY_H_BLOB.into(), values }).into_iter().collect();
     let quantized = stored.quantized;
     match stored.cpca {

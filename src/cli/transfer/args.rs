@@ -131,11 +131,19 @@ pub struct Args {
     #[arg(long, num_args = 2, value_names = ["WxH", "FILE.exr"])]
     pub lightmap: Option<Vec<String>>,
 
+    /// Like --lightmap, but per texel of a generated atlas (charts of faces within 60° of a
+    /// normal, projected, packed at one texel density with a 2-texel gutter), ignoring the
+    /// mesh's own UVs; vertices are split along the charts' seams and the .glb carries the
+    /// atlas as TEXCOORD_0. Not with --job/--join (the atlas splits the vertices the parts
+    /// number). Example: --texels 512x512 knot.exr
+    #[arg(long, num_args = 2, value_names = ["WxH", "FILE.exr"], conflicts_with_all = ["lightmap", "join"])]
+    pub texels: Option<Vec<String>>,
+
     /// Bake only job I of N (1 ≤ I ≤ N): the per-vertex transfer of the I-th of N equal vertex
     /// ranges, against the whole scene, written to FILE.part for --join. Not for
     /// interreflected bakes. Example: --job 3/8 bowl-3.part
     #[arg(long, num_args = 2, value_names = ["I/N", "FILE.part"],
-          conflicts_with_all = ["join", "glb", "glsl", "hlsl", "wgsl", "clusters", "quantize", "lightmap", "json"])]
+          conflicts_with_all = ["join", "glb", "glsl", "hlsl", "wgsl", "clusters", "quantize", "lightmap", "texels", "json"])]
     pub job: Option<Vec<String>>,
 
     /// Join the parts of a bake split by --job (every part, in any order; the other options as
