@@ -10,15 +10,16 @@
 
 mod common;
 
-use common::{cmd, run_in, stderr, test_mesh};
+use common::{cmd, render_rel_error, run_in, stderr, test_mesh};
 use std::path::Path;
 
-/// `render ARGS --json` in `dir`: its relative RMS error against `--compare`.
-fn relative_error(dir: &Path, args: &[&str]) -> f64 {
-    let out = cmd("render").args(args).args(["-q", "--json"]).current_dir(dir).output().unwrap();
-    assert!(out.status.success(), "render {args:?}: {}", stderr(&out));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    v["metrics"]["rel_error"].as_f64().unwrap()
+/// `factor-brdf BRDF` on the hemisphere with the cosine, `resolution`² bins, `terms` terms kept,
+/// into `NAME.exr` and `NAME.json` in `dir`.
+fn factor(dir: &Path, brdf: &str, resolution: usize, terms: usize, name: &str) {
+    let (resolution, terms) = (resolution.to_string(), terms.to_string());
+    let (exr, json) = (format!("{name}.exr"), format!("{name}.json"));
+    let args = ["--domain", "hemisphere", "--resolution", &resolution, "--cosine", "--factors", &exr];
+    run_in(dir, "factor-brdf", &[&[brdf][..], &args, &["--terms", &terms, "-o", &json]].concat());
 }
 
 /// A lat-long sky of bands 0–2 only (a different quadratic per channel), positive everywhere:
@@ -36,24 +37,7 @@ fn a_glossy_bake_relit_by_band_limited_light_is_the_factored_render() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     band_limited_sky(d);
-    run_in(
-        d,
-        "factor-brdf",
-        &[
-            "phong:s=8",
-            "--domain",
-            "hemisphere",
-            "--resolution",
-            "16",
-            "--cosine",
-            "--factors",
-            "p.exr",
-            "--terms",
-            "10",
-            "-o",
-            "p.json",
-        ],
-    );
+    factor(d, "phong:s=8", 16, 10, "p");
     let bowl = test_mesh("bowl-ball.obj");
     run_in(d, "transfer", &[&bowl, "-n", "4", "--factors", "p.json", "-K", "10", "--glb", "g.glb", "-o", "g.json"]);
     let view = [
@@ -86,7 +70,7 @@ fn a_glossy_bake_relit_by_band_limited_light_is_the_factored_render() {
             &["--shading", "transfer", "--transfer", "g.glb", "--factors", "p.json", "--compare", compare],
         ]
         .concat();
-        relative_error(d, &args)
+        render_rel_error(d, &args)
     };
     // The .glb carries h_k: without --factors the image is the same, bit for bit.
     let with_factors = [
@@ -121,24 +105,7 @@ fn a_lambertian_factorization_at_one_term_is_the_diffuse_transfer() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     band_limited_sky(d);
-    run_in(
-        d,
-        "factor-brdf",
-        &[
-            "lambert:albedo=0.6",
-            "--domain",
-            "hemisphere",
-            "--resolution",
-            "32",
-            "--cosine",
-            "--factors",
-            "l.exr",
-            "--terms",
-            "2",
-            "-o",
-            "l.json",
-        ],
-    );
+    factor(d, "lambert:albedo=0.6", 32, 2, "l");
     let sphere = test_mesh("sphere.obj");
     let common = [sphere.as_str(), "-n", "3", "--mode", "unshadowed"];
     run_in(d, "transfer", &[&common[..], &["--albedo", "0.6", "--glb", "diffuse.glb", "-o", "diffuse.json"]].concat());
@@ -153,7 +120,7 @@ fn a_lambertian_factorization_at_one_term_is_the_diffuse_transfer() {
         "render",
         &[&["sky.pfm"][..], &view, &["--shading", "transfer", "--transfer", "diffuse.glb", "-o", "d.exr"]].concat(),
     );
-    let err = relative_error(
+    let err = render_rel_error(
         d,
         &[
             &["sky.pfm"][..],
@@ -181,24 +148,7 @@ fn the_pole_of_a_sphere_relights_as_the_brute_force_reference() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     band_limited_sky(d);
-    run_in(
-        d,
-        "factor-brdf",
-        &[
-            "phong:s=8",
-            "--domain",
-            "hemisphere",
-            "--resolution",
-            "16",
-            "--cosine",
-            "--factors",
-            "p.exr",
-            "--terms",
-            "16",
-            "-o",
-            "p.json",
-        ],
-    );
+    factor(d, "phong:s=8", 16, 16, "p");
     let sphere = test_mesh("sphere.obj");
     run_in(
         d,
@@ -235,7 +185,7 @@ fn the_pole_of_a_sphere_relights_as_the_brute_force_reference() {
     run_in(d, "render", &[&["sky.pfm"][..], &view, &["-o", "reference.exr"]].concat());
     let relit =
         [&["sky.pfm"][..], &view, &["--shading", "transfer", "--transfer", "g.glb", "--compare", "reference.exr"]];
-    let err = relative_error(d, &relit.concat());
+    let err = render_rel_error(d, &relit.concat());
     eprintln!("glossy bake of sphere.obj (K = 13, n = 4), the cap around +Z vs the reference: {err:.2e}");
     // Measured: 0.97 % (the K = 13 terms and the interpolation); the frame R_z(φ_n)·R_y(θ_n)
     // in its place: 3.8 %.
@@ -246,24 +196,7 @@ fn the_pole_of_a_sphere_relights_as_the_brute_force_reference() {
 fn glossy_bakes_are_the_same_bytes_for_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    run_in(
-        d,
-        "factor-brdf",
-        &[
-            "phong:s=8",
-            "--domain",
-            "hemisphere",
-            "--resolution",
-            "12",
-            "--cosine",
-            "--factors",
-            "p.exr",
-            "--terms",
-            "6",
-            "-o",
-            "p.json",
-        ],
-    );
+    factor(d, "phong:s=8", 12, 6, "p");
     let bowl = test_mesh("bowl.obj");
     for mode in ["shadowed", "interreflected"] {
         let mut bakes = Vec::new();
@@ -289,24 +222,7 @@ fn a_lambertian_factorization_gathers_the_diffuse_interreflections() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     band_limited_sky(d);
-    run_in(
-        d,
-        "factor-brdf",
-        &[
-            "lambert:albedo=0.8",
-            "--domain",
-            "hemisphere",
-            "--resolution",
-            "32",
-            "--cosine",
-            "--factors",
-            "l.exr",
-            "--terms",
-            "1",
-            "-o",
-            "l.json",
-        ],
-    );
+    factor(d, "lambert:albedo=0.8", 32, 1, "l");
     let scene = test_mesh("bowl-ball.obj");
     let view = ["--scene", scene.as_str(), "--brdf", "lambert:albedo=0.8", "--res", "96x96"];
     let mut errors = Vec::new();
@@ -328,9 +244,9 @@ fn a_lambertian_factorization_gathers_the_diffuse_interreflections() {
             &[&relit[..], &["--transfer", &format!("{diffuse}.glb"), "-o", &format!("{diffuse}.exr")]].concat(),
         );
         let compare = ["--transfer", "g.glb", "--factors", "l.json", "--compare", &format!("{diffuse}.exr")];
-        errors.push(relative_error(d, &[&relit[..], &compare].concat()));
+        errors.push(render_rel_error(d, &[&relit[..], &compare].concat()));
     }
-    let bounced = relative_error(
+    let bounced = render_rel_error(
         d,
         &[
             &["sky.pfm"][..],
@@ -359,25 +275,7 @@ fn mismatched_bakes_factors_and_brdfs_exit_2_naming_the_file() {
     let d = dir.path();
     common::sky_pfm(d, 16, 8);
     for (brdf, name) in [("phong:s=8", "p"), ("phong:s=20", "q")] {
-        let (exr, json) = (format!("{name}.exr"), format!("{name}.json"));
-        run_in(
-            d,
-            "factor-brdf",
-            &[
-                brdf,
-                "--domain",
-                "hemisphere",
-                "--resolution",
-                "8",
-                "--cosine",
-                "--factors",
-                &exr,
-                "--terms",
-                "4",
-                "-o",
-                &json,
-            ],
-        );
+        factor(d, brdf, 8, 4, name);
     }
     let bowl = test_mesh("bowl.obj");
     run_in(d, "transfer", &[&bowl, "-n", "2", "--factors", "p.json", "-K", "3", "--glb", "g.glb", "-o", "g.json"]);

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{cmd, stderr};
+use common::{cmd, render_rel_error, stderr};
 use glam::DVec3;
 use prtkit::mesh::Mesh;
 use prtkit::progress::NoProgress;
@@ -143,13 +143,6 @@ fn the_glb_carries_the_atlas_uvs_and_the_manifest_its_account() {
     eprintln!("torus knot, 256x256: {atlas}, {covered} texels covered");
 }
 
-fn render_error(dir: &Path, args: &[&str]) -> f64 {
-    let out = cmd("render").args(args).args(["-q", "--json"]).current_dir(dir).output().unwrap();
-    assert!(out.status.success(), "render {args:?}: {}", stderr(&out));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    v["metrics"]["rel_error"].as_f64().unwrap_or(f64::NAN)
-}
-
 #[test]
 fn the_atlas_lightmap_relights_from_its_glb_alone() {
     // As tests/transfer_lightmap.rs relights the hand-made UVs: the floor and ball under the
@@ -161,7 +154,7 @@ fn the_atlas_lightmap_relights_from_its_glb_alone() {
     let mesh = mesh.to_str().unwrap();
     let camera = ["--res", "96x96", "--eye", "0,-2.2,2.6", "--target", "0,0,0.1", "--brdf", "lambert:albedo=0.8"];
     let run = |scene: &str, args: &[&str]| {
-        render_error(dir.path(), &[&["sky.pfm", "--scene", scene][..], &camera, args].concat())
+        render_rel_error(dir.path(), &[&["sky.pfm", "--scene", scene][..], &camera, args].concat())
     };
     run(mesh, &["--shading", "reference", "-o", "r.exr"]);
     let bake_args = ["-n", "6", "--rays", "1024", "--albedo", "0.8", "-q"];

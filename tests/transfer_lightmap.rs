@@ -12,7 +12,7 @@
 
 mod common;
 
-use common::{cmd, stderr};
+use common::{cmd, render_rel_error, stderr};
 use glam::DVec3;
 use prtkit::mesh::{uv_sphere, Mesh};
 use prtkit::progress::NoProgress;
@@ -392,14 +392,6 @@ fn bad_lightmap_requests_exit_2_naming_the_file_and_write_nothing() {
     }
 }
 
-/// `render --shading transfer --lightmap`: the relative RMS error against `--shading reference`.
-fn render_error(dir: &Path, args: &[&str]) -> f64 {
-    let out = cmd("render").args(args).args(["-q", "--json"]).current_dir(dir).output().unwrap();
-    assert!(out.status.success(), "render {args:?}: {}", stderr(&out));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    v["metrics"]["rel_error"].as_f64().unwrap_or(f64::NAN)
-}
-
 #[test]
 fn a_relit_lightmap_approaches_the_reference_where_vertices_cannot() {
     // The fixture's two-triangle floor under its ball, seen from above and to the side, under
@@ -411,7 +403,7 @@ fn a_relit_lightmap_approaches_the_reference_where_vertices_cannot() {
     let mesh = mesh.to_str().unwrap();
     let camera = ["--res", "96x96", "--eye", "0,-2.2,2.6", "--target", "0,0,0.1"];
     let view = [&["--scene", mesh, "--brdf", "lambert:albedo=0.8"][..], &camera].concat();
-    let run = |args: &[&str]| render_error(dir.path(), &[&["sky.pfm"][..], &view, args].concat());
+    let run = |args: &[&str]| render_rel_error(dir.path(), &[&["sky.pfm"][..], &view, args].concat());
     run(&["--shading", "reference", "-o", "r.exr"]);
     let bake = ["-n", "6", "--rays", "1024", "--albedo", "0.8", "-q", "--glb", "f.glb", "-o", "f.json"];
     let out = cmd("transfer")

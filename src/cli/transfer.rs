@@ -198,7 +198,9 @@ impl Stage for Args {
         if let Some(job) = &self.job {
             return self.run_job(job, ctx);
         }
-        let glb = self.glb.as_ref().expect("clap requires --glb without --job");
+        let Some(glb) = self.glb.as_ref() else {
+            anyhow::bail!("--glb FILE is required (except with --job)");
+        };
         check_json_output(&self.output, self.json)?;
         check_outputs(
             [(glb, Holds::Glb), (&self.output, Holds::Text)]

@@ -139,6 +139,15 @@ pub fn run_in(dir: &Path, stage: &str, args: &[&str]) {
     assert!(out.status.success(), "{stage} {args:?}: {}", stderr(&out));
 }
 
+/// `render ARGS -q --json` in `dir`, which must succeed: its relative RMS error against
+/// `--compare` (NaN when the run reports none, which fails any bound).
+pub fn render_rel_error(dir: &Path, args: &[&str]) -> f64 {
+    let out = cmd("render").args(args).args(["-q", "--json"]).current_dir(dir).output().unwrap();
+    assert!(out.status.success(), "render {args:?}: {}", stderr(&out));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    v["metrics"]["rel_error"].as_f64().unwrap_or(f64::NAN)
+}
+
 /// The path of `testdata/meshes/NAME`, as a string for argument lists.
 pub fn test_mesh(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/meshes").join(name).display().to_string()

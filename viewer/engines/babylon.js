@@ -18,6 +18,7 @@ import { PBRMaterial } from '../node_modules/@babylonjs/core/Materials/PBR/pbrMa
 import { CreateSphere } from '../node_modules/@babylonjs/core/Meshes/Builders/sphereBuilder.js';
 import '../node_modules/@babylonjs/core/Materials/Textures/Loaders/ddsTextureLoader.js';
 import '../node_modules/@babylonjs/core/Helpers/sceneHelpers.js';
+import { readFrame } from '../src/readback.js';
 
 const q = new URLSearchParams(location.search);
 const vec = (s, d) => Vector3.FromArray((s ?? d).split(',').map(Number));
@@ -71,13 +72,10 @@ async function setup() {
 function pixels() {
   scene.render();
   const gl = engine._gl;
-  const buf = new Uint8Array(W * H * 4);
-  gl.readPixels(0, 0, W, H, gl.RGBA, gl.UNSIGNED_BYTE, buf);
+  const frame = readFrame(gl, W, H);
   const e = gl.getError();
   if (e !== gl.NO_ERROR) errors.push(`WebGL error 0x${e.toString(16)}`);
-  let s = '';
-  for (let i = 0; i < buf.length; i += 0x8000) s += String.fromCharCode.apply(null, buf.subarray(i, i + 0x8000));
-  return { width: W, height: H, rgbaBottomUp: btoa(s) };
+  return frame;
 }
 
 window.prtkit = {

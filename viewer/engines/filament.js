@@ -7,6 +7,7 @@
 // the skybox too; 0 by default), eye, target (glTF frame), fov (vertical, degrees), res W×H.
 // Exposes window.prtkit = { ready, pixels(), errors } as the three.js viewer does (test/run.mjs).
 import { read } from '../node_modules/ktx-parse/dist/index.mjs';
+import { readFrame } from '../src/readback.js';
 
 const q = new URLSearchParams(location.search);
 const num3 = (s, d) => (s ?? d).split(',').map(Number);
@@ -77,13 +78,10 @@ async function setup() {
 
 function pixels() {
   renderer.render(swapChain, view);
-  const buf = new Uint8Array(W * H * 4);
-  gl.readPixels(0, 0, W, H, gl.RGBA, gl.UNSIGNED_BYTE, buf);
+  const frame = readFrame(gl, W, H);
   const e = gl.getError();
   if (e !== gl.NO_ERROR) errors.push(`WebGL error 0x${e.toString(16)}`);
-  let s = '';
-  for (let i = 0; i < buf.length; i += 0x8000) s += String.fromCharCode.apply(null, buf.subarray(i, i + 0x8000));
-  return { width: W, height: H, rgbaBottomUp: btoa(s) };
+  return frame;
 }
 
 window.prtkit = {

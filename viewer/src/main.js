@@ -39,6 +39,7 @@ import { prtkitFromWorld, loadPrtkitSh, rotateShZ, irradianceUniform, SH_GLSL, l
   prtAttribute, transferLightingUniform, prtVertexShader, PRT_FRAGMENT,
   transferTexture, glossyHTexture, prtGlossyVertexShader, prtGlossyFragmentShader, prtTextureVertexShader,
   PRT_CLUSTER_ATTRIBUTE, prtWeightAttribute, cpcaBake, projectCpcaLighting, prtCpcaVertexShader } from './prtkit-sh.js';
+import { readFrame } from './readback.js';
 
 const q = new URLSearchParams(location.search);
 const num = (k, d) => (q.has(k) ? Number(q.get(k)) : d);
@@ -878,11 +879,7 @@ function draw() {
 // --- test hooks ---------------------------------------------------------------------------
 function pixels() {
   draw();
-  const buf = new Uint8Array(W * H * 4);
-  gl.readPixels(0, 0, W, H, gl.RGBA, gl.UNSIGNED_BYTE, buf);
-  let s = '';
-  for (let i = 0; i < buf.length; i += 0x8000) s += String.fromCharCode.apply(null, buf.subarray(i, i + 0x8000));
-  return { width: W, height: H, rgbaBottomUp: btoa(s) };
+  return readFrame(gl, W, H);
 }
 function bench(frames = 30) {
   const one = new Uint8Array(4);

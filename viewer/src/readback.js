@@ -1,0 +1,13 @@
+// readback.js — the test hook every page shares: the drawn frame read back for test/run.mjs.
+
+/**
+ * The `width`×`height` RGBA8 frame of `gl`'s default framebuffer, rows bottom-up, as base64
+ * (puppeteer hands strings across; the bytes go in 32 KiB slices through String.fromCharCode).
+ */
+export function readFrame(gl, width, height) {
+  const buf = new Uint8Array(width * height * 4);
+  gl.readPixels(0, 0, width, height, gl.RGBA, gl.UNSIGNED_BYTE, buf);
+  let s = '';
+  for (let i = 0; i < buf.length; i += 0x8000) s += String.fromCharCode.apply(null, buf.subarray(i, i + 0x8000));
+  return { width, height, rgbaBottomUp: btoa(s) };
+}
