@@ -12,15 +12,22 @@
 //! inverse transpose of its upper 3 × 3 (renormalized). Positions stay in the file's axes: glTF is
 //! +Y up (§3.4) where prtkit's frame is +Z up, and nothing is turned. Skins and morph targets are
 //! not applied (the rest pose is read).
+//!
+//! [`read_coloured`] also reads each vertex's base colour (albedo), the core metallic-roughness
+//! material's `baseColorFactor × baseColorTexture × COLOR_0` (§3.9.2) evaluated at the vertex,
+//! the texture sampled bilinearly in linear values ([`BaseColourTexture`];
+//! `docs/formats/mesh-colours.md`). [`read`] decodes no texture.
 
 use super::read::{display_path, read_bytes};
 use super::IoError;
 use crate::limits::{human_bytes, LimitError};
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::mesh::Mode;
+use ::gltf::texture::WrappingMode;
 use ::gltf::Semantic;
 use base64::Engine as _;
 use glam::{DMat3, DMat4, DQuat, DVec3, DVec4};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// The format's name in messages.
@@ -74,6 +81,19 @@ pub enum GltfError {
         /// What is used.
         reason: String,
     },
+    /// A primitive's base-colour texture cannot be had ([`read_coloured`] alone): its image is
+    /// missing, unreadable, neither PNG nor JPEG, or in an extension; its `texCoord` set is not on
+    /// the primitive or cannot be read.
+    #[error("{path}: {at}: {reason}")]
+    Texture {
+        /// The glTF file.
+        path: PathBuf,
+        /// Which primitive, texture and image, e.g. "mesh 0, primitive 1, baseColorTexture
+        /// (texture 0, image 2)".
+        at: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// The buffers or the flattened scene exceed a ceiling.
     #[error("{path}: {error}")]
     Limit {
@@ -97,6 +117,25 @@ pub use super::geometry::Geometry;
 
 /// Reads a `.gltf` or `.glb` file and its buffers, and flattens its scene.
 pub fn read(path: &Path) -> Result<Geometry, GltfError> {
+    read_with(path, false).map(|(geometry, _)| geometry)
+}
+
+/// As [`read`], and each vertex's linear RGB base colour, one per position in the same order:
+/// per primitive, `baseColorFactor.rgb × baseColorTexture.rgb × COLOR_0.rgb` (glTF 2.0 §3.9.2;
+/// each factor white when absent, a primitive without material white), alpha ignored. The
+/// texture is sampled as [`BaseColourTexture::sample`] says; COLOR_0 is float or normalized
+/// unsigned byte/short VEC3 or VEC4 (§3.7.2.1), linear. A texture that cannot be had, a
+/// `texCoord` set the primitive lacks, KHR_texture_transform on the base-colour texture, or a
+/// colour that is negative or not finite is an error naming the file and the object.
+pub fn read_coloured(path: &Path) -> Result<(Geometry, Vec<[f64; 3]>), GltfError> {
+    read_with(path, true).map(|(geometry, colours)| (geometry, colours.unwrap_or_default()))
+}
+
+/// Linear RGB base colours, one per vertex.
+type BaseColours = Vec<[f64; 3]>;
+
+/// [`read`], and with `colours` [`read_coloured`]'s colours.
+fn read_with(path: &Path, colours: bool) -> Result<(Geometry, Option<BaseColours>), GltfError> {
     let name = display_path(path);
     let ceiling = crate::limits::max_file_bytes();
     let bytes = read_bytes(path, FORMAT, ceiling, |start| {
@@ -119,6 +158,7 @@ pub fn read(path: &Path) -> Result<Geometry, GltfError> {
     let buffers = buffers(path, &name, &document, blob, ceiling)?;
     let mut scene = Flattened {
         path: name,
+        source: path.to_path_buf(),
         buffers,
         geometry: Geometry {
             positions: Vec::new(),
@@ -126,11 +166,14 @@ pub fn read(path: &Path) -> Result<Geometry, GltfError> {
             triangles: Vec::new(),
             uvs: Some(Vec::new()),
         },
+        colours: colours.then(Vec::new),
+        images: HashMap::new(),
+        image_bytes: 0,
     };
     for (mesh, world, at) in placements(&document).map_err(|(at, reason)| scene.invalid(at, reason))? {
-        scene.place(&mesh, world, at)?;
+        scene.place(&document, &mesh, world, at)?;
     }
-    Ok(scene.geometry)
+    Ok((scene.geometry, scene.colours))
 }
 
 /// The asset a file holds: a `.glb`'s first `length` bytes once its 12-byte header is checked
@@ -212,7 +255,7 @@ fn buffers(
             ::gltf::buffer::Source::Bin => {
                 blob.take().ok_or_else(|| error("it has no uri, and the file has no GLB BIN chunk".into()))?
             }
-            ::gltf::buffer::Source::Uri(uri) => buffer_uri(path, uri).map_err(error)?,
+            ::gltf::buffer::Source::Uri(uri) => buffer_uri(path, uri, "glTF buffer").map_err(error)?,
         };
         let length = buffer.length();
         if data.len() < length {
@@ -226,8 +269,9 @@ fn buffers(
 
 /// A buffer's bytes from its URI (RFC 3986, §3.6.1): `data:…;base64,…`, or a relative reference
 /// resolved against the directory of `gltf` (percent-escapes decoded). Absolute paths and other
-/// schemes are refused: an asset names the files beside it.
-fn buffer_uri(gltf: &Path, uri: &str) -> Result<Vec<u8>, String> {
+/// schemes are refused: an asset names the files beside it. `what` names the file's role in
+/// messages ("glTF buffer", "glTF image").
+fn buffer_uri(gltf: &Path, uri: &str, what: &'static str) -> Result<Vec<u8>, String> {
     if let Some(data) = uri.strip_prefix("data:") {
         let (_, payload) = data.split_once(";base64,").ok_or("a data: URI that is not base64")?;
         return base64::engine::general_purpose::STANDARD
@@ -244,7 +288,7 @@ fn buffer_uri(gltf: &Path, uri: &str) -> Result<Vec<u8>, String> {
     }
     let relative = percent_decode(uri).ok_or_else(|| format!("{uri:?} has a bad percent-escape"))?;
     let file = gltf.parent().unwrap_or(Path::new("")).join(relative);
-    read_bytes(&file, "glTF buffer", crate::limits::max_file_bytes(), |_| Ok(())).map_err(|e| e.to_string())
+    read_bytes(&file, what, crate::limits::max_file_bytes(), |_| Ok(())).map_err(|e| e.to_string())
 }
 
 /// `%XX` escapes of a URI decoded (RFC 3986 §2.1); `None` for a bad escape or bytes that are not
@@ -314,10 +358,19 @@ fn local_transform(transform: &::gltf::scene::Transform) -> Result<DMat4, String
 
 /// The scene as it is flattened.
 struct Flattened {
+    /// The file, as messages name it.
     path: PathBuf,
+    /// The file as given, against which relative image URIs resolve.
+    source: PathBuf,
     buffers: Vec<Vec<u8>>,
     /// What is placed so far; `normals` is `None` from the first primitive without NORMAL.
     geometry: Geometry,
+    /// The base colours placed so far, when they are read ([`read_coloured`]).
+    colours: Option<Vec<[f64; 3]>>,
+    /// The images decoded so far, by image index: each once, however many textures name it.
+    images: HashMap<usize, BaseColourTexture>,
+    /// Bytes the decoded images take together, kept within the memory budget.
+    image_bytes: u128,
 }
 
 /// A problem of one primitive, before the caller says where it is.
@@ -326,11 +379,149 @@ enum Problem {
     Unsupported(String),
 }
 
+impl Problem {
+    fn reason(self) -> String {
+        match self {
+            Problem::Invalid(reason) | Problem::Unsupported(reason) => reason,
+        }
+    }
+}
+
+/// The component-wise product of two colours.
+fn times(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] * b[0], a[1] * b[1], a[2] * b[2]]
+}
+
+/// Bytes of memory a texel of a base-colour image may take while it is decoded: the decoder's
+/// RGBA at 16 bits (8 bytes) and the RGB codes kept (up to 6).
+const IMAGE_TEXEL_BYTES: u64 = 14;
+
+/// A decoded base-colour image (glTF 2.0 §3.9.2): its sRGB-encoded codes, RGB from the top row
+/// down, and the linear value of each code, so that texels are decoded to linear exactly (in f64)
+/// when they are sampled, and the image takes 3 or 6 bytes a texel.
+struct BaseColourTexture {
+    width: usize,
+    height: usize,
+    codes: Codes,
+    /// The linear value of each code: `srgb_decode(code / max)`.
+    linear: Vec<f64>,
+}
+
+/// An image's codes: 8-bit (PNG, JPEG), or 16-bit (PNG).
+enum Codes {
+    Eight(Vec<u8>),
+    Sixteen(Vec<u16>),
+}
+
+/// Why an image cannot be decoded.
+enum ImageProblem {
+    Limit(crate::limits::LimitError),
+    Bad(String),
+}
+
+impl BaseColourTexture {
+    /// Decodes a PNG or JPEG (glTF 2.0 §3.8.3, the two image formats of core glTF). Its size is
+    /// read from the header and checked (`check_size`: the texel ceiling of an image read) before
+    /// any texel is decoded; a grey image is read as RGB, alpha is dropped.
+    fn decode(
+        bytes: &[u8],
+        check_size: impl Fn(u64, u64) -> Result<(), crate::limits::LimitError>,
+    ) -> Result<Self, ImageProblem> {
+        use ::image::{DynamicImage, ImageFormat, ImageReader};
+        let reader = || -> Result<ImageReader<std::io::Cursor<&[u8]>>, ImageProblem> {
+            let reader = ImageReader::new(std::io::Cursor::new(bytes))
+                .with_guessed_format()
+                .map_err(|e| ImageProblem::Bad(e.to_string()))?;
+            match reader.format() {
+                Some(ImageFormat::Png | ImageFormat::Jpeg) => Ok(reader),
+                Some(format) => Err(ImageProblem::Bad(format!("the image is {format:?}, not PNG or JPEG"))),
+                None => Err(ImageProblem::Bad("the image is neither PNG nor JPEG (by its first bytes)".into())),
+            }
+        };
+        let (width, height) = reader()?.into_dimensions().map_err(|e| ImageProblem::Bad(e.to_string()))?;
+        if width == 0 || height == 0 {
+            return Err(ImageProblem::Bad(format!("the image is {width}x{height}")));
+        }
+        check_size(width as u64, height as u64).map_err(ImageProblem::Limit)?;
+        let mut reader = reader()?;
+        // The ceiling above is prtkit's; the decoder's own allocation limit (512 MiB by default)
+        // is raised to the memory budget so that it is not a second, different ceiling.
+        let mut limits = ::image::Limits::default();
+        limits.max_alloc = Some(crate::limits::memory_budget());
+        reader.limits(limits);
+        let image = reader.decode().map_err(|e| ImageProblem::Bad(e.to_string()))?;
+        let sixteen = matches!(
+            image,
+            DynamicImage::ImageLuma16(_)
+                | DynamicImage::ImageLumaA16(_)
+                | DynamicImage::ImageRgb16(_)
+                | DynamicImage::ImageRgba16(_)
+        );
+        let (codes, max) = match sixteen {
+            true => (Codes::Sixteen(image.to_rgb16().into_raw()), u16::MAX as u32),
+            false => (Codes::Eight(image.to_rgb8().into_raw()), u8::MAX as u32),
+        };
+        let linear = (0..=max).map(|c| super::png::srgb_decode(c as f64 / max as f64)).collect();
+        Ok(BaseColourTexture { width: width as usize, height: height as usize, codes, linear })
+    }
+
+    /// The linear RGB of texel (i, j), column i from the left, row j from the top.
+    fn texel(&self, i: usize, j: usize) -> [f64; 3] {
+        let at = 3 * (j * self.width + i);
+        match &self.codes {
+            Codes::Eight(c) => [0, 1, 2].map(|k| self.linear[c[at + k] as usize]),
+            Codes::Sixteen(c) => [0, 1, 2].map(|k| self.linear[c[at + k] as usize]),
+        }
+    }
+
+    /// The linear RGB at `uv`, filtered bilinearly between the four nearest texels *after* each
+    /// is decoded to linear (glTF 2.0 §3.9.2: "the transfer function SHOULD be decoded before
+    /// performing linear interpolation"). UV (0, 0) is the image's top-left corner (§3.8.4) and
+    /// texel (i, j)'s centre is at ((i + ½)/W, (j + ½)/H) (OpenGL 4.6 §8.14.2, which glTF's
+    /// samplers follow), so the texel coordinate of u is uW − ½. The neighbours' indices are
+    /// wrapped by the sampler's modes, s for u and t for v ([`wrap`]). The sampler's filters
+    /// are not used: a vertex reads the full-resolution image, bilinearly, whatever they say.
+    fn sample(&self, [u, v]: [f64; 2], [wrap_s, wrap_t]: [WrappingMode; 2]) -> [f64; 3] {
+        let (x, y) = (u * self.width as f64 - 0.5, v * self.height as f64 - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        // `as` saturates: a UV far outside [0, 1] still lands on a texel.
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let [i0, i1] = [x0, x0.saturating_add(1)].map(|i| wrap(i, self.width, wrap_s));
+        let [j0, j1] = [y0, y0.saturating_add(1)].map(|j| wrap(j, self.height, wrap_t));
+        let (a, b, c, d) = (self.texel(i0, j0), self.texel(i1, j0), self.texel(i0, j1), self.texel(i1, j1));
+        [0, 1, 2].map(|k| (1.0 - fy) * ((1.0 - fx) * a[k] + fx * b[k]) + fy * ((1.0 - fx) * c[k] + fx * d[k]))
+    }
+}
+
+/// A texel index wrapped into 0..size by a sampler's mode (OpenGL 4.6 §8.14.2, Table 8.20, which
+/// glTF 2.0 §3.8.4 names): REPEAT takes it modulo the size; CLAMP_TO_EDGE clamps it to the edge
+/// texels; MIRRORED_REPEAT repeats the image and its mirror image, period 2·size, so index −1 is
+/// texel 0 and index size is texel size − 1.
+fn wrap(i: i64, size: usize, mode: WrappingMode) -> usize {
+    let n = size as i64;
+    (match mode {
+        WrappingMode::Repeat => i.rem_euclid(n),
+        WrappingMode::ClampToEdge => i.clamp(0, n - 1),
+        WrappingMode::MirroredRepeat => {
+            let m = i.rem_euclid(2 * n);
+            if m < n {
+                m
+            } else {
+                2 * n - 1 - m
+            }
+        }
+    }) as usize
+}
+
 /// Bytes of memory a vertex of the scene takes while it is flattened: the decoded primitive's and
 /// the placed copy's position and normal (DVec3 each).
 const VERTEX_BYTES: u128 = 96;
 /// Bytes of a triangle corner: its index as decoded and in the placed triangle (u32 each).
 const CORNER_BYTES: u128 = 8;
+/// Bytes a vertex's base colour takes on top ([`read_coloured`]): the primitive's and the
+/// scene's copy ([f64; 3] each).
+const COLOUR_BYTES: u128 = 48;
 
 impl Flattened {
     fn invalid(&self, at: String, reason: String) -> GltfError {
@@ -338,7 +529,13 @@ impl Flattened {
     }
 
     /// Appends the primitives of `mesh`, placed by `world` (`at`: the node that places it).
-    fn place(&mut self, mesh: &::gltf::Mesh, world: DMat4, at: String) -> Result<(), GltfError> {
+    fn place(
+        &mut self,
+        document: &::gltf::Document,
+        mesh: &::gltf::Mesh,
+        world: DMat4,
+        at: String,
+    ) -> Result<(), GltfError> {
         let linear = DMat3::from_mat4(world);
         let det = linear.determinant();
         if det == 0.0 || !det.is_finite() {
@@ -348,16 +545,19 @@ impl Flattened {
         // surface; a mirroring transform (det < 0) turns the winding, which is turned back (§3.7.4).
         let normal_matrix = linear.inverse().transpose();
         let identity = world == DMat4::IDENTITY;
+        let path = self.path.clone();
         for primitive in mesh.primitives() {
             let at = format!("mesh {}, primitive {}", mesh.index(), primitive.index());
             let wrap = |p: Problem| match p {
-                Problem::Invalid(reason) => GltfError::Invalid { path: self.path.clone(), at: at.clone(), reason },
-                Problem::Unsupported(reason) => {
-                    GltfError::Unsupported { path: self.path.clone(), at: at.clone(), reason }
-                }
+                Problem::Invalid(reason) => GltfError::Invalid { path: path.clone(), at: at.clone(), reason },
+                Problem::Unsupported(reason) => GltfError::Unsupported { path: path.clone(), at: at.clone(), reason },
             };
             let (positions, normals, triangles) = self.primitive(&primitive).map_err(wrap)?;
             let uvs = self.uvs(&primitive, positions.len());
+            let colours = match self.colours {
+                Some(_) => Some(self.base_colours(document, &primitive, positions.len(), &at)?),
+                None => None,
+            };
             let base = u32::try_from(self.geometry.positions.len())
                 .ok()
                 .filter(|b| b.checked_add(positions.len() as u32).is_some() && positions.len() <= u32::MAX as usize)
@@ -383,9 +583,172 @@ impl Flattened {
                 }
                 _ => None,
             };
+            if let (Some(colours), Some(all)) = (colours, self.colours.as_mut()) {
+                all.extend(colours);
+            }
             let turn = |[a, b, c]: [u32; 3]| if det < 0.0 { [a, c, b] } else { [a, b, c] };
             self.geometry.triangles.extend(triangles.into_iter().map(|t| turn(t).map(|i| base + i)));
         }
+        Ok(())
+    }
+
+    /// One primitive's base colours, one per vertex ([`read_coloured`]). `at` names the
+    /// primitive.
+    fn base_colours(
+        &mut self,
+        document: &::gltf::Document,
+        primitive: &::gltf::Primitive,
+        vertices: usize,
+        at: &str,
+    ) -> Result<Vec<[f64; 3]>, GltfError> {
+        let path = self.path.clone();
+        let invalid = |at: String, reason: String| GltfError::Invalid { path: path.clone(), at, reason };
+        let texture_error = |at: &str, reason: String| GltfError::Texture { path: path.clone(), at: at.into(), reason };
+        // §3.9.1: a primitive without material is drawn with the default material, whose
+        // baseColorFactor is (1, 1, 1, 1) and which has no texture; so is `material()`'s.
+        let material = primitive.material();
+        let material_at = match material.index() {
+            Some(m) => format!("{at}, material {m}"),
+            None => at.to_string(),
+        };
+        let pbr = material.pbr_metallic_roughness();
+        let [r, g, b, _] = pbr.base_color_factor();
+        let factor = [r, g, b].map(f64::from);
+        if factor.iter().any(|c| !c.is_finite() || *c < 0.0) {
+            let reason = format!("baseColorFactor {factor:?} is not a colour (a negative or infinite component)");
+            return Err(invalid(material_at, reason));
+        }
+        let mut colours = vec![factor; vertices];
+        if let Some(accessor) = primitive.get(&Semantic::Colors(0)) {
+            let colour_0 = self.colour_0(&accessor, vertices).map_err(|p| invalid(at.into(), p.reason()))?;
+            colours.iter_mut().zip(colour_0).for_each(|(c, k)| *c = times(*c, k));
+        }
+        let Some(info) = pbr.base_color_texture() else {
+            return Ok(colours);
+        };
+        let texture = info.texture();
+        let texture_at = format!("{material_at}, baseColorTexture (texture {})", texture.index());
+        if info.extension_value("KHR_texture_transform").is_some() {
+            // It moves, turns and scales the UVs the texture is read at: ignoring it would read the
+            // wrong texels, silently.
+            let reason = "KHR_texture_transform (an offset, rotation or scale of its UVs)".into();
+            return Err(GltfError::Unsupported { path: path.clone(), at: texture_at, reason });
+        }
+        let set = info.tex_coord();
+        let Some(accessor) = primitive.get(&Semantic::TexCoords(set)) else {
+            return Err(texture_error(&texture_at, format!("it is read at TEXCOORD_{set}, which the primitive lacks")));
+        };
+        let uvs = self
+            .texcoords(&accessor, vertices)
+            .map_err(|p| texture_error(&texture_at, format!("its TEXCOORD_{set}: {}", p.reason())))?;
+        let Some(image) = texture.source() else {
+            let extensions: Vec<&str> =
+                texture.extensions().into_iter().flat_map(|e| e.keys()).map(|k| k.as_str()).collect();
+            let reason = format!("its image is in an extension ({}), not a PNG or JPEG", extensions.join(", "));
+            return Err(GltfError::Unsupported { path: path.clone(), at: texture_at, reason });
+        };
+        let image_at =
+            format!("{material_at}, baseColorTexture (texture {}, image {})", texture.index(), image.index());
+        self.decode_image(document, image.index(), &image_at)?;
+        let texels = &self.images[&image.index()];
+        let sampler = texture.sampler();
+        let wrap = [sampler.wrap_s(), sampler.wrap_t()];
+        colours.iter_mut().zip(uvs).for_each(|(c, uv)| *c = times(*c, texels.sample(uv, wrap)));
+        Ok(colours)
+    }
+
+    /// A primitive's COLOR_0 (§3.7.2.1): float, or normalized unsigned byte or short, VEC3 or VEC4
+    /// (alpha dropped), linear; every colour finite and not negative.
+    fn colour_0(&self, accessor: &::gltf::Accessor, vertices: usize) -> Result<Vec<[f64; 3]>, Problem> {
+        let channels = match accessor.dimensions() {
+            Dimensions::Vec3 => 3,
+            Dimensions::Vec4 => 4,
+            d => return Err(Problem::Invalid(format!("COLOR_0 is {d:?}, not VEC3 or VEC4"))),
+        };
+        if accessor.count() != vertices {
+            return Err(Problem::Invalid(format!(
+                "COLOR_0 has {} elements for {vertices} positions",
+                accessor.count()
+            )));
+        }
+        let (data_type, normalized) = (accessor.data_type(), accessor.normalized());
+        let size = match (data_type, normalized) {
+            (DataType::F32, _) => 4,
+            (DataType::U16, true) => 2,
+            (DataType::U8, true) => 1,
+            _ => {
+                return Err(Problem::Invalid(format!(
+                "COLOR_0 is {data_type:?} (normalized: {normalized}), not float or normalized unsigned byte or short"
+            )))
+            }
+        };
+        // §3.11 (accessor data types): a normalized unsigned integer c stands for c / (2ⁿ − 1).
+        let value = |e: &[u8], k: usize| match data_type {
+            DataType::F32 => f32::from_le_bytes([e[4 * k], e[4 * k + 1], e[4 * k + 2], e[4 * k + 3]]) as f64,
+            DataType::U16 => u16::from_le_bytes([e[2 * k], e[2 * k + 1]]) as f64 / 65535.0,
+            _ => e[k] as f64 / 255.0,
+        };
+        let colours: Vec<[f64; 3]> =
+            self.elements(accessor, channels * size)?.map(|e| [0, 1, 2].map(|k| value(e, k))).collect();
+        if let Some((i, c)) = colours.iter().enumerate().find(|(_, c)| c.iter().any(|x| !x.is_finite() || *x < 0.0)) {
+            return Err(Problem::Invalid(format!(
+                "COLOR_0 of vertex {i} is {c:?}, not a colour (a negative component, or one not finite)"
+            )));
+        }
+        Ok(colours)
+    }
+
+    /// Decodes image `index` into [`Flattened::images`] unless it is there: its bytes from its
+    /// bufferView (§3.6.2, a GLB's images), or from its `uri` by [`buffer_uri`]'s rules (a
+    /// relative path read within the file ceiling, or a `data:` URI of a file read within it);
+    /// its size checked against the image ceiling before it is decoded, and the images'
+    /// decoded bytes together against the memory budget.
+    fn decode_image(&mut self, document: &::gltf::Document, index: usize, at: &str) -> Result<(), GltfError> {
+        if self.images.contains_key(&index) {
+            return Ok(());
+        }
+        let error = |reason: String| GltfError::Texture { path: self.path.clone(), at: at.into(), reason };
+        let limit = |error| GltfError::Limit { path: self.path.clone(), error };
+        let json = &document.as_json().images[index];
+        let from_uri;
+        let bytes: &[u8] = match (&json.buffer_view, &json.uri) {
+            (Some(view), _) => {
+                let view = document
+                    .views()
+                    .nth(view.value())
+                    .ok_or_else(|| error(format!("its bufferView {} does not exist", view.value())))?;
+                let buffer = &self.buffers[view.buffer().index()];
+                view.offset().checked_add(view.length()).and_then(|end| buffer.get(view.offset()..end)).ok_or_else(
+                    || {
+                        error(format!(
+                            "its buffer view {} runs past the end of buffer {} ({} bytes)",
+                            view.index(),
+                            view.buffer().index(),
+                            buffer.len()
+                        ))
+                    },
+                )?
+            }
+            (None, Some(uri)) => {
+                let named = if uri.starts_with("data:") { "its data: URI".to_string() } else { format!("{uri:?}") };
+                from_uri = buffer_uri(&self.source, uri, "glTF image")
+                    .map_err(|e| error(format!("cannot read {named}: {e}")))?;
+                &from_uri
+            }
+            (None, None) => return Err(error("the image has neither a uri nor a bufferView".into())),
+        };
+        let check = |w, h| crate::limits::check_image(at, w, h, IMAGE_TEXEL_BYTES);
+        let texture = BaseColourTexture::decode(bytes, check).map_err(|p| match p {
+            ImageProblem::Limit(e) => limit(e),
+            ImageProblem::Bad(reason) => error(format!("cannot decode the image: {reason}")),
+        })?;
+        let kept = match &texture.codes {
+            Codes::Eight(c) => c.len() as u128,
+            Codes::Sixteen(c) => 2 * c.len() as u128,
+        };
+        self.image_bytes += kept;
+        crate::limits::check_memory("the glTF's base-colour images together", self.image_bytes).map_err(limit)?;
+        self.images.insert(index, texture);
         Ok(())
     }
 
@@ -405,7 +768,8 @@ impl Flattened {
         let vertices = self.geometry.positions.len() as u128 + position.count() as u128;
         let corners = 3 * self.geometry.triangles.len() as u128
             + primitive.indices().map_or(position.count(), |i| i.count()) as u128;
-        crate::limits::check_memory("the flattened glTF scene", vertices * VERTEX_BYTES + corners * CORNER_BYTES)
+        let vertex_bytes = VERTEX_BYTES + if self.colours.is_some() { COLOUR_BYTES } else { 0 };
+        crate::limits::check_memory("the flattened glTF scene", vertices * vertex_bytes + corners * CORNER_BYTES)
             .map_err(|e| Problem::Invalid(e.to_string()))?;
         let positions = self.vec3(&position, "POSITION")?;
         if positions.iter().any(|p| !p.is_finite()) {
@@ -503,17 +867,32 @@ impl Flattened {
     /// The primitive's lightmap UVs ([`Geometry::uvs`]), one per vertex, or `None`.
     fn uvs(&self, primitive: &::gltf::Primitive, vertices: usize) -> Option<Vec<[f64; 2]>> {
         let accessor = primitive.get(&Semantic::TexCoords(1)).or_else(|| primitive.get(&Semantic::TexCoords(0)))?;
-        if accessor.dimensions() != Dimensions::Vec2 || accessor.count() != vertices {
-            return None;
+        self.texcoords(&accessor, vertices).ok()
+    }
+
+    /// A TEXCOORD_n accessor, one (u, v) per vertex: float, or normalized unsigned byte or
+    /// short, VEC2 (§3.7.2.1), every coordinate finite.
+    fn texcoords(&self, accessor: &::gltf::Accessor, vertices: usize) -> Result<Vec<[f64; 2]>, Problem> {
+        let index = accessor.index();
+        if accessor.dimensions() != Dimensions::Vec2 {
+            return Err(Problem::Invalid(format!("accessor {index} is {:?}, not VEC2", accessor.dimensions())));
+        }
+        if accessor.count() != vertices {
+            let count = accessor.count();
+            return Err(Problem::Invalid(format!("accessor {index} has {count} elements for {vertices} positions")));
         }
         let (size, normalized) = (accessor.data_type(), accessor.normalized());
         let element = match (size, normalized) {
             (DataType::F32, _) => 8,
             (DataType::U16, true) => 4,
             (DataType::U8, true) => 2,
-            _ => return None,
+            _ => {
+                return Err(Problem::Invalid(format!(
+                    "accessor {index} is {size:?} (normalized: {normalized}), not float or normalized unsigned byte or short"
+                )))
+            }
         };
-        let elements = self.elements(&accessor, element).ok()?;
+        let elements = self.elements(accessor, element)?;
         let uvs: Vec<[f64; 2]> = elements
             .map(|e| match size {
                 DataType::F32 => [0, 4].map(|k| f32::from_le_bytes([e[k], e[k + 1], e[k + 2], e[k + 3]]) as f64),
@@ -521,7 +900,10 @@ impl Flattened {
                 _ => [0, 1].map(|k| e[k] as f64 / 255.0),
             })
             .collect();
-        uvs.iter().flatten().all(|c| c.is_finite()).then_some(uvs)
+        match uvs.iter().flatten().all(|c| c.is_finite()) {
+            true => Ok(uvs),
+            false => Err(Problem::Invalid(format!("accessor {index} has a coordinate that is not finite"))),
+        }
     }
 
     /// Vertex indices (§3.7.2.1: unsigned byte, short or int SCALAR).
@@ -586,14 +968,60 @@ mod tests {
         assert_eq!(percent_decode("a%2"), None);
         assert_eq!(percent_decode("a%zz"), None);
         let here = Path::new("dir/scene.gltf");
-        assert_eq!(buffer_uri(here, "data:application/octet-stream;base64,AAEC").unwrap(), vec![0, 1, 2]);
-        assert!(buffer_uri(here, "data:application/octet-stream,abc").unwrap_err().contains("not base64"));
-        assert!(buffer_uri(here, "data:;base64,!!").unwrap_err().contains("base64"));
+        assert_eq!(
+            buffer_uri(here, "data:application/octet-stream;base64,AAEC", "glTF buffer").unwrap(),
+            vec![0, 1, 2]
+        );
+        assert!(buffer_uri(here, "data:application/octet-stream,abc", "glTF buffer")
+            .unwrap_err()
+            .contains("not base64"));
+        assert!(buffer_uri(here, "data:;base64,!!", "glTF buffer").unwrap_err().contains("base64"));
         for uri in ["/etc/passwd", "file:///etc/passwd", "https://example.com/a.bin", "C:x.bin"] {
-            assert!(buffer_uri(here, uri).unwrap_err().contains("not a relative path"), "{uri}");
+            assert!(buffer_uri(here, uri, "glTF buffer").unwrap_err().contains("not a relative path"), "{uri}");
         }
-        let e = buffer_uri(here, "missing%20file.bin").unwrap_err();
+        let e = buffer_uri(here, "missing%20file.bin", "glTF buffer").unwrap_err();
         assert!(e.contains("dir/missing file.bin"), "{e}");
+    }
+
+    #[test]
+    fn wrap_modes_follow_the_opengl_table() {
+        // OpenGL 4.6 Table 8.20 with size 3, indices −7..=7, written out (mirrored: period 6,
+        // 0 1 2 2 1 0 from index 0, and index −1 is 0).
+        let repeat = [2, 0, 1, 2, 0, 1, 2, 0, 1, 2, 0, 1, 2, 0, 1];
+        let clamp = [0, 0, 0, 0, 0, 0, 0, 0, 1, 2, 2, 2, 2, 2, 2];
+        let mirror = [0, 0, 1, 2, 2, 1, 0, 0, 1, 2, 2, 1, 0, 0, 1];
+        for (k, i) in (-7i64..=7).enumerate() {
+            assert_eq!(wrap(i, 3, WrappingMode::Repeat), repeat[k], "repeat {i}");
+            assert_eq!(wrap(i, 3, WrappingMode::ClampToEdge), clamp[k], "clamp {i}");
+            assert_eq!(wrap(i, 3, WrappingMode::MirroredRepeat), mirror[k], "mirror {i}");
+        }
+        // The far ends of i64 (a UV of ±1e300 saturates there) stay in range.
+        for mode in [WrappingMode::Repeat, WrappingMode::ClampToEdge, WrappingMode::MirroredRepeat] {
+            assert!(wrap(i64::MAX, 3, mode) < 3 && wrap(i64::MIN, 3, mode) < 3);
+        }
+    }
+
+    #[test]
+    fn a_texture_is_sampled_anywhere_without_panicking() {
+        let mut png = std::io::Cursor::new(Vec::new());
+        ::image::RgbImage::from_fn(3, 2, |x, y| ::image::Rgb([(x * 100) as u8, (y * 200) as u8, 7]))
+            .write_to(&mut png, ::image::ImageFormat::Png)
+            .unwrap();
+        let texture = BaseColourTexture::decode(png.get_ref(), |_, _| Ok(())).ok().unwrap();
+        assert_eq!((texture.width, texture.height), (3, 2));
+        let modes = [WrappingMode::Repeat, WrappingMode::ClampToEdge, WrappingMode::MirroredRepeat];
+        for u in [-1e300, -1e19, -2.5, 0.0, 0.5, 1.0, 7.25, 1e19, 1e300] {
+            for mode in modes {
+                let c = texture.sample([u, -u], [mode, mode]);
+                assert!(c.iter().all(|x| x.is_finite() && (0.0..=1.0).contains(x)), "{u}: {c:?}");
+            }
+        }
+        // Texel (2, 1) at its centre: codes 200, 200, 7.
+        let c = texture.sample([2.5 / 3.0, 0.75], [WrappingMode::Repeat; 2]);
+        let want = [200.0, 200.0, 7.0].map(|x: f64| super::super::png::srgb_decode(x / 255.0));
+        assert!((0..3).all(|k| (c[k] - want[k]).abs() < 1e-12), "{c:?}");
+        let refuse = |_, _| Err(crate::limits::check_image("x", u64::MAX, 1, 1).unwrap_err());
+        assert!(matches!(BaseColourTexture::decode(png.get_ref(), refuse), Err(ImageProblem::Limit(_))));
     }
 
     #[test]

@@ -37,6 +37,14 @@ pub fn read(path: &Path) -> Result<String, super::IoError> {
     super::read_text(path, "OBJ", crate::limits::max_file_bytes(), |_| Ok(()))
 }
 
+/// Why `Mesh::load_coloured` refuses an OBJ (the caller names the file): the OBJ specification
+/// gives a vertex no colour (some writers append `r g b` to a `v` line, an extension prtkit does
+/// not read), and a material's `Kd` and `map_Kd` are in the `.mtl` file, which prtkit does not
+/// read either.
+pub const NO_BASE_COLOURS: &str = "OBJ vertex colours are not read: the OBJ format has no vertex colours, and the \
+                                   .mtl file with its Kd and map_Kd is not read; give the mesh as glTF (baseColorFactor, \
+                                   baseColorTexture, COLOR_0) or PLY (red green blue per vertex), or use a constant albedo";
+
 /// One line of an OBJ text.
 pub struct Line<'a> {
     /// Line number, from 1.

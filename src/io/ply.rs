@@ -4,9 +4,9 @@
 //! knows where each value sits ([`walk`]). Two views are taken of a file through it:
 //!
 //! - [`parse`], the geometry of a mesh: the `vertex` element's `x`, `y`, `z` (and `nx`, `ny`, `nz`
-//!   when all three are there, and a texture coordinate pair, [`UV_NAMES`]) and the `face`
-//!   element's index list (`vertex_indices` or `vertex_index`), polygons split into fans; every
-//!   other element and property is skipped.
+//!   when all three are there, a texture coordinate pair, [`UV_NAMES`], and `red`, `green`,
+//!   `blue`, [`PlyColours`]) and the `face` element's index list (`vertex_indices` or
+//!   `vertex_index`), polygons split into fans; every other element and property is skipped.
 //! - [`vertex_normals`], the `vertex` element's `nx ny nz` alone with where each sits, so that
 //!   decoded normals can be written back with only their bytes changed ([`PlyNormals`]).
 //!
@@ -44,6 +44,61 @@ pub struct PlyMesh {
     pub uvs: Option<Vec<[f64; 2]>>,
     /// The faces, polygons split into fans about their first vertex.
     pub triangles: Vec<[u32; 3]>,
+    /// One colour per vertex when the vertex element has `red green blue` scalars.
+    pub colours: Option<PlyColours>,
+}
+
+/// A PLY's vertex colours, `red green blue` as stored, and how they are stored. PLY itself says
+/// nothing of colour (Turk 1994 names the properties only); the writers that store them agree on
+/// two conventions, which [`PlyColours::linear`] follows:
+///
+/// - `uchar` (MeshLab, Blender, Open3D, the Stanford scans' scanners): 8-bit codes 0..255 of
+///   sRGB-encoded colour, as a picture stores them: decoded to linear by the sRGB transfer
+///   function (IEC 61966-2-1) of code / 255.
+/// - `float` or `double` (Open3D's float colours, most point-cloud tools): values in [0, 1], taken
+///   as linear, as stored.
+///
+/// Any other type (`ushort`, a signed integer, a mix of types) has no agreed meaning and is an
+/// error, as is a negative or non-finite value. `alpha` is not read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlyColours {
+    /// Each vertex's `red green blue`, as stored (0..255 for `uchar`).
+    pub stored: Vec<[f64; 3]>,
+    /// The three properties' types as declared, e.g. `["uchar", "uchar", "uchar"]`.
+    pub types: [&'static str; 3],
+}
+
+impl PlyColours {
+    /// The linear colours, by the rule of the properties' type (see [`PlyColours`]). The error
+    /// says what is wrong (the caller names the file).
+    pub fn linear(&self) -> Result<Vec<[f64; 3]>, String> {
+        let srgb8 = match self.types {
+            ["uchar", "uchar", "uchar"] => true,
+            [a, b, c] if [a, b, c].iter().all(|t| matches!(*t, "float" | "double")) => false,
+            types => {
+                return Err(format!(
+                    "the vertex colours (red, green, blue) are {types:?}; prtkit reads uchar (sRGB-encoded 0..255) \
+                     or float/double (linear) colours"
+                ))
+            }
+        };
+        if let Some((i, c)) = self.stored.iter().enumerate().find(|(_, c)| c.iter().any(|x| !x.is_finite() || *x < 0.0))
+        {
+            return Err(format!("vertex {i}'s colour (red, green, blue) {c:?} is negative or not finite"));
+        }
+        if !srgb8 {
+            return Ok(self.stored.clone());
+        }
+        // A binary uchar is 0..=255 by its type; an ASCII token is read as a number, so it is
+        // checked to be one of the 256 codes.
+        if let Some((i, c)) =
+            self.stored.iter().enumerate().find(|(_, c)| c.iter().any(|x| *x > 255.0 || x.fract() != 0.0))
+        {
+            return Err(format!("vertex {i}'s colour (red, green, blue) {c:?} is not three uchar codes 0..255"));
+        }
+        let table: Vec<f64> = (0..=255).map(|c| super::png::srgb_decode(c as f64 / 255.0)).collect();
+        Ok(self.stored.iter().map(|c| c.map(|x| table[x as usize])).collect())
+    }
 }
 
 /// The names PLY writers give a vertex's texture coordinates, in the order they are looked for:
@@ -64,6 +119,20 @@ struct Scalar {
     size: usize,
     float: bool,
     signed: bool,
+}
+
+/// The canonical name of a scalar type (`uint8` is `uchar`…), for messages and [`PlyColours`].
+fn type_name(t: Scalar) -> &'static str {
+    match (t.size, t.float, t.signed) {
+        (4, true, _) => "float",
+        (8, true, _) => "double",
+        (1, false, true) => "char",
+        (1, false, false) => "uchar",
+        (2, false, true) => "short",
+        (2, false, false) => "ushort",
+        (4, false, true) => "int",
+        _ => "uint",
+    }
 }
 
 fn scalar(name: &str) -> Option<Scalar> {
@@ -312,12 +381,22 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, String> {
         [Some(u), Some(v)] => Some([u, v]),
         _ => None,
     });
+    // Scalars only: a list named `red` is no colour.
+    let scalar_type = |k: usize| match header.elements[vertex].properties[k] {
+        Property::Scalar(_, t) => Some(t),
+        Property::List(..) => None,
+    };
+    let colour = match ["red", "green", "blue"].map(|n| property(vertex, n).and_then(|k| Some((k, scalar_type(k)?)))) {
+        [Some(r), Some(g), Some(b)] => Some(([r.0, g.0, b.0], [r.1, g.1, b.1].map(type_name))),
+        _ => None,
+    };
     let list = property(face, "vertex_indices")
         .or_else(|| property(face, "vertex_index"))
         .filter(|&k| matches!(header.elements[face].properties[k], Property::List(..)))
         .ok_or("the face element has no vertex_indices list")?;
 
     let (mut positions, mut normals, mut uvs, mut triangles) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut colours = Vec::new();
     let last = header.elements.len() - 1;
     walk(bytes, &header, last, |e, number, item| {
         let at = |k: usize| item.scalars[k].0;
@@ -328,6 +407,9 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, String> {
             }
             if let Some([u, v]) = uv {
                 uvs.push([at(u), at(v)]);
+            }
+            if let Some(([r, g, b], _)) = colour {
+                colours.push([at(r), at(g), at(b)]);
             }
         } else if e == face {
             let indices = &item.lists[list];
@@ -344,7 +426,8 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, String> {
         }
         Ok(())
     })?;
-    Ok(PlyMesh { positions, normals: normal.map(|_| normals), uvs: uv.map(|_| uvs), triangles })
+    let colours = colour.map(|(_, types)| PlyColours { stored: colours, types });
+    Ok(PlyMesh { positions, normals: normal.map(|_| normals), uvs: uv.map(|_| uvs), triangles, colours })
 }
 
 /// The `vertex` element's `nx ny nz` of a PLY file, with where each sits.
@@ -480,6 +563,7 @@ mod tests {
             normals: None,
             uvs: None,
             triangles: vec![[0, 1, 2], [0, 2, 3]],
+            colours: None,
         };
         assert_eq!(parse(ascii.as_bytes()).unwrap(), expected);
         assert_eq!(parse(&binary(false)).unwrap(), expected);
@@ -519,6 +603,29 @@ mod tests {
         }
         // One coordinate of a pair is not a pair.
         assert_eq!(parse(file("s", "w").as_bytes()).unwrap().uvs, None);
+    }
+
+    #[test]
+    fn colours_are_read_by_their_type() {
+        let file = |ty: &str, row: &str| {
+            format!(
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                 property {ty} red\nproperty {ty} green\nproperty {ty} blue\nelement face 1\n\
+                 property list uchar int vertex_indices\nend_header\n0 0 0 {row}\n1 0 0 {row}\n0 1 0 {row}\n3 0 1 2\n"
+            )
+        };
+        let colours = |ty: &str, row: &str| parse(file(ty, row).as_bytes()).unwrap().colours.unwrap();
+        let uchar = colours("uint8", "0 255 51");
+        assert_eq!(uchar.types, ["uchar"; 3]);
+        let c = uchar.linear().unwrap()[0];
+        // 51/255 = 0.2 encoded: ((0.2 + 0.055) / 1.055)^2.4.
+        assert_eq!(c[..2], [0.0, 1.0]);
+        assert!((c[2] - ((0.2f64 + 0.055) / 1.055).powf(2.4)).abs() < 1e-15);
+        assert_eq!(colours("float32", "0.25 0.5 1").linear().unwrap()[2], [0.25, 0.5, 1.0]);
+        assert!(colours("int", "1 2 3").linear().unwrap_err().contains("[\"int\", \"int\", \"int\"]"));
+        // Two of three, or a list named red, are no colours.
+        let two = file("uchar", "1 2 3").replace("property uchar blue\n", "").replace(" 1 2 3", " 1 2");
+        assert_eq!(parse(two.as_bytes()).unwrap().colours, None);
     }
 
     #[test]

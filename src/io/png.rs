@@ -12,6 +12,17 @@ pub fn srgb_encode(linear: f32) -> f32 {
     }
 }
 
+/// The inverse of [`srgb_encode`] (IEC 61966-2-1): the linear value of an sRGB-encoded value in
+/// [0, 1] (an 8-bit code over 255). Base colours read from meshes (`Mesh::load_coloured`) go
+/// through it: glTF's base-colour textures (glTF 2.0 §3.9.2) and a PLY's 8-bit vertex colours.
+pub fn srgb_decode(encoded: f64) -> f64 {
+    if encoded <= 0.04045 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 /// Converts a linear HDR image to 8-bit sRGB bytes (RGB, row-major).
 pub fn tonemap_to_srgb8(image: &RgbImage, exposure: f32) -> Vec<u8> {
     let gain = exposure.exp2();
@@ -57,5 +68,19 @@ mod tests {
         assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
         // 18 % grey encodes to about 46 % (118/255).
         assert!((srgb_encode(0.18) * 255.0 - 118.0).abs() < 1.0);
+    }
+
+    #[test]
+    fn srgb_decode_inverts_the_encoding() {
+        assert_eq!(srgb_decode(0.0), 0.0);
+        assert!((srgb_decode(1.0) - 1.0).abs() < 1e-15);
+        // The two pieces meet at the breakpoint: 0.04045 / 12.92 = ((0.04045 + 0.055) / 1.055)^2.4
+        // to 1e-7 (IEC 61966-2-1's constants are rounded).
+        assert!((0.04045 / 12.92 - ((0.04045f64 + 0.055) / 1.055).powf(2.4)).abs() < 1e-7);
+        for k in 0..=255 {
+            let c = k as f64 / 255.0;
+            let back = srgb_encode(srgb_decode(c) as f32) as f64;
+            assert!((back - c).abs() < 1e-5, "{k}: {back}");
+        }
     }
 }

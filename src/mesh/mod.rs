@@ -34,6 +34,16 @@ pub enum MeshError {
     /// A glTF asset cannot be read, or is wrong (the error names the file and the object).
     #[error(transparent)]
     Gltf(#[from] crate::io::gltf::GltfError),
+    /// [`Mesh::load_coloured`]: the file holds no base colours prtkit reads (an OBJ, a PLY
+    /// without `red green blue`), or they are wrong (negative, not finite, of a type without an
+    /// agreed meaning).
+    #[error("{path}: {reason}")]
+    Colours {
+        /// The file.
+        path: String,
+        /// What is missing or wrong.
+        reason: String,
+    },
     /// A line of the file is wrong.
     #[error("{path}:{line}:{column}: {reason}")]
     At {
@@ -64,6 +74,9 @@ pub struct Mesh {
     /// `s t`, `u v`, `texture_u texture_v` or `texture_s texture_t`): `transfer --lightmap` bakes
     /// per texel of it.
     pub uvs: Option<Vec<[f64; 2]>>,
+    /// Linear RGB base colour per vertex (same length as `positions`) when loaded with
+    /// [`Mesh::load_coloured`]; `None` otherwise.
+    pub base_colors: Option<Vec<[f64; 3]>>,
     /// Length of the bounding box diagonal, computed once: shadow rays offset by a fraction of it.
     extent: f64,
     bvh: Bvh,
@@ -117,14 +130,63 @@ impl Mesh {
         Ok(mesh)
     }
 
+    /// As [`Mesh::load`], and reads each vertex's linear RGB base colour (albedo) into
+    /// [`Mesh::base_colors`], the vertices in the order [`Mesh::load`] gives them
+    /// (`docs/formats/mesh-colours.md`):
+    ///
+    /// - glTF: per primitive, `baseColorFactor.rgb × baseColorTexture.rgb × COLOR_0.rgb` (glTF 2.0
+    ///   §3.9.2), the texture sampled bilinearly in linear values ([`crate::io::gltf::read_coloured`]);
+    /// - PLY: the vertex element's `red green blue`, `uchar` sRGB-decoded, `float`/`double` linear
+    ///   ([`crate::io::ply::PlyColours`]); a PLY without them is an error;
+    /// - OBJ: an error ([`crate::io::obj::NO_BASE_COLOURS`]).
+    ///
+    /// A colour that is negative or not finite, or a texture that cannot be read, is an error
+    /// naming the file.
+    ///
+    /// ```
+    /// use prtkit::mesh::Mesh;
+    /// let dir = tempfile::tempdir()?;
+    /// let ply = dir.path().join("triangle.ply");
+    /// let header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+    ///               property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+    ///               element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    /// std::fs::write(&ply, format!("{header}0 0 0 255 128 0\n1 0 0 255 128 0\n0 1 0 255 128 0\n3 0 1 2\n"))?;
+    /// let mesh = Mesh::load_coloured(&ply)?;
+    /// // 8-bit PLY colours are sRGB-encoded: code 128 is 0.2159 linear.
+    /// let [r, g, b] = mesh.base_colors.as_ref().unwrap()[0];
+    /// assert!(r == 1.0 && (g - 0.2159).abs() < 1e-4 && b == 0.0);
+    /// // `load` reads no colour; an OBJ has none to read.
+    /// assert!(Mesh::load(&ply)?.base_colors.is_none());
+    /// let obj = dir.path().join("triangle.obj");
+    /// std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")?;
+    /// assert!(Mesh::load_coloured(&obj).unwrap_err().to_string().contains("OBJ vertex colours are not read"));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn load_coloured(path: &Path) -> Result<Mesh, MeshError> {
+        let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match extension.as_deref() {
+            Some("ply") => Self::ply(path, true),
+            Some("gltf" | "glb") => Self::gltf(path, true),
+            _ => Err(MeshError::Colours {
+                path: path.display().to_string(),
+                reason: crate::io::obj::NO_BASE_COLOURS.into(),
+            }),
+        }
+    }
+
     /// Reads a PLY file (ASCII or binary; [`crate::io::ply`]): its vertices, their normals when
     /// every vertex has `nx ny nz` (else computed), their texture coordinates when the vertex
     /// element has a pair ([`crate::io::ply::UV_NAMES`]), its faces split into triangles.
     pub fn load_ply(path: &Path) -> Result<Mesh, MeshError> {
+        Self::ply(path, false)
+    }
+
+    /// [`Mesh::load_ply`], and with `colours` the vertex colours.
+    fn ply(path: &Path, colours: bool) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
         let invalid = |reason: String| MeshError::Invalid { path: name.clone(), reason };
         let bytes = crate::io::ply::read(path)?;
-        let crate::io::ply::PlyMesh { positions, normals, uvs, triangles } =
+        let crate::io::ply::PlyMesh { positions, normals, uvs, triangles, colours: stored } =
             crate::io::ply::parse(&bytes).map_err(|reason| invalid(format!("cannot read PLY: {reason}")))?;
         if triangles.is_empty() {
             return Err(invalid("the PLY holds no triangles".into()));
@@ -135,8 +197,19 @@ impl Mesh {
         if uvs.as_ref().is_some_and(|uvs| uvs.iter().flatten().any(|c| !c.is_finite())) {
             return Err(invalid("a texture coordinate is not finite".into()));
         }
+        let base_colors = match (colours, stored) {
+            (false, _) => None,
+            (true, None) => {
+                let reason = "the PLY has no vertex colours (red, green, blue)".into();
+                return Err(MeshError::Colours { path: name, reason });
+            }
+            (true, Some(stored)) => {
+                Some(stored.linear().map_err(|reason| MeshError::Colours { path: name.clone(), reason })?)
+            }
+        };
         let mut mesh = Mesh::new(positions, normals, triangles).map_err(invalid)?;
         mesh.uvs = uvs;
+        mesh.base_colors = base_colors;
         Ok(mesh)
     }
 
@@ -144,14 +217,24 @@ impl Mesh {
     /// triangles of every mesh of its scene placed by their nodes, in the file's axes; normals
     /// from the file when every primitive has NORMAL, else computed.
     pub fn load_gltf(path: &Path) -> Result<Mesh, MeshError> {
+        Self::gltf(path, false)
+    }
+
+    /// [`Mesh::load_gltf`], and with `colours` the base colours.
+    fn gltf(path: &Path, colours: bool) -> Result<Mesh, MeshError> {
         let name = path.display().to_string();
-        let crate::io::gltf::Geometry { positions, normals, triangles, uvs } = crate::io::gltf::read(path)?;
+        let (geometry, base_colors) = match colours {
+            true => crate::io::gltf::read_coloured(path).map(|(g, c)| (g, Some(c)))?,
+            false => (crate::io::gltf::read(path)?, None),
+        };
+        let crate::io::gltf::Geometry { positions, normals, triangles, uvs } = geometry;
         if triangles.is_empty() {
             return Err(MeshError::Invalid { path: name, reason: "the glTF scene holds no triangles".into() });
         }
         let mut mesh =
             Mesh::new(positions, normals, triangles).map_err(|reason| MeshError::Invalid { path: name, reason })?;
         mesh.uvs = uvs.filter(|uvs| !uvs.is_empty());
+        mesh.base_colors = base_colors;
         Ok(mesh)
     }
 
@@ -172,7 +255,7 @@ impl Mesh {
         let (lo, hi) =
             positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
         let extent = if positions.is_empty() { 0.0 } else { (hi - lo).length() };
-        Ok(Mesh { positions, normals, triangles, normals_computed, uvs: None, extent, bvh })
+        Ok(Mesh { positions, normals, triangles, normals_computed, uvs: None, base_colors: None, extent, bvh })
     }
 
     /// The closest hit of the ray o + t d with t in (t_min, t_max).
