@@ -13,7 +13,7 @@
 //!   external .png; a missing image, a missing texCoord set, KHR_texture_transform and a huge
 //!   image are errors naming the file and the texture, while `Mesh::load` reads the mesh;
 //! - PLY `uchar` colours (sRGB-decoded) and `float` colours (linear), a PLY without colours and an
-//!   OBJ are errors; vertex order is `Mesh::load`'s.
+//!   OBJ are errors; vertex order is `Mesh::load`'s; garbled files are errors, never panics.
 
 use base64::Engine as _;
 use prtkit::mesh::Mesh;
@@ -703,4 +703,64 @@ fn plys_without_usable_colours_and_objs_are_errors_naming_the_file() {
     );
     assert!(!message.contains("  "), "{message}");
     assert!(Mesh::load(&obj).is_ok());
+}
+
+#[test]
+fn garbled_coloured_assets_are_errors_never_panics() {
+    // A .glb with COLOR_0, a texture in a bufferView and a sampler, and a binary PLY with
+    // colours, each with bytes overwritten at pseudo-random places (a fixed LCG): whatever
+    // `load_coloured` makes of them, it returns.
+    let dir = tempfile::tempdir().unwrap();
+    let uvs = pad(vec![at(0.0, 0.0), at(5.0, -2.0), at(1.5, 2.25)]);
+    let mut a =
+        textured(&uvs, r#"{"wrapS": 33648, "wrapT": 33071}"#, r#"{"bufferView": 0, "mimeType": "image/png"}"#, "");
+    let colour = a.accessor(&[200u8, 100, 50, 255].repeat(3), UBYTE, 3, "VEC4", true);
+    a.primitives[0] = a.primitives[0].replace("\"TEXCOORD_0\"", &format!("\"COLOR_0\": {colour}, \"TEXCOORD_0\""));
+    let view = a.view(&png(W, W, code));
+    a.top = a.top.replace(r#""bufferView": 0, "mimeType""#, &format!(r#""bufferView": {view}, "mimeType""#));
+    let glb = std::fs::read(a.write_glb(&dir.path().join("good.glb"))).unwrap();
+    assert!(Mesh::load_coloured(&dir.path().join("good.glb")).is_ok());
+    let mut ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                    property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n\
+                    property list uchar int vertex_indices\nend_header\n"
+        .to_vec();
+    for p in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        ply.extend(f32_bytes(&p));
+        ply.extend([10, 20, 30]);
+    }
+    ply.push(3);
+    ply.extend([0i32, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+    std::fs::write(dir.path().join("good.ply"), &ply).unwrap();
+    assert!(Mesh::load_coloured(&dir.path().join("good.ply")).is_ok());
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = move || {
+        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        (state >> 33) as usize
+    };
+    let (mut ok, mut failed) = (0, 0);
+    for (name, bytes) in [("m.glb", &glb), ("m.ply", &ply)] {
+        for _ in 0..1500 {
+            let mut garbled = bytes.clone();
+            for _ in 0..1 + next() % 4 {
+                let at = next() % garbled.len();
+                garbled[at] = next() as u8;
+            }
+            let path = dir.path().join(name);
+            std::fs::write(&path, &garbled).unwrap();
+            match Mesh::load_coloured(&path) {
+                Ok(mesh) => {
+                    let colours = mesh.base_colors.unwrap();
+                    assert_eq!(colours.len(), mesh.positions.len());
+                    assert!(colours.iter().flatten().all(|c| c.is_finite() && *c >= 0.0));
+                    ok += 1;
+                }
+                Err(e) => {
+                    assert!(e.to_string().starts_with(&path.display().to_string()), "{e}");
+                    failed += 1;
+                }
+            }
+        }
+    }
+    // Both outcomes happen: the garbling reaches the parts that matter and the parts that do not.
+    assert!(ok > 100 && failed > 100, "{ok} read, {failed} refused");
 }
