@@ -1039,20 +1039,27 @@ async function dropTests() {
 // The reference is render's picture for a camera in the glTF frame: three.js's equirectangular view
 // of the source map from the x-mirrored camera, mirrored back (the skybox tests above check that
 // this view is the one prtkit's cube gives).
+const ENGINE_VIEWS = [
+  { name: 'front', eye: [0, -4, 0.3], fov: 60 },
+  { name: 'side', eye: [4, 1.5, -0.5], fov: 60 },
+];
+// DIR/sky-NAME-reference(-TAG).png: render's picture of the source map for camera v (see above),
+// 192² at v.fov unless fov and res say otherwise.
+async function engineReference(dir, v, { fov = v.fov, res = '192x192', tag = '' } = {}) {
+  const ref = mirrorX((await view({ mode: 'equirect', src: url(map), eye: toPage(v.eye, 'three'), target: '0,0,0', fov: String(fov), res, exposure: '0' })).image);
+  writePng(join(dir, `sky-${v.name}-reference${tag}.png`), ref);
+  return ref;
+}
 async function engineTests() {
   const dir = join(out, 'engines');
   rmSync(dir, { recursive: true, force: true });
   mkdirSync(dir, { recursive: true });
   const dds = join(dir, 'bake-dds');
   run('ibl', [map, '-o', dds, '--size', '128', '--samples', '0', '--container', 'dds', '-q']);
-  const views = [
-    { name: 'front', eye: [0, -4, 0.3], fov: 60 },
-    { name: 'side', eye: [4, 1.5, -0.5], fov: 60 },
-  ];
+  const views = ENGINE_VIEWS;
   for (const v of views) {
     const res = '192x192', fov = String(v.fov);
-    const ref = mirrorX((await view({ mode: 'equirect', src: url(map), eye: toPage(v.eye, 'three'), target: '0,0,0', fov, res, exposure: '0' })).image);
-    writePng(join(dir, `sky-${v.name}-reference.png`), ref);
+    const ref = await engineReference(dir, v);
     const g = mul(M, v.eye);
     // Babylon's left-handed world (its default) holds a glTF point (x, y, z) at (−x, y, z) (what
     // its glTF loader's root does: 180° about +Y, then z mirrored); the right-handed one
@@ -1099,6 +1106,7 @@ async function engineTests() {
     check(`Filament skybox ${v.name} turned 90° about +Y differs from render's view`, c.mean > 4 * Math.max(a.mean, 0.5),
       `mean |Δ| = ${c.mean.toFixed(3)} sRGB codes (must be far above ${a.mean.toFixed(3)})`);
   }
+  await sampleViewerTests(dir, views);
   // A metallic PBR sphere lit by the same cube, left-handed scene, x flipped, beside
   // `render --shading ibl` of the same sphere and camera: a figure, not a check (Babylon picks
   // its mip per roughness by its own rule and adds its own BRDF terms; see docs/results/viewer.md).
@@ -1119,7 +1127,98 @@ async function engineTests() {
   }
 }
 
-// PRTKIT_VIEWER_TESTS=ibl|engines|formats|model|drop|sh|prt|glossy|lookup|cpca|quantized|n8 runs one group (development; prt
+// ---- the Khronos glTF Sample Viewer (viewer/engines/gltf-sample-viewer.*) ----------------------
+// Its renderer (npm @khronosgroup/gltf-viewer) draws the skybox from prtkit's specular.ktx2 (read by
+// its own libktx reader) looked up at u_EnvRotation · d, u_EnvRotation = R_y(environmentRotation)
+// (its default 90°). It encodes pow(c, 1/2.2) (tonemapping.glsl linearTosRGB) where the reference
+// is sRGB-encoded: its codes are re-encoded with the sRGB curve (kept fractional) before comparing.
+function gamma22ToSrgb(img) {
+  const lut = new Float64Array(256);
+  for (let c = 0; c < 256; c++) {
+    const x = (c / 255) ** 2.2;
+    lut[c] = 255 * (x <= 0.0031308 ? 12.92 * x : 1.055 * x ** (1 / 2.4) - 0.055);
+  }
+  const rgba = new Float64Array(img.rgba.length);
+  for (let i = 0; i < rgba.length; i++) rgba[i] = i % 4 === 3 ? img.rgba[i] : lut[img.rgba[i]];
+  return { ...img, rgba, png: { ...img, rgba: Buffer.from(rgba.map(Math.round)) } };
+}
+// Its skybox is not a pinhole view: cubemap.vert replaces the view-projection's translation column
+// by (0, 0, 0, 0.1), so a vertex p of the unit cube lands where it would seen from 0.1 behind the
+// cube's centre (clip w = −z_view + 0.1). The pixel whose camera ray is u shows the direction p
+// where the ray from c = −0.1 f (f: the unit view direction) along u leaves the cube |p|∞ = 1.
+// The reference for that pixel is render's view in direction p: read bilinearly from `wide`, a
+// reference of the same camera at fov wideFov (one more pinhole: glTF frame, up +Y).
+function sampleViewerReference(wide, wideFov, g, fov, w, h) {
+  const f = norm(sub([0, 0, 0], g)), right = norm(cross(f, [0, 1, 0])), up = cross(right, f);
+  const T = Math.tan((fov * Math.PI) / 360), Tw = Math.tan((wideFov * Math.PI) / 360);
+  const c = f.map((x) => -0.1 * x);
+  const rgba = new Float64Array(w * h * 4);
+  for (let y = 0; y < h; y++) {
+    for (let x = 0; x < w; x++) {
+      const sx = (2 * (x + 0.5) / w - 1) * T * (w / h), sy = (1 - 2 * (y + 0.5) / h) * T;
+      const u = [0, 1, 2].map((i) => f[i] + sx * right[i] + sy * up[i]);
+      let t = Infinity;
+      for (let i = 0; i < 3; i++) if (u[i] !== 0) t = Math.min(t, (Math.sign(u[i]) - c[i]) / u[i]);
+      const p = [0, 1, 2].map((i) => c[i] + t * u[i]);
+      const z = dot(p, f);
+      const X = ((dot(p, right) / z / (Tw * (wide.width / wide.height)) + 1) / 2) * wide.width - 0.5;
+      const Y = ((1 - dot(p, up) / z / Tw) / 2) * wide.height - 0.5;
+      const x0 = Math.floor(X), y0 = Math.floor(Y), ax = X - x0, ay = Y - y0;
+      if (x0 < 0 || y0 < 0 || x0 + 1 >= wide.width || y0 + 1 >= wide.height) throw new Error('the wide reference does not cover the Sample Viewer\'s view');
+      for (let k = 0; k < 3; k++) {
+        const at = (xx, yy) => wide.rgba[(yy * wide.width + xx) * 4 + k];
+        rgba[(y * w + x) * 4 + k] = (1 - ay) * ((1 - ax) * at(x0, y0) + ax * at(x0 + 1, y0)) + ay * ((1 - ax) * at(x0, y0 + 1) + ax * at(x0 + 1, y0 + 1));
+      }
+      rgba[(y * w + x) * 4 + 3] = 255;
+    }
+  }
+  return { width: w, height: h, rgba };
+}
+async function sampleViewerTests(dir, views) {
+  for (const v of views) {
+    const pinhole = readPng(join(dir, `sky-${v.name}-reference.png`));
+    const wideFov = 90, wide = await engineReference(dir, v, { fov: wideFov, res: '384x384', tag: '-wide' });
+    const ref = sampleViewerReference(wide, wideFov, mul(M, v.eye), v.fov, 192, 192);
+    writePng(join(dir, `sky-${v.name}-reference-gltf-sample-viewer.png`), { ...ref, rgba: Buffer.from(ref.rgba.map(Math.round)) });
+    const eye = mul(M, v.eye).map((x) => +x.toFixed(6)).join(',');
+    const shot = async (rot) => {
+      const requests = [];
+      const img = gamma22ToSrgb((await view({ ibl: url(bake) + '/', rot, eye, target: '0,0,0', fov: String(v.fov), res: '192x192' },
+        { page: '/viewer/engines/gltf-sample-viewer.html', requests })).image);
+      writePng(join(dir, `sky-${v.name}-gltf-sample-viewer-rot-${rot}.png`), img.png);
+      return { img, foreign: requests.filter((r) => !r.startsWith(origin) && !r.startsWith('data:')) };
+    };
+    const good = await shot('0'), bad = await shot('90');
+    writePng(join(dir, `sky-${v.name}-gltf-sample-viewer-diff-x8.png`), diffImage(good.img, ref));
+    const a = compare(good.img, ref), c = compare(bad.img, ref), pin = compare(good.img, pinhole);
+    figures[`gltf_sample_viewer_sky_${v.name}`] = { rot_0: a.mean, rot_90: c.mean, rot_0_vs_pinhole: pin.mean };
+    console.log(`     glTF Sample Viewer skybox ${v.name}, environmentRotation 0, against the pinhole view itself: mean |Δ| ${pin.mean.toFixed(2)} codes (its skybox geometry, a figure)`);
+    check(`glTF Sample Viewer skybox ${v.name} (specular.ktx2 via its libktx reader, environmentRotation 0) vs render's view`, a.mean <= 1 && good.foreign.length === 0,
+      `mean |Δ| = ${a.mean.toFixed(3)} sRGB codes (≤ 1); requests outside 127.0.0.1: ${good.foreign.length}`);
+    check(`glTF Sample Viewer skybox ${v.name} at its default environmentRotation 90 differs from render's view`, c.mean > 4 * Math.max(a.mean, 0.5),
+      `mean |Δ| = ${c.mean.toFixed(3)} sRGB codes (must be far above ${a.mean.toFixed(3)})`);
+  }
+  // Spheres of its own glTF material lit by prtkit's specular, irradiance and DFG files, beside
+  // `render --shading ibl`: figures, no bar (its lod is r·(mipCount − 1) of the reflected ray, where
+  // render uses the dominant direction and the manifest's roughness per level, and it adds a
+  // multiple-scattering term to the split sum, ibl.glsl's FmsEms).
+  const eye = [0, -4, 0.6], g = mul(M, eye).map((x) => +x.toFixed(6)).join(','), res = '192x192';
+  for (const s of [{ name: 'metal-r0.05', m: 1, r: 0.05, base: [1, 1, 1] }, { name: 'plastic-r0.5', m: 0, r: 0.5, base: [0.8, 0.2, 0.15] }]) {
+    const refPng = join(dir, `sphere-${s.name}-render.png`);
+    run('render', [map, '--shading', 'ibl', '--ibl', join(bake, 'ibl.json'), '--brdf', `gltf:base=${s.base.join('/')},metalness=${s.m},roughness=${s.r}`,
+      '--eye', eye.join(','), '--target', '0,0,0', '--fov', '32', '--res', res, '--png', refPng, '--exposure', '0', '-q']);
+    const img = gamma22ToSrgb((await view({ ibl: url(bake) + '/', mode: 'sphere', m: String(s.m), r: String(s.r), base: s.base.join(','), rot: '0', eye: g, target: '0,0,0', fov: '32', res },
+      { page: '/viewer/engines/gltf-sample-viewer.html' })).image);
+    writePng(join(dir, `sphere-${s.name}-gltf-sample-viewer.png`), img.png);
+    const ref = readPng(refPng);
+    writePng(join(dir, `sphere-${s.name}-gltf-sample-viewer-diff-x8.png`), diffImage(img, ref));
+    const c = compare(img, ref, sphereMask(eye, [0, 0, 0], 32, 192, 192));
+    figures[`gltf_sample_viewer_sphere_${s.name}_vs_render`] = { psnr_sphere: c.psnr, mean_sphere: c.mean };
+    console.log(`     glTF Sample Viewer sphere (${s.name}) vs render --shading ibl: PSNR ${c.psnr.toFixed(2)} dB, mean |Δ| ${c.mean.toFixed(2)} codes over the sphere (a figure, no bar)`);
+  }
+}
+
+// PRTKIT_VIEWER_TESTS=ibl|engines|gsv|formats|model|drop|sh|prt|glossy|lookup|cpca|quantized|n8 runs one group (development; prt
 // includes glossy, lookup, cpca, quantized and n8; glossy includes lookup); all by default.
 const only = process.env.PRTKIT_VIEWER_TESTS ?? '';
 try {
@@ -1220,6 +1319,12 @@ try {
   figures.frame_ms_640x360 = times;
   }
   if (!only || only === 'engines') await engineTests();
+  if (only === 'gsv') { // the Sample Viewer's checks alone (development)
+    const dir = join(out, 'engines');
+    mkdirSync(dir, { recursive: true });
+    for (const v of ENGINE_VIEWS) await engineReference(dir, v);
+    await sampleViewerTests(dir, ENGINE_VIEWS);
+  }
   if (!only || only === 'formats') await formatTests();
   if (!only || only === 'model') await modelTests();
   if (!only || only === 'drop') await dropTests();
