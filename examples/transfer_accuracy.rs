@@ -19,6 +19,7 @@ use prtkit::mesh::{uv_sphere, Mesh};
 use prtkit::progress::NoProgress;
 use prtkit::sh::basis::eval_basis_dir;
 use prtkit::sh::legendre::LegendreTable;
+use prtkit::transfer::albedo::{Albedo, Reflectance};
 use prtkit::transfer::diffuse::unshadowed_exact;
 use prtkit::transfer::directions::Stratified;
 use prtkit::transfer::interreflect::{Storage, Tracer};
@@ -41,7 +42,7 @@ fn unshadowed(small: bool) {
     let (p, t) = uv_sphere(rings, segments);
     let mesh = Mesh::new(p.clone(), Some(p.clone()), t).unwrap();
     let (order, albedo) = (8, 0.8);
-    let config = Config { order, mode: Mode::Unshadowed, albedo, ..Config::default() };
+    let config = Config { order, mode: Mode::Unshadowed, albedo: Albedo::Grey(albedo), ..Config::default() };
     let out = stage::run(&config, &mesh, &NoProgress).unwrap();
     let table = LegendreTable::new(order - 1);
     let mut y = vec![0.0; 64];
@@ -190,7 +191,7 @@ fn furnace(small: bool) {
         unshadowed_exact(*n, order, albedo, &mut source[v * coeffs..(v + 1) * coeffs]);
     }
     let t0 = albedo / (4.0 * PI).sqrt();
-    let passes = tracer.bounces(&source, bounces, albedo, &first.hits, &NoProgress);
+    let passes = tracer.bounces(&source, bounces, Reflectance::Grey(albedo), &first.hits, &NoProgress);
     let mut total: Vec<f64> = source.iter().step_by(coeffs).copied().collect();
     for (b, pass) in passes.iter().enumerate() {
         for (s, x) in total.iter_mut().zip(pass.iter().step_by(coeffs)) {

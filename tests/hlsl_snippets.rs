@@ -2,7 +2,7 @@
 //! `glslangValidator -D`, Debian's `glslang-tools`), as a pixel shader that calls it the way a
 //! client would, compiled to SPIR-V. naga, which checks the GLSL and WGSL twins elsewhere, has no
 //! HLSL front end. The texts: `transfer`'s diffuse snippet at every order, its glossy snippet on
-//! both factor domains, the dequantization of a quantized bake (as the CLI writes it), every
+//! both factor domains, its coloured-albedo snippet, the dequantization of a quantized bake (as the CLI writes it), every
 //! `encode-normals` decoder, and `ibl`'s SH irradiance.
 //!
 //! CI installs glslang-tools (`.ci/run`) and fails here without it; elsewhere the test says it
@@ -116,6 +116,31 @@ fn the_hlsl_a_quantized_bake_writes_compiles_with_its_dequantization() {
         let text = std::fs::read_to_string(d.join(&hlsl)).unwrap();
         assert!(text.contains("prtkitDequantizeTransfer"), "{hlsl}: no dequantization");
         compile(d, &format!("quantized-{kind}"), &transfer_client(&text, false, true));
+    }
+}
+
+#[test]
+fn the_hlsl_of_a_coloured_albedo_compiles_quantized_or_not() {
+    if !have_validator() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mesh = test_mesh("bowl.obj");
+    for (order, quantize) in [("1", "none"), ("3", "none"), ("4", "i8"), ("8", "i16")] {
+        let hlsl = format!("rgb-{order}-{quantize}.hlsl");
+        let args =
+            [mesh.as_str(), "--mode", "unshadowed", "-n", order, "--albedo", "0.9,0.5,0.2", "--quantize", quantize];
+        run_in(d, "transfer", &[&args[..], &["--glb", "c.glb", "-o", "c.json", "--hlsl", &hlsl]].concat());
+        let text = std::fs::read_to_string(d.join(&hlsl)).unwrap();
+        let dequantize = if quantize == "none" { "" } else { "    prtkitDequantizeTransfer(t);\n" };
+        let source = format!(
+            "{text}\nfloat4 main(float4 t0 : T0) : SV_Target {{\n\
+             float4 t[PRTKIT_TRANSFER_RGB_VEC4S];\n\
+             for (int k = 0; k < PRTKIT_TRANSFER_RGB_VEC4S; ++k) t[k] = t0 * float(k + 1);\n{dequantize}\
+             return float4(prtkitTransferRadianceRGB(t), 1.0);\n}}\n"
+        );
+        compile(d, &format!("rgb-{order}-{quantize}"), &source);
     }
 }
 

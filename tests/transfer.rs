@@ -15,6 +15,7 @@ use prtkit::mesh::{uv_sphere, Mesh};
 use prtkit::progress::NoProgress;
 use prtkit::sh::basis::eval_basis_dir;
 use prtkit::sh::legendre::LegendreTable;
+use prtkit::transfer::albedo::{Albedo, Reflectance};
 use prtkit::transfer::stage::{self, Config, Mode};
 use std::f64::consts::PI;
 use std::path::Path;
@@ -53,7 +54,7 @@ fn unshadowed_sphere_is_the_clamped_cosine_convolution() {
     let (p, t) = uv_sphere(16, 32);
     let mesh = Mesh::new(p.clone(), Some(p.clone()), t).unwrap();
     let (order, albedo) = (8, 0.8);
-    let config = Config { order, mode: Mode::Unshadowed, albedo, ..Config::default() };
+    let config = Config { order, mode: Mode::Unshadowed, albedo: Albedo::Grey(albedo), ..Config::default() };
     let out = stage::run(&config, &mesh, &NoProgress).unwrap();
     let table = LegendreTable::new(order - 1);
     let mut y = vec![0.0; 64];
@@ -69,7 +70,7 @@ fn unshadowed_sphere_is_the_clamped_cosine_convolution() {
     assert!(worst < 1e-6, "{worst}");
 
     // Shadowed on a convex mesh: nothing occludes, so the rays' error is the quadrature's alone.
-    let config = Config { order, mode: Mode::Shadowed, albedo, rays: 4096, ..Config::default() };
+    let config = Config { order, mode: Mode::Shadowed, albedo: Albedo::Grey(albedo), rays: 4096, ..Config::default() };
     let shadowed = stage::run(&config, &mesh, &NoProgress).unwrap();
     let error = shadowed.document.body.error.clone().unwrap();
     let (mut d2, mut r2) = (0.0, 0.0);
@@ -427,7 +428,7 @@ fn furnace_inside_a_sphere_converges_to_the_geometric_series() {
     }
     let t0 = albedo / (4.0 * PI).sqrt(); // (ρ/π) Â_0 Y_00 = ρ/√(4π)
     assert!(source.iter().step_by(coeffs).all(|&s| (s - t0).abs() < 1e-15));
-    let passes = tracer.bounces(&source, bounces, albedo, &first.hits, &NoProgress);
+    let passes = tracer.bounces(&source, bounces, Reflectance::Grey(albedo), &first.hits, &NoProgress);
     let mut total: Vec<f64> = source.iter().step_by(coeffs).copied().collect();
     let (mut worst_series, mut mean_series, mut exact) = (0.0f64, 0.0f64, 0usize);
     for (b, pass) in passes.iter().enumerate() {
@@ -464,7 +465,7 @@ fn furnace_inside_a_sphere_converges_to_the_geometric_series() {
     // Hits recorded or traced again in every bounce: the same bits.
     let retraced = tracer.first_pass(albedo, Storage::Retrace, &NoProgress);
     assert!(matches!(retraced.hits, prtkit::transfer::interreflect::Hits::Retraced));
-    assert_eq!(tracer.bounces(&source, bounces, albedo, &retraced.hits, &NoProgress), passes);
+    assert_eq!(tracer.bounces(&source, bounces, Reflectance::Grey(albedo), &retraced.hits, &NoProgress), passes);
 }
 
 #[test]
@@ -486,7 +487,7 @@ fn interreflected_equals_shadowed_on_a_convex_mesh() {
 fn interreflected_bowl_is_shadowed_plus_bounces_and_thread_independent() {
     let (p, n, t) = bowl_and_ball();
     let mesh = Mesh::new(p.clone(), Some(n.clone()), t.clone()).unwrap();
-    let base = Config { order: 3, rays: 512, albedo: 0.8, ..Config::default() };
+    let base = Config { order: 3, rays: 512, albedo: Albedo::Grey(0.8), ..Config::default() };
     let shadowed = stage::run(&Config { mode: Mode::Shadowed, ..base.clone() }, &mesh, &NoProgress).unwrap();
     let inter = stage::run(&Config { mode: Mode::Interreflected, ..base }, &mesh, &NoProgress).unwrap();
     let info = inter.document.body.interreflection.clone().unwrap();

@@ -8,6 +8,7 @@ use common::{cmd, render_rel_error, stderr};
 use glam::DVec3;
 use prtkit::mesh::Mesh;
 use prtkit::progress::NoProgress;
+use prtkit::transfer::albedo::Albedo;
 use prtkit::transfer::lightmap::{self, rasterize, LightmapConfig, LightmapUvs};
 use prtkit::transfer::stage::{self, Config, Mode};
 use std::f64::consts::PI;
@@ -26,7 +27,7 @@ fn config(uvs: LightmapUvs, side: usize, source: &Path) -> Config {
         order: 3,
         mode: Mode::Shadowed,
         rays: 1024,
-        albedo: 0.8,
+        albedo: Albedo::Grey(0.8),
         source: source.display().to_string(),
         lightmap: Some(LightmapConfig { width: side, height: side, file: "lightmap.exr".into(), uvs }),
         ..Config::default()

@@ -1,6 +1,6 @@
 //! `transfer --job I/N` and `--join` (issue 32, "Scale"): a bake split into jobs whose parts,
 //! joined in any order, give one run's outputs byte for byte — diffuse shadowed with clustered
-//! PCA, quantization and a lightmap applied at the join, glossy shadowed, and across thread
+//! PCA, quantization and a lightmap applied at the join, a coloured albedo, glossy shadowed, and across thread
 //! counts — and parts that do not belong, or leave vertices out, are refused naming the file.
 
 mod common;
@@ -78,6 +78,10 @@ fn diffuse_jobs_join_into_one_runs_bytes() {
         ["1", "2"],
         false,
     );
+    // A coloured albedo: the parts hold the grey transfer at albedo 1, and the join makes the
+    // channels (and the coloured lightmap) as one run does.
+    let coloured = [floor.as_str(), "-n", "3", "--rays", "64", "--albedo", "0.9,0.5,0.2"];
+    one_run_and_jobs_agree(dir.path(), &coloured, &["--quantize", "i16"], 2, ["1", "2"], true);
     let unshadowed = [mesh.as_str(), "-n", "3", "--mode", "unshadowed"];
     one_run_and_jobs_agree(dir.path(), &unshadowed, &["--quantize", "i16"], 2, ["2", "2"], false);
 }

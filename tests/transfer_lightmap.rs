@@ -18,6 +18,7 @@ use prtkit::mesh::{uv_sphere, Mesh};
 use prtkit::progress::NoProgress;
 use prtkit::sh::basis::eval_basis_dir;
 use prtkit::sh::legendre::LegendreTable;
+use prtkit::transfer::albedo::{Albedo, Reflectance};
 use prtkit::transfer::lightmap::{rasterize, LightmapConfig, LightmapInfo, LightmapUvs};
 use prtkit::transfer::stage::{self, Config, Mode};
 use std::f64::consts::PI;
@@ -88,7 +89,7 @@ fn lightmap_config(mode: Mode, order: usize, side: usize, source: &Path) -> Conf
         order,
         mode,
         rays: 1024,
-        albedo: 0.8,
+        albedo: Albedo::Grey(0.8),
         source: source.display().to_string(),
         lightmap: Some(LightmapConfig {
             width: side,
@@ -248,14 +249,14 @@ fn an_interreflected_texel_at_a_vertex_is_that_vertex_transfer() {
     let tracer = Tracer::new(&mesh, &occluders, &directions, order, 1e-4 * mesh.extent());
     let first = tracer.first_pass(albedo, Storage::Record, &NoProgress);
     let direct: Vec<f64> = first.points.iter().flat_map(|p| p.shadowed.clone()).collect();
-    let passes = tracer.bounces(&direct, bounces, albedo, &first.hits, &NoProgress);
+    let passes = tracer.bounces(&direct, bounces, Reflectance::Grey(albedo), &first.hits, &NoProgress);
     let sum = |passes: &[Vec<f64>]| -> Vec<f64> {
         passes.iter().fold(direct.clone(), |acc, p| acc.iter().zip(p).map(|(a, b)| a + b).collect())
     };
     let (total, gathered) = (sum(&passes), sum(&passes[..bounces - 1]));
     let (mut worst, mut bounced) = (0.0f64, 0.0f64);
     for v in 0..mesh.positions.len() {
-        let t = tracer.gather_at(mesh.positions[v], mesh.normals[v], albedo, &gathered);
+        let t = tracer.gather_at(mesh.positions[v], mesh.normals[v], &[albedo], &gathered);
         for i in 0..coeffs {
             worst = worst.max((t[i] - total[v * coeffs + i]).abs());
             bounced = bounced.max((total[v * coeffs + i] - direct[v * coeffs + i]).abs());

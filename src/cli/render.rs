@@ -150,6 +150,10 @@ impl Args {
             E::TransferAlbedo { bake, albedo, brdf } => {
                 format!("{bake}: the transfer was baked with albedo {albedo}, --brdf says {brdf}")
             }
+            E::ColouredTransferAlbedo { bake, brdf } => format!(
+                "{bake}: the transfer holds a coloured albedo (transfer --albedo R,G,B or mesh), so its colour is in \
+                 the bake: relight it with --brdf lambert (albedo 1), not {brdf}"
+            ),
             E::NoLightmapUvs { lightmap } => format!(
                 "{lightmap}: the --scene mesh {} has no lightmap UVs (TEXCOORD_1/TEXCOORD_0, vt, or a PLY's s t / u v) to look the lightmap up with",
                 self.scene

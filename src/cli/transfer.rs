@@ -11,6 +11,7 @@ use crate::limits::{
     MAX_TRANSFER_ORDER, MAX_TRANSFER_RAYS,
 };
 use crate::mesh::Mesh;
+use crate::transfer::albedo::Albedo;
 use crate::transfer::jobs::{read_part, Job};
 use crate::transfer::lightmap::{LightmapConfig, LightmapUvs};
 use crate::transfer::order;
@@ -69,7 +70,7 @@ impl TryFrom<&Args> for Config {
             rays: args.rays,
             bounces: args.bounces.unwrap_or(Config::default().bounces),
             seed: args.seed,
-            albedo: args.albedo,
+            albedo: args.albedo.clone(),
             offset: args.offset,
             source: args.mesh.display().to_string(),
             glb_name,
@@ -145,6 +146,10 @@ fn flagged(error: Error) -> anyhow::Error {
         Error::Rays(n) => format!("--rays {n} is outside 1..={MAX_TRANSFER_RAYS}"),
         Error::Bounces(n) => format!("--bounces {n} is outside 1..={MAX_TRANSFER_BOUNCES}"),
         Error::Albedo(albedo) => format!("--albedo {albedo} must be a finite number ≥ 0"),
+        Error::NoColours(mesh) => format!("{mesh}: --albedo mesh: the mesh holds no base colours"),
+        Error::GlossyColour => "--albedo R,G,B and --albedo mesh are for diffuse transfer: a glossy bake's colour \
+                                (--factors) is its BRDF's, and the surfaces it gathers from reflect a grey --albedo"
+            .into(),
         Error::Offset(offset) => format!("--offset {offset} must be in [0, 0.1)"),
         Error::Terms { factors, terms, stored } => {
             format!("{factors}: --terms {terms} is outside 1..={stored}, the terms the factor file holds")
@@ -212,7 +217,7 @@ impl Stage for Args {
             check_outputs([(file, Holds::Exr)])?;
         }
         let config = Config::try_from(&self)?;
-        let mesh = Mesh::load(&self.mesh)?;
+        let mesh = self.load_mesh()?;
         let out = match &self.join {
             None => stage::run(&config, &mesh, ctx.progress()),
             Some(parts) => {
@@ -255,6 +260,14 @@ impl Stage for Args {
 }
 
 impl Args {
+    /// The mesh, with its base colours when `--albedo mesh` asks for them.
+    fn load_mesh(&self) -> Result<Mesh> {
+        Ok(match self.albedo {
+            Albedo::Mesh => Mesh::load_coloured(&self.mesh)?,
+            _ => Mesh::load(&self.mesh)?,
+        })
+    }
+
     /// `--job I/N FILE.part`: one job's part.
     fn run_job(&self, job: &[String], ctx: &Context) -> Result<Outcome> {
         let [job, file] = job else { anyhow::bail!("--job takes I/N and FILE.part") };
@@ -262,7 +275,7 @@ impl Args {
         let file = Output::File(file.into());
         check_outputs([(&file, Holds::Part)])?;
         let config = Config::try_from(self)?;
-        let mesh = Mesh::load(&self.mesh)?;
+        let mesh = self.load_mesh()?;
         let part = stage::run_job(&config, &mesh, job, ctx.progress())
             .map_err(flagged)
             .with_context(|| format!("cannot bake {}", self.mesh.display()))?;

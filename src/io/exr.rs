@@ -181,17 +181,29 @@ pub fn encode_layers(layers: &[(&str, &RgbImage)]) -> Result<Vec<u8>, String> {
 /// Encodes float grey layers (channel `name.Y`, or `Y` for `""`) of `width`×`height` samples
 /// each, row-major, into one EXR. They read back through [`decode_layers`] as grey images.
 pub fn encode_grey_layers(width: usize, height: usize, layers: &[(&str, &[f32])]) -> Result<Vec<u8>, String> {
-    if layers.is_empty() {
+    let named: Vec<(&str, &str, &[f32])> = layers.iter().map(|&(name, samples)| (name, "Y", samples)).collect();
+    encode_named_channels(width, height, &named)
+}
+
+/// Encodes float channels `layer.letter` (`R`, `G`, `B` or `Y`; `letter` alone for layer `""`)
+/// of `width`×`height` samples each, row-major, into one EXR: grey and colour layers side by
+/// side. They read back through [`decode_layers`].
+pub fn encode_named_channels(
+    width: usize,
+    height: usize,
+    channels: &[(&str, &str, &[f32])],
+) -> Result<Vec<u8>, String> {
+    if channels.is_empty() {
         return Err("no layers to write".into());
     }
-    let mut channels = Vec::with_capacity(layers.len());
-    for (name, samples) in layers {
+    let mut out = Vec::with_capacity(channels.len());
+    for (name, letter, samples) in channels {
         if samples.len() != width * height {
             return Err(format!("layer {name:?} has {} samples, expected {width}x{height}", samples.len()));
         }
-        channels.push(channel(name, "Y", samples.to_vec())?);
+        out.push(channel(name, letter, samples.to_vec())?);
     }
-    encode_channels((width, height), channels)
+    encode_channels((width, height), out)
 }
 
 fn channel(layer: &str, letter: &str, samples: Vec<f32>) -> Result<AnyChannel<FlatSamples>, String> {

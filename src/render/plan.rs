@@ -313,8 +313,13 @@ fn diffuse_bake(bake: &TransferBake, with_factors: bool, brdf: &Brdf) -> Result<
     let Brdf::Lambert(m) = brdf else {
         return Err(Error::DiffuseTransferNotLambert { bake: bake.name.clone(), brdf: brdf.spec() });
     };
-    if m.albedo != bake.albedo {
-        return Err(Error::TransferAlbedo { bake: bake.name.clone(), albedo: bake.albedo, brdf: brdf.spec() });
+    // A coloured bake's colour is in its transfer: it relights lambert of albedo 1.
+    let albedo = bake.albedo.unwrap_or(1.0);
+    if m.albedo != albedo {
+        return Err(match bake.albedo {
+            Some(albedo) => Error::TransferAlbedo { bake: bake.name.clone(), albedo, brdf: brdf.spec() },
+            None => Error::ColouredTransferAlbedo { bake: bake.name.clone(), brdf: brdf.spec() },
+        });
     }
     Ok(())
 }

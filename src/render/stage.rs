@@ -403,6 +403,17 @@ pub enum Error {
         /// The BRDF of the rendering.
         brdf: String,
     },
+    /// A coloured bake given a Lambert BRDF of an albedo other than 1.
+    #[error(
+        "{bake}: the transfer holds a coloured albedo (transfer --albedo R,G,B or mesh), so its colour is in the \
+         bake: relight it with lambert of albedo 1, not {brdf}"
+    )]
+    ColouredTransferAlbedo {
+        /// The bake's file.
+        bake: String,
+        /// The BRDF of the rendering.
+        brdf: String,
+    },
     /// A lightmap given with a mesh that has no UVs.
     #[error("{lightmap}: the mesh has no lightmap UVs (TEXCOORD_1/TEXCOORD_0, vt, or a PLY's s t / u v) to look the lightmap up with")]
     NoLightmapUvs {

@@ -28,13 +28,17 @@ pub struct TransferBake {
     pub order: usize,
     /// `unshadowed`, `shadowed` or `interreflected`.
     pub mode: String,
-    /// The albedo baked in.
-    pub albedo: f64,
+    /// The grey albedo baked in; `None` for a coloured bake (`transfer --albedo R,G,B` or
+    /// `mesh`), whose colour is in its three transfer vectors.
+    pub albedo: Option<f64>,
+    /// Transfer vectors per vertex and term: 1, or 3 (R, G, B) for a coloured bake.
+    pub channels: usize,
     /// Positions as stored (single precision).
     pub positions: Vec<[f32; 3]>,
     /// Triangles in the file.
     pub triangles: usize,
-    /// n² coefficients per vertex (K·n², term-major, for glossy bakes), vertex after vertex.
+    /// n² coefficients per vertex (K·n², term-major, for glossy bakes; 3·n², channel-major, for
+    /// coloured ones), vertex after vertex.
     pub transfer: Vec<f32>,
     /// What a glossy bake was factored with (absent for diffuse bakes).
     pub glossy: Option<GlossyBake>,
@@ -527,12 +531,21 @@ impl TransferBake {
             }
         }
         let terms = glossy.as_ref().map_or(1, |g| g.terms);
-        let albedo = extras["albedo"].as_f64().filter(|a| a.is_finite()).ok_or_else(|| bad("no finite albedo"))?;
+        let channels = extras.get("channels").map_or(Some(1), Value::as_u64);
+        let channels = match channels {
+            Some(1) => 1,
+            Some(3) if glossy.is_none() => 3,
+            _ => return Err(bad("extras.prtkit.transfer.channels is not 1, or 3 for a diffuse bake").into()),
+        };
+        let albedo = match channels {
+            1 => Some(extras["albedo"].as_f64().filter(|a| a.is_finite()).ok_or_else(|| bad("no finite albedo"))?),
+            _ => None,
+        };
         let primitive = &mesh["primitives"][0];
         let attributes = &primitive["attributes"];
         let (vertices, data) = glb.accessor(attributes, "POSITION", "VEC3", Storage::Float)?;
         let positions: Vec<[f32; 3]> = Storage::Float.read(data).chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        let coeffs = terms * order * order;
+        let coeffs = channels * terms * order * order;
         let quantized = glb.quantized(extras.get("quantization"))?;
         let (transfer, compressed) = match extras.get("cpca") {
             None => (glb.transfer(attributes, vertices, coeffs, &quantized)?, None),
@@ -546,6 +559,7 @@ impl TransferBake {
             order,
             mode,
             albedo,
+            channels,
             positions,
             triangles,
             transfer,
@@ -592,29 +606,23 @@ pub fn rotation_about_z(degrees: f64) -> DMat3 {
 /// axes, as stored) turned by `rotation` (one SH rotation, Ivanic & Ruedenberg), then
 /// B_v = Σ_i T_i(v) L_i per vertex in single precision, as a GPU would, into `out`.
 /// For a glossy bake, the values are c_k per vertex and term (vertex-major): K dot products.
+/// For a coloured bake, channel c's transfer is dotted with channel c of the lighting.
 pub fn relight(bake: &TransferBake, light: &ShCoeffs, rotation: &ShRotation, out: &mut Vec<[f32; 3]>) {
-    let coeffs = bake.coefficients();
     let turned = rotation.apply(&light.truncated(bake.order - 1));
     let l: Vec<[f32; 3]> = turned.rgb.iter().map(|c| c.map(|x| x as f32)).collect();
-    let dot = |t: &[f32]| {
-        let mut b = [0.0f32; 3];
-        for (ti, li) in t.iter().zip(&l) {
-            b[0] += ti * li[0];
-            b[1] += ti * li[1];
-            b[2] += ti * li[2];
-        }
-        b
-    };
+    let (coeffs, channels) = (bake.coefficients(), bake.channels);
+    let dot = |t: &[f32]| dot_lighting(t, &l, channels);
+    let stride = channels * coeffs;
     out.clear();
     let Some(c) = &bake.compressed else {
-        out.extend(bake.transfer.chunks_exact(coeffs).map(dot));
+        out.extend(bake.transfer.chunks_exact(stride).map(dot));
         return;
     };
     // Clustered PCA (Sloan et al. 2003, eq. 3): the lighting against each cluster's mean and
     // directions once per frame, term by term; then P multiply-adds per vertex and term.
     let (terms, p) = (bake.terms(), c.components);
-    let means: Vec<[f32; 3]> = c.means.chunks_exact(coeffs).map(dot).collect(); // C × K
-    let bases: Vec<[f32; 3]> = c.bases.chunks_exact(coeffs).map(dot).collect(); // C × P × K
+    let means: Vec<[f32; 3]> = c.means.chunks_exact(stride).map(dot).collect(); // C × K
+    let bases: Vec<[f32; 3]> = c.bases.chunks_exact(stride).map(dot).collect(); // C × P × K
     for (&cluster, w) in c.cluster_of.iter().zip(c.weights.chunks_exact(p)) {
         let cluster = cluster as usize;
         for k in 0..terms {
@@ -628,6 +636,25 @@ pub fn relight(bake: &TransferBake, light: &ShCoeffs, rotation: &ShRotation, out
             out.push(b);
         }
     }
+}
+
+/// RGB radiance from one vertex's (or texel's) transfer `t` and the lighting's RGB coefficients
+/// `l`, in single precision as a GPU would: B = Σ_i T_i L_i with one grey vector (`channels`
+/// 1), or B_c = Σ_i T_ci L_ci with one vector per channel, channel-major (3).
+fn dot_lighting(t: &[f32], l: &[[f32; 3]], channels: usize) -> [f32; 3] {
+    let mut b = [0.0f32; 3];
+    if channels == 1 {
+        for (ti, li) in t.iter().zip(l) {
+            b[0] += ti * li[0];
+            b[1] += ti * li[1];
+            b[2] += ti * li[2];
+        }
+    } else {
+        for (c, block) in t.chunks_exact(l.len()).enumerate() {
+            b[c] = block.iter().zip(l).map(|(ti, li)| ti * li[c]).sum();
+        }
+    }
+    b
 }
 
 /// Shades a mesh hit by interpolating the per-vertex radiance of [`relight`] with the hit's
@@ -665,10 +692,13 @@ pub struct LightmapImage {
     pub width: usize,
     /// H.
     pub height: usize,
-    /// n² values per texel, row-major, row y holding v = (y + ½)/H.
+    /// n² values per texel (3·n², channel-major, for a coloured bake), row-major, row y holding
+    /// v = (y + ½)/H.
     pub transfer: Vec<f32>,
     /// n².
     pub coefficients: usize,
+    /// 1, or 3 for a coloured bake (layers T_i with channels R, G, B).
+    pub channels: usize,
 }
 
 impl LightmapImage {
@@ -680,6 +710,8 @@ impl LightmapImage {
             return Err(LightmapError::Glossy { name, bake: bake.name.clone() });
         }
         let coefficients = bake.order * bake.order;
+        let channels = bake.channels;
+        let per_texel = channels * coefficients;
         let layers = crate::io::exr::read_layers(path)?;
         let layer = |i: usize| {
             let wanted = format!("T{i}");
@@ -693,7 +725,7 @@ impl LightmapImage {
         if width == 0 || height == 0 {
             return Err(LightmapError::Empty { name });
         }
-        let mut transfer = vec![0.0f32; width * height * coefficients];
+        let mut transfer = vec![0.0f32; width * height * per_texel];
         for i in 0..coefficients {
             let (wanted, image) = layer(i)?;
             if (image.width, image.height) != (width, height) {
@@ -701,14 +733,16 @@ impl LightmapImage {
                 return Err(LightmapError::LayerSize { name, layer: wanted, size, first: (width, height) });
             }
             for (texel, px) in image.pixels.iter().enumerate() {
-                if !px[0].is_finite() {
+                if let Some(&value) = px.iter().find(|v| !v.is_finite()) {
                     let (x, y) = (texel % width, texel / width);
-                    return Err(LightmapError::NotFinite { name, layer: wanted, x, y, value: px[0] });
+                    return Err(LightmapError::NotFinite { name, layer: wanted, x, y, value });
                 }
-                transfer[texel * coefficients + i] = px[0];
+                for (c, value) in px.iter().take(channels).enumerate() {
+                    transfer[texel * per_texel + c * coefficients + i] = *value;
+                }
             }
         }
-        Ok(LightmapImage { name, width, height, transfer, coefficients })
+        Ok(LightmapImage { name, width, height, transfer, coefficients, channels })
     }
 }
 
@@ -796,16 +830,8 @@ impl<'a> LightmapShader<'a> {
         let l: Vec<[f32; 3]> = turned.rgb.iter().map(|c| c.map(|x| x as f32)).collect();
         let radiance = lightmap
             .transfer
-            .chunks_exact(lightmap.coefficients)
-            .map(|t| {
-                let mut b = [0.0f32; 3];
-                for (ti, li) in t.iter().zip(&l) {
-                    for k in 0..3 {
-                        b[k] += ti * li[k];
-                    }
-                }
-                b
-            })
+            .chunks_exact(lightmap.channels * lightmap.coefficients)
+            .map(|t| dot_lighting(t, &l, lightmap.channels))
             .collect();
         LightmapShader { radiance, width: lightmap.width, height: lightmap.height, uvs, triangles: &mesh.triangles }
     }

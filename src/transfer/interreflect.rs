@@ -30,6 +30,7 @@
 //! again in every bounce instead: the same rays through the same tree give the same hits, so
 //! both ways give the same bits.
 
+use super::albedo::Reflectance;
 use super::diffuse::{LocalBasis, PointTransfer};
 use super::directions::Stratified;
 use super::visibility::{barycentrics, Occluders};
@@ -208,20 +209,23 @@ impl<'a> Tracer<'a> {
     /// The interreflected transfer at a point of the surface that is not a vertex (a lightmap
     /// texel's): its shadowed transfer plus, over its rays' front hits, `gathered` — every
     /// vertex's T^0 + … + T^{B−1} — interpolated at the hit, so that
-    /// T = T^0 + Σ_{b=1..B} (ρ/N) Σ_hits T^{b−1}(y), eq. 9 summed over the bounces.
-    pub fn gather_at(&self, position: DVec3, normal: DVec3, albedo: f64, gathered: &[f64]) -> Vec<f64> {
+    /// T = T^0 + Σ_{b=1..B} (ρ/N) Σ_hits T^{b−1}(y), eq. 9 summed over the bounces. `albedo`
+    /// holds the point's ρ per channel (one for a grey bake, three for a coloured one), and
+    /// `gathered` as many blocks of n² values per vertex; so does the result.
+    pub fn gather_at(&self, position: DVec3, normal: DVec3, albedo: &[f64], gathered: &[f64]) -> Vec<f64> {
         let coeffs = self.order * self.order;
         let mut local = vec![0.0; coeffs];
-        let mut bounced = vec![0.0; coeffs];
+        let mut bounced = vec![0.0; albedo.len() * coeffs];
         self.each_ray_from(position, normal, |k, outcome| match outcome {
             Outcome::Escaped => self.basis.add_row(k, &mut local),
             Outcome::Back => {}
             Outcome::Front(hit) => hit.gather(&self.mesh.triangles, gathered, &mut bounced),
         });
-        let scale = albedo / self.directions.len() as f64;
-        let (mut transfer, _) = self.basis.to_world(normal, &local, scale);
-        for (t, b) in transfer.iter_mut().zip(&bounced) {
-            *t += scale * b;
+        let mut transfer = Vec::with_capacity(bounced.len());
+        for (rho, bounced) in albedo.iter().zip(bounced.chunks_exact(coeffs)) {
+            let scale = rho / self.directions.len() as f64;
+            let (direct, _) = self.basis.to_world(normal, &local, scale);
+            transfer.extend(direct.iter().zip(bounced).map(|(t, b)| t + scale * b));
         }
         transfer
     }
@@ -298,28 +302,32 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// The bounces b = 1..=`bounces` from `source` = T^0 (n² values per vertex): each
-    /// T^b(x) = (ρ/N) Σ_{front hits} Σ_j w_j T^{b−1}(v_j), summed in the rays' order (eq. 9;
-    /// [`FrontHit`]'s weights w_j). Returns every bounce's transfer, in order.
+    /// The bounces b = 1..=`bounces` from `source` = T^0: each
+    /// T^b(x) = (ρ(x)/N) Σ_{front hits} Σ_j w_j T^{b−1}(v_j), summed in the rays' order (eq. 9;
+    /// [`FrontHit`]'s weights w_j), ρ(x) the `reflectance` of the gathering vertex. `source`
+    /// holds its channels' blocks of n² values per vertex (one grey, or R, G, B: each block
+    /// gathers the same block of its neighbours, so colour bleeds). Returns every bounce's
+    /// transfer, in order.
     pub fn bounces(
         &self,
         source: &[f64],
         bounces: usize,
-        albedo: f64,
+        reflectance: Reflectance,
         hits: &Hits,
         progress: &dyn Progress,
     ) -> Vec<Vec<f64>> {
         let coeffs = self.order * self.order;
+        let width = reflectance.channels() * coeffs;
         let vertices = self.mesh.positions.len();
-        let scale = albedo / self.directions.len() as f64;
+        let rays = self.directions.len() as f64;
         let mut out: Vec<Vec<f64>> = Vec::with_capacity(bounces);
         for b in 1..=bounces {
             let previous = out.last().map_or(source, Vec::as_slice);
-            let mut next = vec![0.0; vertices * coeffs];
+            let mut next = vec![0.0; vertices * width];
             progress.start(&format!("bounce {b} of {bounces}"), vertices as u64);
-            next.par_chunks_mut(CHUNK * coeffs).enumerate().for_each(|(c, block)| {
+            next.par_chunks_mut(CHUNK * width).enumerate().for_each(|(c, block)| {
                 let mut traced = Vec::new();
-                for (k, t) in block.chunks_exact_mut(coeffs).enumerate() {
+                for (k, t) in block.chunks_exact_mut(width).enumerate() {
                     let v = c * CHUNK + k;
                     let list: &[FrontHit] = match hits {
                         Hits::Recorded(chunks) => {
@@ -336,11 +344,12 @@ impl<'a> Tracer<'a> {
                     for hit in list {
                         hit.gather(&self.mesh.triangles, previous, t);
                     }
-                    for a in t.iter_mut() {
-                        *a *= scale;
+                    for (channel, t) in t.chunks_exact_mut(coeffs).enumerate() {
+                        let scale = reflectance.at(v, channel) / rays;
+                        t.iter_mut().for_each(|a| *a *= scale);
                     }
                 }
-                progress.advance((block.len() / coeffs) as u64);
+                progress.advance((block.len() / width) as u64);
             });
             progress.finish();
             out.push(next);

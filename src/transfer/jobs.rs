@@ -63,7 +63,8 @@ pub struct Recipe {
     pub rays: usize,
     /// Seed of the directions' jitter.
     pub seed: u64,
-    /// The albedo baked in.
+    /// The albedo folded into the part's values: the grey albedo, or 1 for a coloured bake,
+    /// whose channels the join makes ([`super::albedo`]).
     pub albedo: f64,
     /// The ray origin offset, relative to the bounding-box diagonal.
     pub offset: f64,
@@ -117,7 +118,7 @@ impl Recipe {
             mode: config.mode,
             rays: config.rays,
             seed: config.seed,
-            albedo: config.albedo,
+            albedo: config.albedo.folded(),
             offset: config.offset,
             glossy,
             vertices: mesh.positions.len(),

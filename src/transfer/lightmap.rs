@@ -281,6 +281,7 @@ pub fn atlas_mesh(lightmap: &LightmapConfig, config: &Config, mesh: &Mesh) -> Re
         .expect("the atlas's triangles index its vertices");
     split.normals_computed = mesh.normals_computed;
     split.uvs = Some(atlas.uvs);
+    split.base_colors = mesh.base_colors.as_ref().map(|c| atlas.vertex_of.iter().map(|&i| c[i as usize]).collect());
     Ok(Some((split, atlas.info)))
 }
 
@@ -291,7 +292,8 @@ pub struct Lightmap {
     pub exr: Vec<u8>,
     /// What the manifest says of it.
     pub info: LightmapInfo,
-    /// The transfer, n² values per texel, row-major (zeros at empty texels).
+    /// The transfer, n² values per texel (3·n², channel-major, with a coloured albedo),
+    /// row-major (zeros at empty texels).
     pub transfer: Vec<f64>,
     /// 1 covered, [`DILATED`] dilated, 0 empty.
     pub coverage: Vec<f32>,
@@ -312,6 +314,11 @@ pub fn bake(
     let (width, height) = (lightmap.width, lightmap.height);
     let n = config.order;
     let coeffs = n * n;
+    // A coloured albedo: each texel's ρ_c interpolated from its triangle's vertices, as the
+    // vertex bake's T is, and one transfer vector per channel ([`super::albedo`]).
+    let colours = config.albedo.colours(mesh);
+    let channels = config.albedo.channels();
+    let per_texel = channels * coeffs;
     let coverage = rasterize(uvs, &mesh.triangles, width, height);
     let covered: Vec<(usize, Sample)> =
         coverage.samples.iter().enumerate().filter_map(|(i, s)| s.map(|s| (i, s))).collect();
@@ -320,16 +327,37 @@ pub fn bake(
         let mix = |v: &[DVec3]| s.weights[0] * v[t[0]] + s.weights[1] * v[t[1]] + s.weights[2] * v[t[2]];
         (mix(&mesh.positions), mix(&mesh.normals).try_normalize().unwrap_or(mesh.normals[t[0]]))
     };
-    let mut values = vec![0.0; covered.len() * coeffs];
+    let albedo = |s: &Sample| -> Vec<f64> {
+        match &colours {
+            None => vec![config.albedo.folded()],
+            Some(c) => {
+                let t = mesh.triangles[s.triangle as usize].map(|i| c[i as usize]);
+                (0..3).map(|k| s.weights[0] * t[0][k] + s.weights[1] * t[1][k] + s.weights[2] * t[2][k]).collect()
+            }
+        }
+    };
+    // The grey transfer (ρ folded in, 1 when coloured) spread over the channels.
+    let spread = |grey: &[f64], rho: &[f64], out: &mut [f64]| match rho {
+        [_] => out.copy_from_slice(grey),
+        _ => {
+            for (block, r) in out.chunks_exact_mut(coeffs).zip(rho) {
+                block.iter_mut().zip(grey).for_each(|(o, g)| *o = r * g);
+            }
+        }
+    };
+    let folded = config.albedo.folded();
+    let mut values = vec![0.0; covered.len() * per_texel];
     let offset = config.offset * mesh.extent();
     // Each texel's sums run in a fixed order; chunks are independent: the same bits for any
     // thread count.
     match config.mode {
         Mode::Unshadowed => {
             progress.start("lightmap (unshadowed)", covered.len() as u64);
-            values.par_chunks_mut(CHUNK * coeffs).zip(covered.par_chunks(CHUNK)).for_each(|(out, texels)| {
-                for (t, (_, s)) in out.chunks_exact_mut(coeffs).zip(texels) {
-                    unshadowed_exact(point(s).1, n, config.albedo, t);
+            values.par_chunks_mut(CHUNK * per_texel).zip(covered.par_chunks(CHUNK)).for_each(|(out, texels)| {
+                let mut grey = vec![0.0; coeffs];
+                for (t, (_, s)) in out.chunks_exact_mut(per_texel).zip(texels) {
+                    unshadowed_exact(point(s).1, n, folded, &mut grey);
+                    spread(&grey, &albedo(s), t);
                 }
                 progress.advance(texels.len() as u64);
             });
@@ -340,12 +368,13 @@ pub fn bake(
             let shadowed = Shadowed::new(&directions, n, &occluders);
             let tracer = Tracer::new(mesh, &occluders, &directions, n, offset);
             progress.start("lightmap (visibility)", covered.len() as u64);
-            values.par_chunks_mut(CHUNK * coeffs).zip(covered.par_chunks(CHUNK)).for_each(|(out, texels)| {
-                for (t, (_, s)) in out.chunks_exact_mut(coeffs).zip(texels) {
+            values.par_chunks_mut(CHUNK * per_texel).zip(covered.par_chunks(CHUNK)).for_each(|(out, texels)| {
+                for (t, (_, s)) in out.chunks_exact_mut(per_texel).zip(texels) {
                     let (p, normal) = point(s);
+                    let rho = albedo(s);
                     match gathered {
-                        Some(g) => t.copy_from_slice(&tracer.gather_at(p, normal, config.albedo, g)),
-                        None => t.copy_from_slice(&shadowed.integrate(p, normal, offset, config.albedo).shadowed),
+                        Some(g) => t.copy_from_slice(&tracer.gather_at(p, normal, &rho, g)),
+                        None => spread(&shadowed.integrate(p, normal, offset, folded).shadowed, &rho, t),
                     }
                 }
                 progress.advance(texels.len() as u64);
@@ -358,23 +387,29 @@ pub fn bake(
         slot_of[*i] = k;
     }
     let sources = dilate(&coverage, DILATION);
-    let mut transfer = vec![0.0; width * height * coeffs];
+    let mut transfer = vec![0.0; width * height * per_texel];
     let mut coverage_layer = vec![0.0f32; width * height];
     let mut dilated = 0;
     for (i, source) in sources.iter().enumerate() {
         let Some(j) = *source else { continue };
         let k = slot_of[j];
-        transfer[i * coeffs..(i + 1) * coeffs].copy_from_slice(&values[k * coeffs..(k + 1) * coeffs]);
+        transfer[i * per_texel..(i + 1) * per_texel].copy_from_slice(&values[k * per_texel..(k + 1) * per_texel]);
         coverage_layer[i] = if i == j { 1.0 } else { DILATED };
         dilated += usize::from(i != j);
     }
     let names: Vec<String> = (0..coeffs).map(|i| format!("T{i}")).chain(["coverage".to_string()]).collect();
-    let layers: Vec<Vec<f32>> = (0..coeffs)
-        .map(|i| (0..width * height).map(|p| transfer[p * coeffs + i] as f32).collect())
-        .chain([coverage_layer.clone()])
-        .collect();
-    let named: Vec<(&str, &[f32])> = names.iter().map(String::as_str).zip(layers.iter().map(Vec::as_slice)).collect();
-    let exr = crate::io::exr::encode_grey_layers(width, height, &named).map_err(Error::LightmapEncoding)?;
+    // Layer T_i: one grey channel Y, or R, G, B (channel c's coefficient i) when coloured.
+    let letters: &[&str] = if channels == 1 { &["Y"] } else { &["R", "G", "B"] };
+    let mut samples: Vec<(&str, &str, Vec<f32>)> = Vec::with_capacity(coeffs * channels + 1);
+    for (i, name) in names[..coeffs].iter().enumerate() {
+        for (c, letter) in letters.iter().enumerate() {
+            let value = c * coeffs + i;
+            samples.push((name, letter, (0..width * height).map(|p| transfer[p * per_texel + value] as f32).collect()));
+        }
+    }
+    samples.push(("coverage", "Y", coverage_layer.clone()));
+    let named: Vec<(&str, &str, &[f32])> = samples.iter().map(|(n, l, s)| (*n, *l, s.as_slice())).collect();
+    let exr = crate::io::exr::encode_named_channels(width, height, &named).map_err(Error::LightmapEncoding)?;
     let info = LightmapInfo {
         file: lightmap.file.clone(),
         width,
@@ -391,9 +426,15 @@ pub fn bake(
             }
         },
         layout: format!(
-            "one grey layer (channel T<i>.Y, f32) per coefficient i = l(l+1)+m, {coeffs} of them, and coverage.Y (1: \
+            "one {} per coefficient i = l(l+1)+m, {coeffs} of them, and coverage.Y (1: \
              the texel centre lies in a triangle, {DILATED}: filled by dilation from a neighbour, 0: empty); texel \
-             (x, y), row y from the top of the image, is the point of UV ((x+0.5)/{width}, (y+0.5)/{height})"
+             (x, y), row y from the top of the image, is the point of UV ((x+0.5)/{width}, (y+0.5)/{height})",
+            if channels == 1 {
+                "grey layer (channel T<i>.Y, f32)"
+            } else {
+                "colour layer (channels T<i>.R, T<i>.G, T<i>.B, f32: each channel's transfer, dotted with that \
+                 channel's lighting)"
+            }
         ),
         atlas: None,
     };

@@ -15,9 +15,10 @@
 //! [`interreflect`] the bounces, [`shaders`] the run-time dot product and SH rotation (GLSL,
 //! HLSL, WGSL), [`lightmap`] the same diffuse transfer per texel of a UV set, [`cpca`] and
 //! [`quantize`] the compressed and quantized storage, [`order`] the SH order an energy fraction
-//! needs, [`jobs`] a bake split into jobs whose
+//! needs, [`albedo`] the grey or coloured albedo folded in, [`jobs`] a bake split into jobs whose
 //! parts join into one run's outputs, and [`stage`] the `transfer` stage.
 
+pub mod albedo;
 pub mod atlas;
 pub mod cpca;
 pub mod diffuse;

@@ -186,6 +186,57 @@ uniform {vec3} prtkitLightSH[PRTKIT_TRANSFER_COEFFS];
     out
 }
 
+/// The snippet of a bake with a coloured albedo (`transfer --albedo R,G,B` or `mesh`):
+/// [`snippet`]'s rotation, and the dot product of each colour channel's transfer with that
+/// channel of the lighting, B_c(x) = Σ_i T_ci(x) L_ci, over the 3·n² values channel-major.
+pub fn colour_snippet(order: usize, lang: Language) -> String {
+    let coeffs = order * order;
+    let vec4s = (3 * coeffs).div_ceil(4);
+    let s = syntax(lang);
+    let radiance = match lang {
+        Language::Wgsl => "prtkit_transfer_radiance_rgb",
+        _ => "prtkitTransferRadianceRGB",
+    };
+    let light = match lang {
+        Language::Wgsl => "light",
+        _ => "prtkitLightSH",
+    };
+    // Channel c's coefficient i is value c·n² + i: four-vector (c·n² + i)/4, its lane mod 4.
+    let channel = |c: usize| {
+        sum((0..coeffs).map(|i| {
+            let value = c * coeffs + i;
+            let lane = ["x", "y", "z", "w"];
+            (1.0, format!("transfer[{}].{} * {light}[{i}].{}", value / 4, lane[value % 4], lane[c]))
+        }))
+    };
+    let body = format!("{}(\n        {},\n        {},\n        {})", s.vec3, channel(0), channel(1), channel(2));
+    let mut out = snippet(order, lang);
+    out += &format!(
+        "
+// prtkit transfer, coloured albedo (transfer --albedo R,G,B or --albedo mesh): one transfer
+// vector per colour channel, so colour bleeds between surfaces. _PRT_0.._PRT_{last} hold
+// 3 x {coeffs} values channel-major (value c*{coeffs} + i is channel c's coefficient i, c = R, G, B;
+// zeros pad the last four-vector). {radiance}: B_c(x) = sum_i T_ci(x) L_ci, each
+// channel's transfer dotted with that channel of the lighting; use it for this bake in place of
+// the grey dot product above, with the lighting turned by the same rotation.
+",
+        last = vec4s - 1
+    );
+    out += &match lang {
+        Language::Wgsl => format!(
+            "\nfn {radiance}(transfer: array<{vec4}, {vec4s}>, light: array<{vec3}, {coeffs}>) -> {vec3} {{\n    return {body};\n}}\n",
+            vec4 = s.vec4,
+            vec3 = s.vec3
+        ),
+        _ => format!(
+            "\n#define PRTKIT_TRANSFER_RGB_VEC4S {vec4s}\n\n{vec3} {radiance}({vec4} transfer[PRTKIT_TRANSFER_RGB_VEC4S]) {{\n    return {body};\n}}\n",
+            vec4 = s.vec4,
+            vec3 = s.vec3
+        ),
+    };
+    out
+}
+
 /// The snippet of a glossy bake: [`snippet`]'s dot product (applied per term) and rotation, then
 /// the per-pixel half of Mahajan, Tseng & Ramamoorthi 2008's eq. 4 for `terms` K factors on
 /// `grid` (the bake's `glossy.h`): the view direction in the normal's frame, the h_k lookup and

@@ -8,6 +8,7 @@
 //! ray casts (2⁻²⁴ ≈ 6·10⁻⁸ of the coordinates), far below any feature a mesh is modelled with.
 //! The manifest states both numbers.
 
+use super::albedo::{colourize, Albedo, Reflectance};
 use super::atlas::AtlasInfo;
 use super::cpca::Cpca;
 use super::diffuse::{unshadowed_exact, PointTransfer, Shadowed};
@@ -17,7 +18,7 @@ use super::interreflect::{Hits, Storage, Tracer};
 use super::jobs::{Job, Joined, Part, Recipe, Transfer};
 use super::lightmap::{self, Lightmap, LightmapConfig, LightmapInfo, LightmapUvs};
 use super::quantize::{Quantization, Quantized};
-use super::shaders::{dequantize_snippet, glossy_snippet, snippet, Language};
+use super::shaders::{colour_snippet, dequantize_snippet, glossy_snippet, snippet, Language};
 use super::visibility::{triangle_area, Occluders};
 use crate::factor::Factorization;
 use crate::io::glb::{self, Attribute, Blob, GlbMesh, Values};
@@ -72,8 +73,8 @@ pub struct Config {
     pub bounces: usize,
     /// Seed of the directions' jitter.
     pub seed: u64,
-    /// The constant albedo ρ baked into the transfer.
-    pub albedo: f64,
+    /// The albedo baked into diffuse transfer: grey (one vector per vertex) or coloured (three).
+    pub albedo: Albedo,
     /// The ray origin offset along the normal, as a fraction of the bounding-box diagonal.
     pub offset: f64,
     /// The mesh's name, for messages and the manifest.
@@ -130,7 +131,7 @@ impl Default for Config {
             rays: 1024,
             bounces: 2,
             seed: 0,
-            albedo: 1.0,
+            albedo: Albedo::Grey(1.0),
             offset: 1e-4,
             source: String::new(),
             glb_name: String::new(),
@@ -151,15 +152,18 @@ pub struct TransferBody {
     /// Why n is what it is, when an energy fraction chose it (absent: given).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub order_reason: Option<String>,
-    /// n² coefficients per vertex.
+    /// Values per vertex: n² (diffuse, grey albedo), 3·n² (diffuse, coloured), K·n² (glossy).
     pub coefficients: usize,
+    /// Transfer vectors per vertex, one per colour channel: 3 with a coloured albedo (absent: 1).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub channels: usize,
     /// `unshadowed`, `shadowed` or `interreflected`.
     pub mode: Mode,
     /// The interreflection bounces (interreflected mode, else absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interreflection: Option<Interreflection>,
-    /// The albedo ρ baked in.
-    pub albedo: f64,
+    /// The albedo baked in: ρ, [r, g, b], or the mesh's colours (their source and range).
+    pub albedo: serde_json::Value,
     /// How the integral was computed.
     pub integration: Integration,
     /// The ray origin offset.
@@ -377,7 +381,8 @@ pub struct Output {
     pub hlsl: String,
     /// WGSL.
     pub wgsl: String,
-    /// The per-vertex transfer, n² values per vertex.
+    /// The per-vertex transfer in the `.glb`'s layout: n², 3·n² (coloured) or K·n² (glossy) values
+    /// per vertex.
     pub transfer: Vec<f64>,
     /// The `--json` summary.
     pub summary: Summary,
@@ -415,9 +420,18 @@ pub enum Error {
     /// The bounce count is outside 1..=[`MAX_TRANSFER_BOUNCES`].
     #[error("{0} interreflection bounces is outside 1..={MAX_TRANSFER_BOUNCES}")]
     Bounces(usize),
-    /// The albedo is not a finite number ≥ 0.
+    /// The albedo (or one of its components) is not a finite number ≥ 0.
     #[error("albedo {0} is not a finite number ≥ 0")]
     Albedo(f64),
+    /// The albedo is the mesh's, and the mesh holds no colours.
+    #[error("{0}: the mesh holds no base colours to take the albedo from")]
+    NoColours(String),
+    /// A coloured albedo for a glossy bake.
+    #[error(
+        "a coloured albedo is for diffuse transfer: a glossy bake's colour is its BRDF's, and the surfaces it \
+         gathers from reflect a grey albedo"
+    )]
+    GlossyColour,
     /// The ray offset is outside [0, 0.1) of the bounding-box diagonal.
     #[error("ray offset {0} is outside [0, 0.1) of the bounding-box diagonal")]
     Offset(f64),
@@ -576,8 +590,12 @@ enum Bake {
 struct Plan<'a> {
     /// Which transfer is integrated.
     bake: Bake,
-    /// Values per vertex: n², or K·n² for a glossy bake.
+    /// Values per vertex as stored: n², 3·n² with a coloured albedo, or K·n² for a glossy bake.
     per_vertex: usize,
+    /// Values per vertex as integrated (and as parts hold them): n² or K·n², the albedo grey.
+    integrated: usize,
+    /// Each vertex's (ρ_r, ρ_g, ρ_b), for a coloured albedo.
+    colours: Option<Vec<[f64; 3]>>,
     /// Clustered PCA of the transfer (Sloan et al. 2003).
     compression: Option<Compression>,
     /// The per-texel bake of the same diffuse transfer.
@@ -604,8 +622,18 @@ impl<'a> Plan<'a> {
         if config.mode == Mode::Interreflected && !(1..=MAX_TRANSFER_BOUNCES).contains(&config.bounces) {
             return Err(Error::Bounces(config.bounces));
         }
-        if !(config.albedo.is_finite() && config.albedo >= 0.0) {
-            return Err(Error::Albedo(config.albedo));
+        if let Some(a) = config.albedo.invalid() {
+            return Err(Error::Albedo(a));
+        }
+        if config.albedo.channels() > 1 && config.glossy.is_some() {
+            return Err(Error::GlossyColour);
+        }
+        let colours = config.albedo.colours(mesh);
+        if config.albedo == Albedo::Mesh && colours.is_none() {
+            return Err(Error::NoColours(config.source.clone()));
+        }
+        if let Some(a) = colours.iter().flatten().flatten().find(|a| !(a.is_finite() && **a >= 0.0)) {
+            return Err(Error::Albedo(*a));
         }
         if !(config.offset.is_finite() && (0.0..0.1).contains(&config.offset)) {
             return Err(Error::Offset(config.offset));
@@ -626,16 +654,19 @@ impl<'a> Plan<'a> {
             (None, Mode::Shadowed) => Bake::Shadowed,
             (None, Mode::Interreflected) => Bake::Interreflected { bounces: config.bounces },
         };
-        let per_vertex = match &bake {
+        let integrated = match &bake {
             Bake::Glossy { integrator, .. } => integrator.values_per_vertex(),
             _ => n * n,
         };
+        let per_vertex = config.albedo.channels() * integrated;
         if let Some(c) = &config.compression {
             check_compression(c, mesh.positions.len(), per_vertex)?;
         }
         Ok(Plan {
             bake,
             per_vertex,
+            integrated,
+            colours,
             compression: config.compression,
             lightmap: config.lightmap.as_ref(),
             atlas: None,
@@ -688,7 +719,7 @@ pub fn run(config: &Config, mesh: &Mesh, progress: &dyn Progress) -> Result<Outp
     let baked = match &plan.bake {
         Bake::Interreflected { bounces } => {
             let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
-            interreflected(config, mesh, &occluders, *bounces, plan.offset, progress)
+            interreflected(config, mesh, &occluders, *bounces, plan.offset, plan.colours.as_deref(), progress)
         }
         Bake::Glossy { integrator, mode: Mode::Interreflected } => {
             glossy_interreflected(config, mesh, &plan, integrator, progress)
@@ -720,7 +751,7 @@ pub fn run_job(config: &Config, mesh: &Mesh, job: Job, progress: &dyn Progress) 
     }
     let vertices = job.vertices(mesh.positions.len());
     let transfer = per_vertex(config, mesh, &plan, vertices.clone(), progress);
-    Ok(Part::new(Recipe::new(config, mesh), vertices, plan.per_vertex, transfer))
+    Ok(Part::new(Recipe::new(config, mesh), vertices, plan.integrated, transfer))
 }
 
 /// Joins the parts of a `transfer` split into jobs (`(file, part)`, in any order) and does what
@@ -736,7 +767,7 @@ pub fn run_joined(
     if plan.gathers() {
         return Err(Error::JobInterreflected);
     }
-    let mut joined = Joined::new(Recipe::new(config, mesh), plan.per_vertex);
+    let mut joined = Joined::new(Recipe::new(config, mesh), plan.integrated);
     for part in parts {
         let (file, part) = part?;
         joined.add(part).map_err(|reason| Error::Part { file, reason })?;
@@ -771,9 +802,13 @@ fn baked(config: &Config, mesh: &Mesh, plan: &Plan, transfer: Transfer, seconds:
     let (transfer, error) = match transfer {
         Transfer::Values(values) => (values, None),
         Transfer::Points(points) => {
-            let error = integration_error(mesh, &points, config.order, config.rays, config.albedo);
+            let error = integration_error(mesh, &points, config.order, config.rays, config.albedo.folded());
             (points.into_iter().flat_map(|p| p.shadowed).collect(), Some(error))
         }
+    };
+    let transfer = match &plan.colours {
+        Some(colours) => colourize(&transfer, plan.integrated, colours),
+        None => transfer,
     };
     let integration = match &plan.bake {
         Bake::Unshadowed => Integration {
@@ -883,7 +918,7 @@ fn unshadowed(config: &Config, mesh: &Mesh, vertices: Range<usize>, progress: &d
     progress.start("transfer (unshadowed)", vertices.len() as u64);
     transfer.par_chunks_mut(CHUNK * coeffs).enumerate().for_each(|(c, out)| {
         for (k, t) in out.chunks_exact_mut(coeffs).enumerate() {
-            unshadowed_exact(mesh.normals[vertices.start + c * CHUNK + k], config.order, config.albedo, t);
+            unshadowed_exact(mesh.normals[vertices.start + c * CHUNK + k], config.order, config.albedo.folded(), t);
         }
         progress.advance((out.len() / coeffs) as u64);
     });
@@ -911,7 +946,7 @@ fn shadowed(
         .flat_map_iter(|c| {
             let range = vertices.start + c * CHUNK..(vertices.start + (c + 1) * CHUNK).min(vertices.end);
             let done: Vec<PointTransfer> = range
-                .map(|v| integrator.integrate(mesh.positions[v], mesh.normals[v], offset, config.albedo))
+                .map(|v| integrator.integrate(mesh.positions[v], mesh.normals[v], offset, config.albedo.folded()))
                 .collect();
             progress.advance(done.len() as u64);
             done
@@ -922,13 +957,14 @@ fn shadowed(
 }
 
 /// Diffuse shadowed transfer plus `bounces` interreflections gathered over the same rays
-/// ([`Tracer`]): T = T^0 + T^1 + … + T^B.
+/// ([`Tracer`]): T = T^0 + T^1 + … + T^B; with `colours`, per channel, the rays traced once.
 fn interreflected(
     config: &Config,
     mesh: &Mesh,
     occluders: &Occluders,
     bounces: usize,
     offset: f64,
+    colours: Option<&[[f64; 3]]>,
     progress: &dyn Progress,
 ) -> Baked {
     let start = Instant::now();
@@ -936,13 +972,20 @@ fn interreflected(
     let coeffs = n * n;
     let directions = Stratified::new(config.rays, config.seed);
     let tracer = Tracer::new(mesh, occluders, &directions, n, offset);
-    let first = tracer.first_pass(config.albedo, Storage::Auto, progress);
+    let first = tracer.first_pass(config.albedo.folded(), Storage::Auto, progress);
     let trace_seconds = start.elapsed().as_secs_f64();
-    let mut transfer: Vec<f64> = first.points.iter().flat_map(|p| p.shadowed.iter().copied()).collect();
-    let passes = tracer.bounces(&transfer, bounces, config.albedo, &first.hits, progress);
+    let direct: Vec<f64> = first.points.iter().flat_map(|p| p.shadowed.iter().copied()).collect();
+    let (mut transfer, reflectance) = match colours {
+        Some(c) => (colourize(&direct, coeffs, c), Reflectance::Rgb(c)),
+        None => (direct, Reflectance::Grey(config.albedo.folded())),
+    };
+    let passes = tracer.bounces(&transfer, bounces, reflectance, &first.hits, progress);
     let bounce_seconds = start.elapsed().as_secs_f64() - trace_seconds;
-    let white =
-        |t: &[f64]| (4.0 * std::f64::consts::PI).sqrt() * t.iter().step_by(coeffs).sum::<f64>() / vertices as f64;
+    // T_0 of every vertex and channel: the response to a uniform white sky, averaged.
+    let channels = reflectance.channels();
+    let white = |t: &[f64]| {
+        (4.0 * std::f64::consts::PI).sqrt() * t.iter().step_by(coeffs).sum::<f64>() / (vertices * channels) as f64
+    };
     let mut white_sky_response = vec![white(&transfer)];
     // Total = T^0 + Σ_b T^b, added bounce after bounce in a fixed order.
     let mut gathered = None;
@@ -973,7 +1016,7 @@ fn interreflected(
     Baked {
         transfer,
         integration: stratified_rays(config),
-        error: Some(integration_error(mesh, &first.points, n, config.rays, config.albedo)),
+        error: Some(integration_error(mesh, &first.points, n, config.rays, config.albedo.folded())),
         interreflection: Some(interreflection),
         trace_seconds,
         bounce_seconds,
@@ -1046,9 +1089,10 @@ fn manifest(
         order: n,
         order_reason: config.order_reason.clone(),
         coefficients: plan.per_vertex,
+        channels: config.albedo.channels(),
         mode: config.mode,
         interreflection: baked.interreflection.clone(),
-        albedo: config.albedo,
+        albedo: config.albedo.describe(plan.colours.as_deref()),
         integration: baked.integration.clone(),
         offset: Offset {
             relative: config.offset,
@@ -1090,9 +1134,14 @@ fn packing(coeffs: usize, per_vertex: usize, glossy: Option<&GlossyInfo>, cpca: 
              means[c] + sum_p w_p bases[c][p], T laid out as below when uncompressed",
             c.components, c.clusters, c.clusters, c.components
         ),
-        (None, None) => format!(
+        (None, None) if per_vertex == coeffs => format!(
             "_PRT_k is a float VEC4 holding coefficients 4k..4k+3 in index order i = l(l+1)+m; {coeffs} \
              coefficients, zeros pad the last attribute"
+        ),
+        (None, None) => format!(
+            "_PRT_k is a float VEC4 holding values 4k..4k+3 of the 3 x {coeffs} colour transfer, channel-major: \
+             value c*{coeffs} + i is channel c's (R, G, B) coefficient i = l(l+1)+m, dotted with that channel's \
+             lighting; {per_vertex} values, zeros pad the last attribute"
         ),
         (Some(g), None) => format!(
             "_PRT_k is a float VEC4 holding values 4k..4k+3 of the {} x {coeffs} matrix, term-major: value \
@@ -1109,6 +1158,7 @@ fn packing(coeffs: usize, per_vertex: usize, glossy: Option<&GlossyInfo>, cpca: 
 fn run_time_snippet(config: &Config, quantized: Option<&Quantized>, lang: Language) -> String {
     let mut text = match &config.glossy {
         Some(g) => glossy_snippet(config.order, g.terms, g.factorization.grid, lang),
+        None if config.albedo.channels() > 1 => colour_snippet(config.order, lang),
         None => snippet(config.order, lang),
     };
     match (&config.compression, quantized) {
@@ -1148,6 +1198,9 @@ struct Stored<'a> {
 /// the manifest's body in the mesh's `extras` (so that the file explains itself).
 fn glb_mesh(mesh: &Mesh, stored: &Stored, body: &TransferBody, h: Option<Vec<f32>>) -> GlbMesh {
     let mut extras = serde_json::json!({ "order": body.order, "mode": body.mode, "albedo": body.albedo });
+    if body.channels != 1 {
+        extras["channels"] = body.channels.into();
+    }
     if let Some(g) = &body.glossy {
         extras["glossy"] = serde_json::json!({
             "terms": g.terms,
@@ -1375,7 +1428,7 @@ fn glossy_interreflected(
     let start = Instant::now();
     let bounces = config.bounces;
     let occluders = Occluders::new(&mesh.positions, &mesh.triangles);
-    let diffuse = interreflected(config, mesh, &occluders, bounces - 1, plan.offset, progress);
+    let diffuse = interreflected(config, mesh, &occluders, bounces - 1, plan.offset, None, progress);
     let visibility =
         Visibility::Interreflected { occluders: &occluders, offset: plan.offset, mesh, radiance: &diffuse.transfer };
     let transfer = glossy(mesh, integrator, &visibility, 0..mesh.positions.len(), progress);
@@ -1387,7 +1440,7 @@ fn glossy_interreflected(
              interreflected transfer (albedo {}, {} bounce(s): the passes white_sky_response lists, traced with \
              {} stratified rays per vertex) interpolated at the hit, times sigma_k g_k(c) and the cell's weight; \
              light between glossy surfaces is carried as if they were diffuse",
-            config.albedo,
+            config.albedo.folded(),
             bounces - 1,
             config.rays
         )),
@@ -1489,4 +1542,14 @@ fn integration_error(mesh: &Mesh, points: &[PointTransfer], order: usize, rays: 
         max_vertex: at(1.0),
         visible_fraction: visible / points.len().max(1) as f64,
     }
+}
+
+/// Serde's default for [`TransferBody::channels`].
+fn one() -> usize {
+    1
+}
+
+/// Whether [`TransferBody::channels`] is the grey 1 (left out of the manifest).
+fn is_one(channels: &usize) -> bool {
+    *channels == 1
 }

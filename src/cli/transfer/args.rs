@@ -2,6 +2,7 @@
 
 use crate::cli::options::{parse_output, Execution};
 use crate::io::Output;
+use crate::transfer::albedo::Albedo;
 use crate::transfer::quantize::Quantization;
 use crate::transfer::stage::Mode;
 use clap::Parser;
@@ -75,10 +76,13 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
 
-    /// Constant albedo baked into diffuse transfer; for a glossy bake (--factors) with --mode
-    /// interreflected, the albedo of the surfaces the light bounces off.
-    #[arg(long, default_value_t = 1.0)]
-    pub albedo: f64,
+    /// Albedo baked into diffuse transfer: a number (grey: one transfer vector per vertex), R,G,B
+    /// (a linear colour: one vector per colour channel, so interreflections bleed colour), or
+    /// `mesh` (each vertex's base colour from the file: glTF base colour factor × texture ×
+    /// COLOR_0, a PLY's red green blue). For a glossy bake (--factors) with --mode
+    /// interreflected, the grey albedo of the surfaces the light bounces off.
+    #[arg(long, default_value = "1", value_parser = Albedo::parse, value_name = "A|R,G,B|mesh")]
+    pub albedo: Albedo,
 
     /// Shadow rays leave from x + offset·n, offset given as a fraction of the mesh's bounding-box
     /// diagonal (stated in the manifest with its absolute value).
