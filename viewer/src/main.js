@@ -445,6 +445,9 @@ async function prtMesh(uniforms) {
   if (!mesh) throw new Error(`${url}: no mesh`);
   const bake = mesh.userData['prtkit.transfer'];
   if (bake?.quantization) await dequantizeTransfer(url, mesh, bake.quantization);
+  // A coloured bake (transfer --albedo R,G,B or mesh) holds one transfer vector per channel.
+  docs.prtChannels = bake?.channels ?? 1;
+  docs.prtCoeffs = (bake?.order ?? 0) ** 2;
   if (bake?.cpca) return prtCpcaMesh(url, mesh, bake, uniforms);
   let K = 0;
   while (mesh.geometry.attributes[prtAttribute(K)]) K++;
@@ -456,7 +459,7 @@ async function prtMesh(uniforms) {
   // past that, the transfer is read from a texture by gl_VertexID.
   const inAttributes = K + 1 <= gl.getParameter(gl.MAX_VERTEX_ATTRIBS);
   document.getElementById('source').textContent =
-    `${url.split('/').pop()}: n = ${bake.order}, ${bake.mode}${inAttributes ? '' : `, transfer read from a texture (${K} texels a vertex)`}`;
+    `${url.split('/').pop()}: n = ${bake.order}, ${bake.mode}${docs.prtChannels === 3 ? ', RGB transfer' : ''}${inAttributes ? '' : `, transfer read from a texture (${K} texels a vertex)`}`;
   if (!inAttributes) uniforms.prtTransfer = { value: (docs.prtTexture ??= transferTexture(mesh.geometry, K)) };
   const vertexShader = inAttributes ? prtVertexShader(K) : prtTextureVertexShader(K);
   shMaterial = new THREE.ShaderMaterial({ uniforms, vertexShader, fragmentShader: PRT_FRAGMENT, side: THREE.DoubleSide });
@@ -562,7 +565,7 @@ async function prtCpcaMesh(url, mesh, bake, uniforms) {
       const view = await docs.prt.parser.getDependency('bufferView', blobs[name].bufferView);
       return new Float32Array(view, 0, blobs[name].count);
     };
-    docs.cpca = cpcaBake(C, P, K, coeffs, await floats('cpca.means'), await floats('cpca.bases'));
+    docs.cpca = cpcaBake(C, P, K, coeffs, await floats('cpca.means'), await floats('cpca.bases'), docs.prtChannels);
     if (g) {
       const snippet = await (await fetch(q.get('glsl'))).text();
       if (!snippet.includes(`#define PRTKIT_GLOSSY_TERMS ${K}\n`) || !snippet.includes(`#define PRTKIT_GLOSSY_RESOLUTION ${g.resolution}\n`)) {
@@ -591,7 +594,10 @@ function updateShUniforms() {
   u.exposureScale.value = exposureScale();
   u.prtkitFromWorld.value = prtkitFromWorld(state.frame);
   if (docs.sh && u.cpcaLighting) projectCpcaLighting(docs.cpca, rotateShZ(docs.sh.coefficients, turn));
-  else if (docs.sh && u.shLighting) u.shLighting.value = transferLightingUniform(rotateShZ(docs.sh.coefficients, turn), u.shLighting.value.length);
+  else if (docs.sh && u.shLighting) {
+    const turned = rotateShZ(docs.sh.coefficients, turn);
+    u.shLighting.value = transferLightingUniform(turned, u.shLighting.value.length, docs.prtChannels ?? 1, docs.prtCoeffs);
+  }
   else if (docs.sh) u.shIrradiance.value = irradianceUniform(rotateShZ(docs.sh.coefficients, turn), num('albedo', 1));
   u.envTurn.value = turn;
   scene.backgroundIntensity = exposureScale();

@@ -315,11 +315,19 @@ export async function loadNormalCodes(codesUrl, reportUrl, width, height) {
 export const prtAttribute = (k) => `_prt_${k}`;
 
 /**
- * The lighting uniform of the PRT vertex shader: the (rotated) lighting SH of the bake's n bands,
- * zero-padded to the 4K coefficients the K attributes hold.
+ * The lighting uniform of the PRT vertex shader, one vec3 per value the K attributes hold (4K,
+ * zero-padded): for a grey bake the (rotated) lighting SH L_i of its n bands; for a coloured bake
+ * (`channels` 3: 3 × `coeffs` values channel-major, docs/formats/transfer.md) value c·n² + i gets
+ * L_i's channel c alone, so the same Σ_v lighting[v] · T_v gives B_c = Σ_i T_ci L_ci.
  */
-export function transferLightingUniform(coefficients, count) {
-  return Array.from({ length: count }, (_, i) => new THREE.Vector3(...(coefficients[i] ?? [0, 0, 0])));
+export function transferLightingUniform(coefficients, count, channels = 1, coeffs = count) {
+  return Array.from({ length: count }, (_, v) => {
+    if (channels === 1) return new THREE.Vector3(...(coefficients[v] ?? [0, 0, 0]));
+    const c = Math.floor(v / coeffs), light = coefficients[v % coeffs] ?? [0, 0, 0];
+    const masked = [0, 0, 0];
+    if (c < 3) masked[c] = light[c];
+    return new THREE.Vector3(...masked);
+  });
 }
 
 /**
@@ -521,8 +529,8 @@ export const CPCA_LIGHTING_WIDTH = 2048;
  * hold them, and an RGBA32F texture for the projected lighting, texel (c·(1 + P) + j)·K + k (row-
  * major, CPCA_LIGHTING_WIDTH wide) = m_ck·L for j = 0 and b_c(j−1)k·L for j ≥ 1, rgb.
  */
-export function cpcaBake(clusters, components, terms, coeffs, means, bases) {
-  const D = terms * coeffs;
+export function cpcaBake(clusters, components, terms, coeffs, means, bases, channels = 1) {
+  const D = channels * terms * coeffs;
   if (means.length !== clusters * D) throw new Error(`cpca.means: ${means.length} values, not C·D = ${clusters * D}`);
   if (bases.length !== clusters * components * D) throw new Error(`cpca.bases: ${bases.length} values, not C·P·D = ${clusters * components * D}`);
   const texels = clusters * (1 + components) * terms;
@@ -533,7 +541,7 @@ export function cpcaBake(clusters, components, terms, coeffs, means, bases) {
   texture.generateMipmaps = false;
   texture.flipY = false;
   texture.needsUpdate = true;
-  return { clusters, components, terms, coeffs, means, bases, texture };
+  return { clusters, components, terms, coeffs, channels, means, bases, texture };
 }
 
 /**
@@ -542,8 +550,8 @@ export function cpcaBake(clusters, components, terms, coeffs, means, bases) {
  * upload). C·(1 + P)·K·n² multiply-adds per channel, in double precision.
  */
 export function projectCpcaLighting(cpca, lighting) {
-  const { clusters: C, components: P, terms: K, coeffs: N, means, bases, texture } = cpca;
-  const D = K * N, data = texture.image.data;
+  const { clusters: C, components: P, terms: K, coeffs: N, channels, means, bases, texture } = cpca;
+  const D = channels * K * N, data = texture.image.data;
   const Lr = new Float64Array(N), Lg = new Float64Array(N), Lb = new Float64Array(N);
   for (let i = 0; i < N; i++) [Lr[i], Lg[i], Lb[i]] = lighting[i] ?? [0, 0, 0];
   let o = 0;
@@ -552,9 +560,16 @@ export function projectCpcaLighting(cpca, lighting) {
       const src = j === 0 ? means : bases, start = j === 0 ? c * D : (c * P + j - 1) * D;
       for (let k = 0; k < K; k++, o += 4) {
         let r = 0, g = 0, b = 0;
-        for (let i = 0, s = start + k * N; i < N; i++, s++) {
-          const t = src[s];
-          r += t * Lr[i]; g += t * Lg[i]; b += t * Lb[i];
+        if (channels === 1) {
+          for (let i = 0, s = start + k * N; i < N; i++, s++) {
+            const t = src[s];
+            r += t * Lr[i]; g += t * Lg[i]; b += t * Lb[i];
+          }
+        } else {
+          // A coloured bake (K = 1): channel c's n² values dotted with channel c of the lighting.
+          for (let i = 0; i < N; i++) {
+            r += src[start + i] * Lr[i]; g += src[start + N + i] * Lg[i]; b += src[start + 2 * N + i] * Lb[i];
+          }
         }
         data[o] = r; data[o + 1] = g; data[o + 2] = b; data[o + 3] = 1;
       }

@@ -700,6 +700,40 @@ async function quantizedPrtTests() {
   figures.prt_quantized = fig;
 }
 
+// ---- Coloured PRT (transfer --albedo R,G,B or mesh: three transfer vectors per vertex) --------
+// The page dots channel c's transfer with channel c of the lighting (the lighting uniform masked
+// per channel); render does the same on the CPU. The corner (red and green walls, a white ball,
+// its PLY's vertex colours) interreflected, uncompressed and by clustered PCA, and the knot in one
+// colour, each turned 60° in the three frame, over the mesh less a rim.
+async function colourPrtTests() {
+  const { dir, sky } = skyIn('prt-colour');
+  const corner = 'testdata/meshes/corner-ball.ply', knot = 'testdata/meshes/torus-knot.obj';
+  const cornerCam = { eye: [2.2, -2.6, 1.8], target: [-0.3, 0.3, 0.3] };
+  const bakes = [
+    { name: 'corner-mesh', mesh: corner, ...cornerCam, args: ['--mode', 'interreflected', '--albedo', 'mesh'] },
+    { name: 'corner-mesh-cpca', mesh: corner, ...cornerCam, args: ['--mode', 'interreflected', '--albedo', 'mesh', '--clusters', '8', '--pca', '4'] },
+    { name: 'knot-orange', mesh: knot, eye: [2.2, -3.4, 2.4], target: [0, 0, 0], args: ['--albedo', '0.9,0.45,0.2'] },
+  ];
+  const sh = join(dir, 'sky2.sh.json'), EXP = '-1.5';
+  run('sh-project', [sky, '-F', '2', '-o', sh, '-q']);
+  const fig = {};
+  for (const b of bakes) {
+    const glb = join(dir, `${b.name}.glb`), png = join(out, `prt-colour-${b.name}-60-render.png`);
+    run('transfer', [b.mesh, '-n', '3', '--rays', '256', ...b.args, '--glb', glb, '-o', join(dir, `${b.name}.json`), '-q']);
+    run('render', [sky, '--scene', b.mesh, '--shading', 'transfer', '--transfer', glb, '--env-rotation', '60',
+      '--eye', b.eye.join(','), '--target', b.target.join(','), '--fov', String(FOV), '--res', '200x200', '--png', png, '--exposure', EXP, '-q']);
+    const ref = readPng(png);
+    const img = mirrorX((await view({ mode: 'prt', glb: url(glb), sh: url(sh), rotate: '60', eye: toPage(b.eye, 'three'),
+      target: toPage(b.target, 'three'), fov: String(FOV), res: '200x200', exposure: EXP })).image);
+    writePng(join(out, `prt-colour-${b.name}-60-viewer-three.png`), img);
+    const c = compare(img, ref, meshMask(img));
+    fig[b.name] = c.psnr;
+    check(`prt coloured ${b.name} (transfer ${b.args.join(' ')}), turned 60° (three frame) vs render --shading transfer`, c.psnr >= 35,
+      `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+  }
+  figures.prt_colour = fig;
+}
+
 // ---- Diffuse PRT at n = 8 (16 four-vectors: past WebGL 2's 16 attributes with the position) ----
 // The knot baked at n = 8 (64 coefficients), relit from a texture of the transfer read by
 // gl_VertexID, against render --shading transfer of the same .glb, turned 60° in the three frame.
@@ -1335,6 +1369,7 @@ try {
   if (!only || only === 'prt' || only === 'cpca') await cpcaPrtTests();
   if (!only || only === 'prt' || only === 'quantized') await quantizedPrtTests();
   if (!only || only === 'prt' || only === 'n8') await order8PrtTests();
+  if (!only || only === 'prt' || only === 'colour') await colourPrtTests();
 } catch (e) {
   check('viewer pages', false, e.stack ?? String(e));
 } finally {
