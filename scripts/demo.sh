@@ -149,6 +149,39 @@ if [ -f "$probes/grace_latlong.exr" ] && [ -f "$probes/uffizi_ict_latlong_256x12
         rows+=("$g/$name.png")
     done
     "$bin/examples/stack_panels" "$out/transfer-glossy.png" "${rows[@]}"
+
+    say "10. transfer --albedo mesh: a corner's red and green walls bleeding colour onto its floor and ball (transfer-colour.png)"
+    # The PLY's vertex colours are the albedo: three transfer vectors per vertex, one per colour
+    # channel, so each bounce carries the colour of the surface it leaves. Columns: a grey bake
+    # (albedo 0.8), the coloured bake shadowed (no bounce: no bleeding), and interreflected.
+    c="$out/transfer-colour"
+    mkdir -p "$c"
+    corner=testdata/meshes/corner-ball.ply
+    "$bin/transfer" "$corner" -n 3 --rays 512 --mode interreflected --bounces 3 --albedo 0.8 \
+        --glb "$c/grey.glb" -o "$c/grey.json" -q
+    for mode in shadowed interreflected; do
+        bounces=(); [ "$mode" = interreflected ] && bounces=(--bounces 3)
+        "$bin/transfer" "$corner" -n 3 --rays 512 --mode "$mode" "${bounces[@]}" --albedo mesh \
+            --glb "$c/$mode.glb" -o "$c/$mode.json" -q
+    done
+    view=(--scene "$corner" --eye 2.4,-2.8,1.9 --target -0.3,0.3,0.35 --fov 38 --res 128x128 -q)
+    rows=()
+    for row in "grace grace.exr 0 3.5" "uffizi uffizi.exr 0 -2" "grace-turned grace.exr 120 3.5"; do
+        set -- $row
+        name=$1 env="$t/$2" turn=$3 exposure=$4
+        title=$([ "$turn" = 0 ] && echo "$name" || echo "grace +${turn}deg")
+        "$bin/render" "$env" "${view[@]}" --env-rotation "$turn" --shading transfer --transfer "$c/grey.glb" \
+            --brdf lambert:albedo=0.8 -o "$c/$name-grey.exr"
+        "$bin/render" "$env" "${view[@]}" --env-rotation "$turn" --shading transfer --transfer "$c/shadowed.glb" \
+            -o "$c/$name-shadowed.exr"
+        "$bin/render" "$env" "${view[@]}" --env-rotation "$turn" --shading transfer --transfer "$c/interreflected.glb" \
+            -o "$c/$name-interreflected.exr" --exposure "$exposure" --panel "$c/$name.png" \
+            --panel-item "$title|grey 0.8|3 bounces=$c/$name-grey.exr" \
+            --panel-item "$title|vertex colours|shadowed=$c/$name-shadowed.exr" \
+            --panel-item "$title|vertex colours|3 bounces=-"
+        rows+=("$c/$name.png")
+    done
+    "$bin/examples/stack_panels" "$out/transfer-colour.png" "${rows[@]}"
 else
     printf 'skipped: %s holds no grace_latlong.exr and uffizi_ict_latlong_256x128.hdr\n' "$probes" >&2
 fi
