@@ -18,7 +18,7 @@ import { PBRMaterial } from '../node_modules/@babylonjs/core/Materials/PBR/pbrMa
 import { CreateSphere } from '../node_modules/@babylonjs/core/Meshes/Builders/sphereBuilder.js';
 import '../node_modules/@babylonjs/core/Materials/Textures/Loaders/ddsTextureLoader.js';
 import '../node_modules/@babylonjs/core/Helpers/sceneHelpers.js';
-import { readFrame } from '../src/readback.js';
+import { exposeEnginePage } from '../src/readback.js';
 
 const q = new URLSearchParams(location.search);
 const vec = (s, d) => Vector3.FromArray((s ?? d).split(',').map(Number));
@@ -69,18 +69,12 @@ async function setup() {
   return true;
 }
 
-function pixels() {
-  scene.render();
-  const gl = engine._gl;
-  const frame = readFrame(gl, W, H);
-  const e = gl.getError();
-  if (e !== gl.NO_ERROR) errors.push(`WebGL error 0x${e.toString(16)}`);
-  return frame;
-}
-
-window.prtkit = {
+exposeEnginePage({
   errors,
-  ready: setup().catch((e) => { errors.push(String(e.stack ?? e)); return false; }),
-  pixels,
+  setup,
+  draw: () => scene.render(),
+  context: () => engine._gl,
+  width: W,
+  height: H,
   gpu: () => 'Babylon.js ' + Engine.Version,
-};
+});

@@ -7,7 +7,7 @@
 // the skybox too; 0 by default), eye, target (glTF frame), fov (vertical, degrees), res W×H.
 // Exposes window.prtkit = { ready, pixels(), errors } as the three.js viewer does (test/run.mjs).
 import { read } from '../node_modules/ktx-parse/dist/index.mjs';
-import { readFrame } from '../src/readback.js';
+import { exposeEnginePage } from '../src/readback.js';
 
 const q = new URLSearchParams(location.search);
 const num3 = (s, d) => (s ?? d).split(',').map(Number);
@@ -76,17 +76,12 @@ async function setup() {
   return true;
 }
 
-function pixels() {
-  renderer.render(swapChain, view);
-  const frame = readFrame(gl, W, H);
-  const e = gl.getError();
-  if (e !== gl.NO_ERROR) errors.push(`WebGL error 0x${e.toString(16)}`);
-  return frame;
-}
-
-window.prtkit = {
+exposeEnginePage({
   errors,
-  ready: setup().catch((e) => { errors.push(String(e.stack ?? e)); return false; }),
-  pixels,
+  setup,
+  draw: () => renderer.render(swapChain, view),
+  context: () => gl,
+  width: W,
+  height: H,
   gpu: () => 'Filament (npm filament)',
-};
+});

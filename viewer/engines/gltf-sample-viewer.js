@@ -20,7 +20,7 @@
 // Exposes window.prtkit = { ready, pixels(), errors } as the three.js viewer does (test/run.mjs).
 // The Sample Viewer writes pow(c, 1/2.2), not the sRGB curve (its tonemapping.glsl linearTosRGB).
 import { GltfView, ResourceLoader } from '../node_modules/@khronosgroup/gltf-viewer/dist/gltf-viewer.module.js';
-import { readFrame } from '../src/readback.js';
+import { exposeEnginePage } from '../src/readback.js';
 
 const LIB = '../node_modules/@khronosgroup/gltf-viewer/dist/libs/';
 const q = new URLSearchParams(location.search);
@@ -170,17 +170,12 @@ async function setup() {
   return true;
 }
 
-function pixels() {
-  view.renderFrame(state, W, H);
-  const frame = readFrame(gl, W, H);
-  const e = gl.getError();
-  if (e !== gl.NO_ERROR) errors.push(`WebGL error 0x${e.toString(16)}`);
-  return frame;
-}
-
-window.prtkit = {
+exposeEnginePage({
   errors,
-  ready: setup().catch((e) => { errors.push(String(e.stack ?? e)); return false; }),
-  pixels,
+  setup,
+  draw: () => view.renderFrame(state, W, H),
+  context: () => gl,
+  width: W,
+  height: H,
   gpu: () => 'Khronos glTF Sample Viewer (npm @khronosgroup/gltf-viewer)',
-};
+});

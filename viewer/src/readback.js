@@ -11,3 +11,25 @@ export function readFrame(gl, width, height) {
   for (let i = 0; i < buf.length; i += 0x8000) s += String.fromCharCode.apply(null, buf.subarray(i, i + 0x8000));
   return { width, height, rgbaBottomUp: btoa(s) };
 }
+
+/**
+ * The hook an engine page (`engines/*.js`) exposes to test/run.mjs, as the three.js viewer does:
+ * window.prtkit = { errors, ready, pixels(), gpu() }. `setup()` loads the bake (its failure is
+ * recorded in `errors`); `pixels()` draws one frame with `draw()`, reads it back from the context
+ * `context()` returns, and records any WebGL error.
+ */
+export function exposeEnginePage({ errors, setup, draw, context, width, height, gpu }) {
+  window.prtkit = {
+    errors,
+    ready: setup().catch((e) => { errors.push(String(e.stack ?? e)); return false; }),
+    pixels() {
+      draw();
+      const gl = context();
+      const frame = readFrame(gl, width, height);
+      const e = gl.getError();
+      if (e !== gl.NO_ERROR) errors.push(`WebGL error 0x${e.toString(16)}`);
+      return frame;
+    },
+    gpu,
+  };
+}
