@@ -640,7 +640,11 @@ pub fn relight(bake: &TransferBake, light: &ShCoeffs, rotation: &ShRotation, out
 
 /// RGB radiance from one vertex's (or texel's) transfer `t` and the lighting's RGB coefficients
 /// `l`, in single precision as a GPU would: B = Σ_i T_i L_i with one grey vector (`channels`
-/// 1), or B_c = Σ_i T_ci L_ci with one vector per channel, channel-major (3).
+/// 1), or B_c = Σ_i T_ci L_ci with one vector per channel, channel-major (3). `l` holds the
+/// bake's n² coefficients, so a channel's block of `t` is `l.len()` long. Always inlined, so
+/// that the branch on `channels` leaves [`relight`]'s per-vertex loop: called out of line, the
+/// grey dot product no longer vectorized and relighting slowed down (`docs/results/transfer.md`).
+#[inline(always)]
 fn dot_lighting(t: &[f32], l: &[[f32; 3]], channels: usize) -> [f32; 3] {
     let mut b = [0.0f32; 3];
     if channels == 1 {
