@@ -8,15 +8,9 @@
 
 mod common;
 
-use common::{cmd, stderr};
+use common::{check_glsl_fragment, check_wgsl, cmd, stderr};
 use prtkit::factor::{Domain, Grid};
 use prtkit::transfer::shaders::{glossy_snippet, snippet, Language};
-
-fn validate(module: &naga::Module, what: &str) {
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-        .validate(module)
-        .unwrap_or_else(|e| panic!("{what}: {e:?}"));
-}
 
 /// The GLSL snippet in a fragment shader that relights a pixel: the lighting block, the h
 /// texture, c_t as inputs, B from `prtkitGlossyRadiance` plus a rotated coefficient (so both
@@ -65,15 +59,10 @@ fn glossy_snippets_parse_and_validate_in_naga_for_both_domains() {
         let what = format!("order {order}, K = {terms}, {} x {} {}", grid.n, grid.n, grid.domain);
         let glsl = glossy_snippet(order, terms, grid, Language::Glsl);
         let src = glsl_client(&glsl, order, terms);
-        let module = naga::front::glsl::Frontend::default()
-            .parse(&naga::front::glsl::Options::from(naga::ShaderStage::Fragment), &src)
-            .unwrap_or_else(|e| panic!("glsl {what}: {e:?}\n{src}"));
-        validate(&module, &format!("glsl {what}"));
+        check_glsl_fragment(&src, &format!("glsl {what}"));
         let wgsl = glossy_snippet(order, terms, grid, Language::Wgsl);
         let src = wgsl_client(&wgsl, order, terms);
-        let module =
-            naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("wgsl {what}: {}", e.emit_to_string(&src)));
-        validate(&module, &format!("wgsl {what}"));
+        check_wgsl(&src, &format!("wgsl {what}"));
         let hlsl = glossy_snippet(order, terms, grid, Language::Hlsl);
         for decl in [
             "float3 prtkitGlossyLocalView(float3 n, float3 wo)",

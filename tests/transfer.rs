@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{cmd, stderr};
+use common::{check_glsl_fragment, check_wgsl, cmd, stderr};
 use glam::DVec3;
 use prtkit::mesh::{uv_sphere, Mesh};
 use prtkit::progress::NoProgress;
@@ -208,12 +208,7 @@ fn thread_counts_give_the_same_bytes() {
          layout(location = 0) in vec4 t0;\nlayout(location = 0) out vec4 o;\n\
          void main() {{ vec4 t[7] = vec4[7](t0, t0, t0, t0, t0, t0, t0); o = vec4(prtkitTransferRadiance(t), 1.0); }}\n"
     );
-    let module = naga::front::glsl::Frontend::default()
-        .parse(&naga::front::glsl::Options::from(naga::ShaderStage::Fragment), &src)
-        .unwrap_or_else(|e| panic!("{e:?}\n{src}"));
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-        .validate(&module)
-        .unwrap();
+    check_glsl_fragment(&src, "the order-5 GLSL snippet");
 }
 
 #[test]
@@ -223,11 +218,6 @@ fn hlsl_and_wgsl_snippets_beside_the_glsl_one_and_their_rotation_compiles() {
     // so each order is different code). naga has no HLSL front end: here the HLSL is checked for its
     // declarations; glslang compiles it (`tests/hlsl_snippets.rs`).
     let dir = tempfile::tempdir().unwrap();
-    let validate = |module: &naga::Module, what: &str| {
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-            .validate(module)
-            .unwrap_or_else(|e| panic!("{what}: {e:?}"));
-    };
     for order in 1..=8usize {
         let files = ["t.glsl", "t.hlsl", "t.wgsl"].map(|f| dir.path().join(format!("{order}-{f}")));
         cmd("transfer")
@@ -253,10 +243,7 @@ fn hlsl_and_wgsl_snippets_beside_the_glsl_one_and_their_rotation_compiles() {
              o = vec4(prtkitTransferRadiance(t) + turned[{last}], 1.0); }}\n",
             last = c - 1
         );
-        let module = naga::front::glsl::Frontend::default()
-            .parse(&naga::front::glsl::Options::from(naga::ShaderStage::Fragment), &src)
-            .unwrap_or_else(|e| panic!("order {order}: {e:?}\n{src}"));
-        validate(&module, &format!("glsl order {order}"));
+        check_glsl_fragment(&src, &format!("glsl order {order}"));
         let src = format!(
             "{wgsl}@group(0) @binding(0) var<uniform> light: array<vec4<f32>, {c}>;\n\
              @fragment fn main(@location(0) t0: vec4<f32>, @location(1) axis: vec3<f32>) -> @location(0) vec4<f32> {{\n\
@@ -265,9 +252,7 @@ fn hlsl_and_wgsl_snippets_beside_the_glsl_one_and_their_rotation_compiles() {
              var t: array<vec4<f32>, {v}>;\n for (var k = 0; k < {v}; k++) {{ t[k] = t0; }}\n\
              return vec4<f32>(prtkit_transfer_radiance(t, turned), 1.0);\n}}\n"
         );
-        let module =
-            naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("order {order}: {}", e.emit_to_string(&src)));
-        validate(&module, &format!("wgsl order {order}"));
+        check_wgsl(&src, &format!("wgsl order {order}"));
         assert!(
             hlsl.contains("float3 prtkitTransferRadiance(float4 transfer[PRTKIT_TRANSFER_VEC4S])")
                 && hlsl.contains(&format!("void prtkitRotateSH(float3x3 R, float3 sh[{c}], out float3 rotated[{c}])")),

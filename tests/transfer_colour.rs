@@ -13,7 +13,7 @@
 
 mod common;
 
-use common::{cmd, run_in, stderr, test_mesh};
+use common::{check_glsl_fragment, check_wgsl, cmd, run_in, stderr, test_mesh};
 use glam::DVec3;
 use prtkit::mesh::{uv_sphere, Mesh};
 use prtkit::progress::NoProgress;
@@ -278,11 +278,6 @@ fn a_base_colour_texture_is_the_albedo_at_each_vertex() {
 fn colour_snippets_compile_and_dot_each_channel_with_its_own_lighting() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let validate = |module: &naga::Module, what: &str| {
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-            .validate(module)
-            .unwrap_or_else(|e| panic!("{what}: {e:?}"));
-    };
     for order in [1usize, 3, 5] {
         let mesh = test_mesh("bowl.obj");
         let n = order.to_string();
@@ -316,10 +311,7 @@ fn colour_snippets_compile_and_dot_each_channel_with_its_own_lighting() {
              void main() {{ vec4 t[{v}]; for (int k = 0; k < {v}; ++k) t[k] = t0; \
              o = vec4(prtkitTransferRadianceRGB(t), 1.0); }}\n"
         );
-        let module = naga::front::glsl::Frontend::default()
-            .parse(&naga::front::glsl::Options::from(naga::ShaderStage::Fragment), &src)
-            .unwrap_or_else(|e| panic!("order {order}: {e:?}\n{src}"));
-        validate(&module, &format!("glsl order {order}"));
+        check_glsl_fragment(&src, &format!("glsl order {order}"));
         let src = format!(
             "{wgsl}@group(0) @binding(0) var<uniform> light: array<vec4<f32>, {c}>;\n\
              @fragment fn main(@location(0) t0: vec4<f32>) -> @location(0) vec4<f32> {{\n\
@@ -327,9 +319,7 @@ fn colour_snippets_compile_and_dot_each_channel_with_its_own_lighting() {
              var t: array<vec4<f32>, {v}>;\n for (var k = 0; k < {v}; k++) {{ t[k] = t0; }}\n\
              return vec4<f32>(prtkit_transfer_radiance_rgb(t, sh), 1.0);\n}}\n"
         );
-        let module =
-            naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("order {order}: {}", e.emit_to_string(&src)));
-        validate(&module, &format!("wgsl order {order}"));
+        check_wgsl(&src, &format!("wgsl order {order}"));
     }
 }
 

@@ -16,7 +16,7 @@
 
 mod common;
 
-use common::{cmd, run_in, stderr, test_mesh};
+use common::{check_glsl_fragment, check_wgsl, cmd, run_in, stderr, test_mesh};
 use serde_json::Value;
 use std::path::Path;
 
@@ -341,15 +341,7 @@ fn the_snippets_of_a_quantized_bake_dequantize_with_the_stored_scales_and_compil
          {glsl}layout(location = 0) in vec4 t0;\nlayout(location = 0) out vec4 o;\n\
          void main() {{ vec4 t[3] = vec4[3](t0, t0, t0); prtkitDequantizeTransfer(t); o = vec4(prtkitTransferRadiance(t), 1.0); }}\n"
     );
-    let validate = |module: &naga::Module| {
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-            .validate(module)
-            .unwrap();
-    };
-    let module = naga::front::glsl::Frontend::default()
-        .parse(&naga::front::glsl::Options::from(naga::ShaderStage::Fragment), &src)
-        .unwrap_or_else(|e| panic!("{e:?}\n{src}"));
-    validate(&module);
+    check_glsl_fragment(&src, "the quantized bake's GLSL");
     let src = format!(
         "{wgsl}@group(0) @binding(0) var<uniform> light: array<vec4<f32>, 9>;\n\
          @fragment fn main(@location(0) t0: vec4<f32>) -> @location(0) vec4<f32> {{\n\
@@ -357,5 +349,5 @@ fn the_snippets_of_a_quantized_bake_dequantize_with_the_stored_scales_and_compil
          let t = prtkit_dequantize_transfer(array<vec4<f32>, 3>(t0, t0, t0));\n\
          return vec4<f32>(prtkit_transfer_radiance(t, l), 1.0);\n}}\n"
     );
-    validate(&naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}\n{src}", e.emit_to_string(&src))));
+    check_wgsl(&src, "the quantized bake's WGSL");
 }

@@ -205,3 +205,27 @@ pub fn path_with_stages() -> std::ffi::OsString {
     let rest = std::env::var_os("PATH").unwrap_or_default();
     std::env::join_paths(std::iter::once(bin_dir()).chain(std::env::split_paths(&rest))).expect("PATH entries")
 }
+
+/// Parses `src` as a GLSL 450 fragment shader with naga's front end and validates the module
+/// (every flag, every capability), failing with `what`, the error and the source.
+pub fn check_glsl_fragment(src: &str, what: &str) {
+    let module = naga::front::glsl::Frontend::default()
+        .parse(&naga::front::glsl::Options::from(naga::ShaderStage::Fragment), src)
+        .unwrap_or_else(|e| panic!("{what}: {e:?}\n{src}"));
+    validate_naga(&module, what);
+}
+
+/// Parses `src` as WGSL with naga's front end and validates the module, failing with `what`,
+/// the error in context and the source.
+pub fn check_wgsl(src: &str, what: &str) {
+    let module =
+        naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{what}: {}\n{src}", e.emit_to_string(src)));
+    validate_naga(&module, what);
+}
+
+/// naga's validator over `module`, every flag and capability.
+fn validate_naga(module: &naga::Module, what: &str) {
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+        .validate(module)
+        .unwrap_or_else(|e| panic!("{what}: {e:?}"));
+}
