@@ -659,6 +659,28 @@ async function cpcaPrtTests() {
   figures.prt_cpca = fig;
 }
 
+// One bake `b` ({ name, mesh, n, args, brdf, eye, target, exp }) of group `group`: baked by
+// transfer (with its GLSL snippet, which a glossy bake's page needs), relit by the page with the
+// environment turned 60° (three frame) and by render --shading transfer of the same .glb, compared
+// over the mesh less a rim (PSNR ≥ 35 dB). Returns the PSNR.
+async function relitAt60(dir, sky, b, group, label) {
+  const glb = join(dir, `${b.name}.glb`), glsl = join(dir, `${b.name}.glsl`), png = join(out, `prt-${group}-${b.name}-60-render.png`);
+  run('transfer', [b.mesh, ...b.args, '--glb', glb, '-o', join(dir, `${b.name}.json`), '--glsl', glsl, '-q']);
+  const sh = join(dir, `sky${b.n - 1}.sh.json`);
+  if (!existsSync(sh)) run('sh-project', [sky, '-F', String(b.n - 1), '-o', sh, '-q']);
+  run('render', [sky, '--scene', b.mesh, ...b.brdf, '--shading', 'transfer', '--transfer', glb, '--env-rotation', '60',
+    '--eye', b.eye.join(','), '--target', b.target.join(','), '--fov', String(FOV), '--res', '200x200', '--png', png, '--exposure', b.exp, '-q']);
+  const ref = readPng(png);
+  const params = { mode: 'prt', glb: url(glb), sh: url(sh), ...(b.brdf.length ? { glsl: url(glsl) } : {}) };
+  const img = mirrorX((await view({ ...params, rotate: '60', eye: toPage(b.eye, 'three'), target: toPage(b.target, 'three'),
+    fov: String(FOV), res: '200x200', exposure: b.exp })).image);
+  writePng(join(out, `prt-${group}-${b.name}-60-viewer-three.png`), img);
+  const c = compare(img, ref, meshMask(img));
+  check(`prt ${label} ${b.name} (transfer ${b.args.join(' ')}), turned 60° (three frame) vs render --shading transfer`, c.psnr >= 35,
+    `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
+  return c.psnr;
+}
+
 // ---- Quantized PRT bakes (transfer --quantize) against render --shading transfer ---------------
 // The page dequantizes on load (normalized codes times the .glb's scales, per value index or per
 // cluster); render reads the same quantized .glb on the CPU. Diffuse (the knot, i16 and i8),
@@ -680,23 +702,7 @@ async function quantizedPrtTests() {
       args: ['-n', '3', '--rays', '256', '--clusters', '8', '--pca', '4', '--quantize', 'i8'] },
   ];
   const fig = {};
-  for (const b of bakes) {
-    const glb = join(dir, `${b.name}.glb`), glsl = join(dir, `${b.name}.glsl`), png = join(out, `prt-quantized-${b.name}-60-render.png`);
-    run('transfer', [b.mesh, ...b.args, '--glb', glb, '-o', join(dir, `${b.name}.json`), '--glsl', glsl, '-q']);
-    const sh = join(dir, `sky${b.n - 1}.sh.json`);
-    if (!existsSync(sh)) run('sh-project', [sky, '-F', String(b.n - 1), '-o', sh, '-q']);
-    run('render', [sky, '--scene', b.mesh, ...b.brdf, '--shading', 'transfer', '--transfer', glb, '--env-rotation', '60',
-      '--eye', b.eye.join(','), '--target', b.target.join(','), '--fov', String(FOV), '--res', '200x200', '--png', png, '--exposure', b.exp, '-q']);
-    const ref = readPng(png);
-    const params = { mode: 'prt', glb: url(glb), sh: url(sh), ...(b.brdf.length ? { glsl: url(glsl) } : {}) };
-    const img = mirrorX((await view({ ...params, rotate: '60', eye: toPage(b.eye, 'three'), target: toPage(b.target, 'three'),
-      fov: String(FOV), res: '200x200', exposure: b.exp })).image);
-    writePng(join(out, `prt-quantized-${b.name}-60-viewer-three.png`), img);
-    const c = compare(img, ref, meshMask(img));
-    fig[b.name] = c.psnr;
-    check(`prt quantized ${b.name} (transfer ${b.args.join(' ')}), turned 60° (three frame) vs render --shading transfer`, c.psnr >= 35,
-      `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
-  }
+  for (const b of bakes) fig[b.name] = await relitAt60(dir, sky, b, 'quantized', 'quantized');
   figures.prt_quantized = fig;
 }
 
@@ -708,29 +714,16 @@ async function quantizedPrtTests() {
 async function colourPrtTests() {
   const { dir, sky } = skyIn('prt-colour');
   const corner = 'testdata/meshes/corner-ball.ply', knot = 'testdata/meshes/torus-knot.obj';
+  const base = { n: 3, brdf: [], exp: '-1.5' }, bake = ['-n', '3', '--rays', '256'];
   const cornerCam = { eye: [2.2, -2.6, 1.8], target: [-0.3, 0.3, 0.3] };
   const bakes = [
-    { name: 'corner-mesh', mesh: corner, ...cornerCam, args: ['--mode', 'interreflected', '--albedo', 'mesh'] },
-    { name: 'corner-mesh-cpca', mesh: corner, ...cornerCam, args: ['--mode', 'interreflected', '--albedo', 'mesh', '--clusters', '8', '--pca', '4'] },
-    { name: 'knot-orange', mesh: knot, eye: [2.2, -3.4, 2.4], target: [0, 0, 0], args: ['--albedo', '0.9,0.45,0.2'] },
+    { ...base, ...cornerCam, name: 'corner-mesh', mesh: corner, args: [...bake, '--mode', 'interreflected', '--albedo', 'mesh'] },
+    { ...base, ...cornerCam, name: 'corner-mesh-cpca', mesh: corner,
+      args: [...bake, '--mode', 'interreflected', '--albedo', 'mesh', '--clusters', '8', '--pca', '4'] },
+    { ...base, name: 'knot-orange', mesh: knot, eye: [2.2, -3.4, 2.4], target: [0, 0, 0], args: [...bake, '--albedo', '0.9,0.45,0.2'] },
   ];
-  const sh = join(dir, 'sky2.sh.json'), EXP = '-1.5';
-  run('sh-project', [sky, '-F', '2', '-o', sh, '-q']);
   const fig = {};
-  for (const b of bakes) {
-    const glb = join(dir, `${b.name}.glb`), png = join(out, `prt-colour-${b.name}-60-render.png`);
-    run('transfer', [b.mesh, '-n', '3', '--rays', '256', ...b.args, '--glb', glb, '-o', join(dir, `${b.name}.json`), '-q']);
-    run('render', [sky, '--scene', b.mesh, '--shading', 'transfer', '--transfer', glb, '--env-rotation', '60',
-      '--eye', b.eye.join(','), '--target', b.target.join(','), '--fov', String(FOV), '--res', '200x200', '--png', png, '--exposure', EXP, '-q']);
-    const ref = readPng(png);
-    const img = mirrorX((await view({ mode: 'prt', glb: url(glb), sh: url(sh), rotate: '60', eye: toPage(b.eye, 'three'),
-      target: toPage(b.target, 'three'), fov: String(FOV), res: '200x200', exposure: EXP })).image);
-    writePng(join(out, `prt-colour-${b.name}-60-viewer-three.png`), img);
-    const c = compare(img, ref, meshMask(img));
-    fig[b.name] = c.psnr;
-    check(`prt coloured ${b.name} (transfer ${b.args.join(' ')}), turned 60° (three frame) vs render --shading transfer`, c.psnr >= 35,
-      `PSNR ${c.psnr.toFixed(2)} dB over ${c.pixels} mesh pixels (≥ 35), mean |Δ| ${c.mean.toFixed(3)} codes`);
-  }
+  for (const b of bakes) fig[b.name] = await relitAt60(dir, sky, b, 'colour', 'coloured');
   figures.prt_colour = fig;
 }
 
