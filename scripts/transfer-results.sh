@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The transfer stage's numbers (docs/results/transfer.md) and one JSON row per measurement on
 # stdout: accuracy against independent derivations (examples/transfer_accuracy.rs: rows with
-# "check" unshadowed, shadowed, furnace), the speed of a shadowed and an interreflected bake of a
+# "check" unshadowed, shadowed, furnace), the speed of a shadowed and an interreflected bake (grey, and coloured) of a
 # bowl holding a ball generated here (about 100 000 vertices; "check": "speed"), the frames per
 # second of relighting that mesh from its .glb at order 3 ("check": "relight"), clustered PCA
 # of diffuse and glossy bakes ("check": "compression"), and the quantized bakes of the demo's bowl
@@ -24,26 +24,28 @@ cat "$tmp/accuracy.jsonl"
 source scripts/lib/bowl-scene.sh
 bowl_scene "$rings" "$segments" >"$tmp/scene.obj"
 
-# bake MODE ORDER EXTRA...: bakes the scene, prints its speed row, leaves $tmp/MODE-ORDER.{glb,json}.
+# bake NAME MODE ORDER EXTRA...: bakes the scene, prints its speed row, leaves $tmp/NAME-ORDER.{glb,json}.
 bake() {
-  local mode=$1 order=$2 load
-  shift 2
+  local name=$1 mode=$2 order=$3 load
+  shift 3
   load="$(cut -d' ' -f1 /proc/loadavg 2>/dev/null || echo null)"
-  echo "transfer-results: $mode, order $order, $rays rays…" >&2
+  echo "transfer-results: $name ($mode $*), order $order, $rays rays…" >&2
   TIMEFORMAT='%R %U'
   { time "$bin/transfer" "$tmp/scene.obj" -n "$order" --rays "$rays" --mode "$mode" "$@" \
-      --glb "$tmp/$mode-$order.glb" -o "$tmp/$mode-$order.json" --json -q >"$tmp/$mode-$order.summary"; } 2>"$tmp/time"
+      --glb "$tmp/$name-$order.glb" -o "$tmp/$name-$order.json" --json -q >"$tmp/$name-$order.summary"; } 2>"$tmp/time"
   read -r wall user <"$tmp/time"
-  local s="$tmp/$mode-$order.summary"
-  json_row check=speed mode="$mode" order="$order" vertices="$(json_get "$s" vertices)" \
-      triangles="$(json_get "$tmp/$mode-$order.json" mesh.triangles)" rays="$rays" \
+  local s="$tmp/$name-$order.summary"
+  json_row check=speed name="$name" mode="$mode" order="$order" vertices="$(json_get "$s" vertices)" \
+      triangles="$(json_get "$tmp/$name-$order.json" mesh.triangles)" rays="$rays" \
       bounces="$(json_get "$s" bounces)" seconds="$(json_get "$s" seconds)" \
       bounce_seconds="$(json_get "$s" bounce_seconds)" rays_per_second="$(json_get "$s" rays_per_second)" \
-      wall="$wall" cpu_user="$user" load_before="$load" | tee "$tmp/speed-$mode-$order.row"
+      wall="$wall" cpu_user="$user" load_before="$load" | tee "$tmp/speed-$name-$order.row"
 }
-bake shadowed 4
-bake interreflected 4 --bounces 2
-bake shadowed 3 >/dev/null # for the relighting at order 3, not a row of the table
+bake shadowed shadowed 4
+bake interreflected interreflected 4 --bounces 2
+# A coloured albedo: three transfer vectors per vertex, the rays traced once (docs/transfer.md).
+bake interreflected-colour interreflected 4 --bounces 2 --albedo 0.9,0.5,0.2
+bake shadowed shadowed 3 >/dev/null # for the relighting at order 3, not a row of the table
 rm "$tmp/speed-shadowed-3.row"
 "$bin/sample-shader" testdata/shaders/sky.sl --latlong 64x32 -o "$tmp/sky.exr" -q
 echo "transfer-results: relighting from the order-3 .glb…" >&2
@@ -170,14 +172,17 @@ acc="$tmp/accuracy.jsonl"
   echo "CPU are the process's (reading the OBJ, writing the .glb). The machine is shared: the load"
   echo "average before each run says how much of its 2 cores the run had."
   echo
-  echo "| mode | vertices | triangles | rays | seconds | of which bounces | rays/s (first pass) | wall s | CPU user s | load before |"
+  echo "| bake | vertices | triangles | rays | seconds | of which bounces | rays/s (first pass) | wall s | CPU user s | load before |"
   echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
-  for f in "$tmp/speed-shadowed-4.row" "$tmp/speed-interreflected-4.row"; do
-    jq -r '"| \(.mode) | \(.vertices) | \(.triangles) | \(.rays) | \(.seconds * 10 | round / 10) | \(.bounce_seconds * 10 | round / 10) | \(.rays_per_second / 1e6 * 100 | round / 100) M | \(.wall) | \(.cpu_user) | \(.load_before) |"' "$f"
+  for f in "$tmp/speed-shadowed-4.row" "$tmp/speed-interreflected-4.row" "$tmp/speed-interreflected-colour-4.row"; do
+    jq -r '"| \(.name) | \(.vertices) | \(.triangles) | \(.rays) | \(.seconds * 10 | round / 10) | \(.bounce_seconds * 10 | round / 10) | \(.rays_per_second / 1e6 * 100 | round / 100) M | \(.wall) | \(.cpu_user) | \(.load_before) |"' "$f"
   done
   echo
   jq -rs 'map({(.mode): .}) | add | "Interreflected with 2 bounces took \(.interreflected.seconds / .shadowed.seconds * 100 | round / 100)× the shadowed bake (CPU \(.interreflected.cpu_user / .shadowed.cpu_user * 100 | round / 100)×). Issue 32'"'"'s targets: shadowed ≤ 30 s on this 2-core machine, interreflected ≤ 3× that, relighting ≥ 200 frames/s."' \
       "$tmp/speed-shadowed-4.row" "$tmp/speed-interreflected-4.row"
+  echo
+  jq -rs 'map({(.name): .}) | add | "With a coloured albedo (`--albedo 0.9,0.5,0.2`: three transfer vectors per vertex, the rays traced once and the three channels gathered over the same hits) the interreflected bake took \(.["interreflected-colour"].seconds / .interreflected.seconds * 100 | round / 100)× the grey one, its bounces \(.["interreflected-colour"].bounce_seconds / .interreflected.bounce_seconds * 100 | round / 100)×."' \
+      "$tmp/speed-interreflected-4.row" "$tmp/speed-interreflected-colour-4.row"
   echo
   echo "Relighting from the order-3 \`.glb\` of the same scene (\`render --shading transfer --json\`):"
   echo "each frame is an SH rotation of the lighting and the 9-term dot product at every vertex, one"

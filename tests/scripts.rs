@@ -282,15 +282,21 @@ fn transfer_results() {
         assert!((num(r, "series") - series).abs() < 1e-12, "{r}");
         assert!((num(r, "total") / series - 1.0).abs() < 1e-3 && num(r, "max_relative_error") < 1e-3, "{r}");
     }
-    // Speed rows: both modes of the same scene; the bounces are a part of the interreflected run.
+    // Speed rows: both modes of the same scene, and the interreflected one with a coloured
+    // albedo; the bounces are a part of the interreflected runs.
     let speed = of("speed");
-    let modes: Vec<&str> = speed.iter().map(|r| text(r, "mode")).collect();
-    assert_eq!(modes, ["shadowed", "interreflected"]);
+    let bakes: Vec<(&str, &str)> = speed.iter().map(|r| (text(r, "name"), text(r, "mode"))).collect();
+    assert_eq!(
+        bakes,
+        [("shadowed", "shadowed"), ("interreflected", "interreflected"), ("interreflected-colour", "interreflected")]
+    );
     for r in &speed {
         assert!(num(r, "rays_per_second") > 0.0 && num(r, "vertices") > 100.0, "{r}");
         assert!(num(r, "bounce_seconds") <= num(r, "seconds"), "{r}");
     }
-    assert_eq!((num(speed[0], "bounces"), num(speed[1], "bounces")), (0.0, 2.0));
+    let bounces: Vec<f64> = speed.iter().map(|r| num(r, "bounces")).collect();
+    assert_eq!(bounces, [0.0, 2.0, 2.0]);
+    assert_eq!(num(speed[2], "vertices"), num(speed[1], "vertices"));
     let relight = of("relight");
     assert_eq!(relight.len(), 1);
     assert!(num(relight[0], "frames_per_second") >= num(relight[0], "median_frames_per_second"), "{}", relight[0]);
