@@ -92,10 +92,8 @@ struct Grid {
     /// Radiance of every texel, row-major (f32 as read: the sums read it once per texel and
     /// sample, so its size is what they wait on).
     radiance: Arc<Vec<[f32; 3]>>,
-    /// The texels with D_T ≠ 0 (none when the grid is the input), block by block.
-    deviations: Vec<Deviation>,
-    /// Blocks of [`BLOCK`] × [`BLOCK`] texels, for the bound.
-    blocks: Vec<Block>,
+    /// What the box filtering changed, for the bound (none when the grid is the input).
+    filtering: Option<Filtering>,
     /// This grid box-filtered, for the two-level sum ([`LobeIntegral`]).
     coarse: Option<Arc<Coarse>>,
 }
@@ -120,25 +118,46 @@ const BOUND_SLACK: f64 = 0.1;
 /// (Σ_T D_T) ρ_max max |dk/dγ| over the block's interval.
 struct Block {
     centre: DVec3,
-    /// The largest angle from the centre to a member texel's centre, plus `texel_radius`.
-    spread: f64,
+    /// The cosine and sine of the largest angle from the centre to a member texel's centre, plus
+    /// `texel_radius`.
+    spread: (f64, f64),
     /// The largest angular radius ρ_T of a member texel.
     texel_radius: f64,
     /// The smallest.
     texel_radius_min: f64,
     /// Σ_T D_T per channel.
     d: [f64; 3],
-    /// The members with D_T ≠ 0, in `Grid::deviations`.
-    members: std::ops::Range<usize>,
+    /// The block's texels.
+    columns: std::ops::Range<usize>,
+    rows: std::ops::Range<usize>,
 }
 
-/// A texel of a filtered grid, for the bound: its centre, the cosine and sine of its angular
-/// radius ρ, and D_T = Σ_{t⊂T} Ω_t |L_t − L̄_T| per channel.
-struct Deviation {
-    centre: DVec3,
-    cos_radius: f64,
-    sin_radius: f64,
-    d: [f64; 3],
+/// A block in [`Grid::filtering_bound`]: by how much summing it texel by texel could lower the
+/// bound at most, and its bound taken at once (without D_T).
+struct Gap {
+    gap: f64,
+    index: usize,
+    steepest: f64,
+}
+
+/// A box-filtered grid's departures from its input: D_T = Σ_{t⊂T} Ω_t |L_t − L̄_T| per channel
+/// of every texel T (row-major), the blocks that bound them at once, and what places each texel
+/// on the sphere (its centre from per-row and per-column sines and cosines, and the cosine and
+/// sine of its angular radius ρ per row).
+struct Filtering {
+    deviation: Vec<[f64; 3]>,
+    blocks: Vec<Block>,
+    rows: Vec<(f64, f64)>,
+    columns: Vec<(f64, f64)>,
+    radius: Vec<(f64, f64)>,
+}
+
+impl Filtering {
+    /// The centre of texel (x, y): the same products as `LatLong::texel_direction`.
+    fn centre(&self, x: usize, y: usize) -> DVec3 {
+        let ((st, ct), (sp, cp)) = (self.rows[y], self.columns[x]);
+        DVec3::new(st * cp, st * sp, ct)
+    }
 }
 
 impl Reference {
@@ -212,7 +231,7 @@ impl Reference {
         let total = 6 * m * m;
         let stride = (total / samples.max(1)).max(1);
         let picks: Vec<usize> = (0..total).step_by(stride).map(|i| (i + stride / 2).min(total - 1)).collect();
-        let integral = self.lobe(lobe);
+        let (integral, slope) = (self.lobe(lobe), Slope::of(lobe));
         let length = |v: [f64; 3]| v.iter().map(|c| c * c).sum::<f64>().sqrt();
         let measured: Vec<((f64, f64), f64)> = picks
             .par_iter()
@@ -220,7 +239,7 @@ impl Reference {
                 let (face, row, col) = (FACES[i / (m * m)], (i / m) % m, i % m);
                 let axis = (env_from_cube * texel_direction(face, m, row, col)).normalize();
                 let (reference, two_level) = integral.at_with_bound(axis);
-                let filtering = self.grid.filtering_bound(axis, lobe);
+                let filtering = self.grid.filtering_bound(axis, lobe, &slope);
                 let got = level.get(face, row, col);
                 let diff = length([0, 1, 2].map(|c| got[c] as f64 - reference[c]));
                 let bound = length([0, 1, 2].map(|c| filtering[c] + two_level[c]));
@@ -251,13 +270,13 @@ impl Grid {
             let geometry = LatLong::new(input.width, input.height);
             let radiance = radiance(input);
             let coarse = Coarse::of(geometry, &radiance);
-            return Grid { geometry, radiance, deviations: Vec::new(), blocks: Vec::new(), coarse };
+            return Grid { geometry, radiance, filtering: None, coarse };
         }
         let filtered = box_latlong(input, input.width / factor, input.height / factor);
-        let (deviations, blocks) = deviations(input, &filtered, factor);
+        let filtering = Some(Filtering::of(input, &filtered, factor));
         let (geometry, radiance) = (LatLong::new(filtered.width, filtered.height), radiance(&filtered));
         let coarse = Coarse::of(geometry, &radiance);
-        Grid { geometry, radiance, deviations, blocks, coarse }
+        Grid { geometry, radiance, filtering, coarse }
     }
 
     /// The lobe's integral: on this grid with the coarsest texel rule whose texel integrals move
@@ -337,49 +356,59 @@ impl Grid {
     /// the blocks whose bound could shrink the most are summed texel by texel until what the
     /// rest could still give back is at most that share of the texels' sum (of which the blocks'
     /// lower ends are a lower bound).
-    fn filtering_bound(&self, axis: DVec3, lobe: &SplitSumLobe) -> [f64; 3] {
-        let slope = Slope::of(lobe);
-        let mut blocks = Vec::with_capacity(self.blocks.len());
-        let (mut lower_total, mut slack) = (0.0, 0.0);
-        for (i, block) in self.blocks.iter().enumerate() {
-            let gamma = axis.dot(block.centre).clamp(-1.0, 1.0).acos();
-            let (lo, hi) = (gamma - block.spread, gamma + block.spread);
-            if lo >= FRAC_PI_2 {
+    fn filtering_bound(&self, axis: DVec3, lobe: &SplitSumLobe, slope: &Slope) -> [f64; 3] {
+        let Some(filtering) = &self.filtering else { return [0.0; 3] };
+        let mut blocks = Vec::with_capacity(filtering.blocks.len());
+        let mut lower_total = 0.0;
+        for (i, block) in filtering.blocks.iter().enumerate() {
+            // cos(γ ∓ s) of the block's interval [γ − s, γ + s] from cos γ = R·c: no angle.
+            let cos_gamma = axis.dot(block.centre).clamp(-1.0, 1.0);
+            let sin_gamma = (1.0 - cos_gamma * cos_gamma).sqrt();
+            let ((cs, ss), reaches_axis) = (block.spread, cos_gamma >= block.spread.0);
+            let near = if reaches_axis { 1.0 } else { cos_gamma * cs + sin_gamma * ss };
+            let far = cos_gamma * cs - sin_gamma * ss;
+            if near <= 0.0 {
                 continue; // every texel of the block lies where the kernel is zero
             }
-            let (a, b) = (lo.max(0.0), hi.min(FRAC_PI_2));
-            let steepest = block.texel_radius * slope.max_over(a, b);
+            let steepest = block.texel_radius * slope.max_between(far.max(0.0), near);
             // The slope vanishes at γ = 0 and past π/2, so a block reaching either has no
             // lower end.
-            let flattest =
-                if lo <= 0.0 || hi >= FRAC_PI_2 { 0.0 } else { block.texel_radius_min * slope.at(a).min(slope.at(b)) };
+            let flattest = if reaches_axis || far <= 0.0 {
+                0.0
+            } else {
+                block.texel_radius_min * slope.at_cos(far).min(slope.at_cos(near))
+            };
             let d: f64 = block.d.iter().sum();
             lower_total += d * flattest;
-            slack += d * (steepest - flattest);
-            blocks.push((d * (steepest - flattest), i, steepest));
+            blocks.push(Gap { gap: d * (steepest - flattest), index: i, steepest });
         }
-        blocks.sort_by(|x, y| y.0.total_cmp(&x.0));
+        // The blocks whose bound could shrink the most, texel by texel; the rest at once.
+        let refined = take_largest(&mut blocks, |b| b.gap, |b| b.index, BOUND_SLACK * lower_total);
+        let width = self.geometry.width;
         let mut bound = [0.0; 3];
-        for (gap, i, steepest) in blocks {
-            let block = &self.blocks[i];
-            if slack <= BOUND_SLACK * lower_total {
-                for c in 0..3 {
-                    bound[c] += block.d[c] * steepest;
-                }
-                continue;
-            }
-            slack -= gap;
-            for t in &self.deviations[block.members.clone()] {
-                // cos(γ ∓ ρ) from cos γ = R·c: no angle is computed.
-                let cos_gamma = axis.dot(t.centre).clamp(-1.0, 1.0);
-                let sin_gamma = (1.0 - cos_gamma * cos_gamma).sqrt();
-                let (cc, ss) = (cos_gamma * t.cos_radius, sin_gamma * t.sin_radius);
-                // γ − ρ < 0 when cos γ > cos ρ: the texel holds R, where k peaks. γ + ρ past π
-                // when cos γ < −cos ρ; the kernel is zero there anyway, as it is past π/2.
-                let nearest = if cos_gamma >= t.cos_radius { 1.0 } else { cc + ss };
-                let half_range = 0.5 * (lobe.kernel(nearest) - lobe.kernel((cc - ss).max(-1.0)));
-                for c in 0..3 {
-                    bound[c] += t.d[c] * half_range;
+        for b in &blocks {
+            (0..3).for_each(|c| bound[c] += filtering.blocks[b.index].d[c] * b.steepest);
+        }
+        for b in refined {
+            let block = &filtering.blocks[b.index];
+            for y in block.rows.clone() {
+                let (cos_radius, sin_radius) = filtering.radius[y];
+                for x in block.columns.clone() {
+                    let d = filtering.deviation[y * width + x];
+                    if d == [0.0; 3] {
+                        continue;
+                    }
+                    // cos(γ ∓ ρ) from cos γ = R·c: no angle is computed.
+                    let cos_gamma = axis.dot(filtering.centre(x, y)).clamp(-1.0, 1.0);
+                    let sin_gamma = (1.0 - cos_gamma * cos_gamma).sqrt();
+                    let (cc, ss) = (cos_gamma * cos_radius, sin_gamma * sin_radius);
+                    // γ − ρ < 0 when cos γ > cos ρ: the texel holds R, where k peaks. γ + ρ past
+                    // π when cos γ < −cos ρ; the kernel is zero there anyway, as it is past π/2.
+                    let nearest = if cos_gamma >= cos_radius { 1.0 } else { cc + ss };
+                    let half_range = 0.5 * (lobe.kernel(nearest) - lobe.kernel((cc - ss).max(-1.0)));
+                    for c in 0..3 {
+                        bound[c] += d[c] * half_range;
+                    }
                 }
             }
         }
@@ -390,15 +419,19 @@ impl Grid {
 /// |dk/dγ| of the split-sum kernel on [0, π/2]: with k = f(cos γ) ([`Curve`]),
 /// |dk/dγ| = sin γ · f'(cos γ). It rises from 0 at γ = 0 to one peak γ* and falls after it (or
 /// rises all the way, α = 1), so its maximum over an interval is at γ* when the interval holds it
-/// and at an end otherwise (`the_slope_has_one_peak`).
+/// and at an end otherwise (`the_slope_has_one_peak`). The bound evaluates it from cos γ, which
+/// it has without an angle: √(1 − s²) f'(s).
 struct Slope {
     curve: Curve,
     peak: f64,
+    /// cos γ* and the slope there.
+    peak_cos: f64,
+    top: f64,
 }
 
 impl Slope {
     fn of(lobe: &SplitSumLobe) -> Slope {
-        let mut slope = Slope { curve: Curve::of(lobe), peak: 0.0 };
+        let mut slope = Slope { curve: Curve::of(lobe), peak: 0.0, peak_cos: 1.0, top: 0.0 };
         // The peak by a scan, then golden-section search in the bracket around the best sample.
         let steps = 1024;
         let h = FRAC_PI_2 / steps as f64;
@@ -414,7 +447,22 @@ impl Slope {
             }
         }
         slope.peak = 0.5 * (lo + hi);
+        (slope.peak_cos, slope.top) = (slope.peak.cos(), slope.at(slope.peak));
         slope
+    }
+
+    /// |dk/dγ| at cos γ = s ∈ [0, 1].
+    fn at_cos(&self, s: f64) -> f64 {
+        (1.0 - s * s).max(0.0).sqrt() * self.curve.first(s)
+    }
+
+    /// max |dk/dγ| over cos γ ∈ [a, b] ⊂ [0, 1].
+    fn max_between(&self, a: f64, b: f64) -> f64 {
+        if (a..=b).contains(&self.peak_cos) {
+            self.top
+        } else {
+            self.at_cos(a).max(self.at_cos(b))
+        }
     }
 
     /// |dk/dγ| at γ ∈ [0, π/2].
@@ -422,93 +470,79 @@ impl Slope {
         let (s, c) = gamma.sin_cos();
         s * self.curve.first(c)
     }
-
-    /// max |dk/dγ| over [a, b] ⊂ [0, π/2].
-    fn max_over(&self, a: f64, b: f64) -> f64 {
-        if (a..=b).contains(&self.peak) {
-            self.at(self.peak)
-        } else {
-            self.at(a).max(self.at(b))
-        }
-    }
 }
 
-/// D_T = Σ_{t⊂T} Ω_t |L_t − L̄_T| of every texel T of `filtered` (`input` box-filtered by
-/// `factor`), keeping those not zero, grouped in [`Block`]s.
-fn deviations(input: &RgbImage, filtered: &RgbImage, factor: usize) -> (Vec<Deviation>, Vec<Block>) {
-    let (fine, coarse) = (LatLong::new(input.width, input.height), LatLong::new(filtered.width, filtered.height));
-    let rows: Vec<Vec<[f64; 3]>> = (0..filtered.height)
-        .into_par_iter()
-        .map(|y| {
-            let mut d = vec![[0.0f64; 3]; filtered.width];
-            for yy in y * factor..(y + 1) * factor {
-                let omega = fine.row_solid_angle(yy);
-                for xx in 0..input.width {
-                    let (l, mean) = (input.get(xx, yy), filtered.get(xx / factor, y));
-                    for c in 0..3 {
-                        d[xx / factor][c] += omega * (l[c] as f64 - mean[c] as f64).abs();
+impl Filtering {
+    /// D_T = Σ_{t⊂T} Ω_t |L_t − L̄_T| of every texel T of `filtered` (`input` box-filtered by
+    /// `factor`), in [`Block`]s of [`BLOCK`] × [`BLOCK`] texels (those whose texels all have
+    /// D_T = 0 left out).
+    fn of(input: &RgbImage, filtered: &RgbImage, factor: usize) -> Filtering {
+        let (fine, coarse) = (LatLong::new(input.width, input.height), LatLong::new(filtered.width, filtered.height));
+        let width = filtered.width;
+        // Row by row into the result, each value written once: a zeroed vector updated in place
+        // would fault every page twice (read as the zero page, then copied on the first write).
+        let deviation: Vec<[f64; 3]> = (0..filtered.height)
+            .into_par_iter()
+            .flat_map_iter(|y| {
+                let mut row = vec![[0.0f64; 3]; width];
+                let means = &filtered.pixels[y * width..(y + 1) * width];
+                for yy in y * factor..(y + 1) * factor {
+                    let omega = fine.row_solid_angle(yy);
+                    let line = &input.pixels[yy * input.width..(yy + 1) * input.width];
+                    for ((d, mean), texels) in row.iter_mut().zip(means).zip(line.chunks_exact(factor)) {
+                        let mut spread = [0.0f64; 3];
+                        for l in texels {
+                            (0..3).for_each(|c| spread[c] += (l[c] as f64 - mean[c] as f64).abs());
+                        }
+                        (0..3).for_each(|c| d[c] += omega * spread[c]);
                     }
                 }
-            }
-            d
-        })
-        .collect();
-    let radii: Vec<f64> = (0..filtered.height).map(|y| angular_radius(coarse, y)).collect();
-    // Texel centres from per-row and per-column sines and cosines: the same products as
-    // `LatLong::texel_direction`, without two sincos per texel.
-    let rows_sin_cos: Vec<(f64, f64)> = (0..coarse.height).map(|y| coarse.row_theta(y).sin_cos()).collect();
-    let columns_sin_cos: Vec<(f64, f64)> = (0..coarse.width).map(|x| coarse.column_phi(x).sin_cos()).collect();
-    let centre = |x: usize, y: usize| {
-        let ((st, ct), (sp, cp)) = (rows_sin_cos[y], columns_sin_cos[x]);
-        DVec3::new(st * cp, st * sp, ct)
-    };
-    // Each band of block rows on its own, then joined in order (the members' ranges shifted).
-    let bands: Vec<(Vec<Deviation>, Vec<Block>)> = (0..filtered.height)
-        .into_par_iter()
-        .step_by(BLOCK)
-        .map(|y0| {
-            let (mut members, mut blocks) = (Vec::new(), Vec::new());
-            let y1 = (y0 + BLOCK).min(filtered.height);
-            let (texel_radius, texel_radius_min) =
-                radii[y0..y1].iter().fold((0.0f64, f64::INFINITY), |(hi, lo), &r| (hi.max(r), lo.min(r)));
-            for x0 in (0..filtered.width).step_by(BLOCK) {
-                let x1 = (x0 + BLOCK).min(filtered.width);
-                let middle = coarse.direction_at(0.5 * (x0 + x1) as f64, 0.5 * (y0 + y1) as f64);
-                let (start, mut d, mut nearest) = (members.len(), [0.0; 3], 1.0f64);
-                for y in y0..y1 {
-                    for x in x0..x1 {
-                        let t = centre(x, y);
-                        nearest = nearest.min(middle.dot(t));
-                        if rows[y][x] != [0.0; 3] {
-                            (0..3).for_each(|c| d[c] += rows[y][x][c]);
-                            members.push(Deviation {
-                                centre: t,
-                                cos_radius: radii[y].cos(),
-                                sin_radius: radii[y].sin(),
-                                d: rows[y][x],
-                            });
+                row
+            })
+            .collect();
+        let mut filtering = Filtering {
+            deviation,
+            blocks: Vec::new(),
+            rows: (0..coarse.height).map(|y| coarse.row_theta(y).sin_cos()).collect(),
+            columns: (0..coarse.width).map(|x| coarse.column_phi(x).sin_cos()).collect(),
+            radius: (0..coarse.height).map(|y| angular_radius(coarse, y).sin_cos()).map(|(s, c)| (c, s)).collect(),
+        };
+        let radii: Vec<f64> = (0..coarse.height).map(|y| angular_radius(coarse, y)).collect();
+        let bands: Vec<Vec<Block>> = (0..coarse.height)
+            .into_par_iter()
+            .step_by(BLOCK)
+            .map(|y0| {
+                let mut blocks = Vec::new();
+                let y1 = (y0 + BLOCK).min(coarse.height);
+                let (texel_radius, texel_radius_min) =
+                    radii[y0..y1].iter().fold((0.0f64, f64::INFINITY), |(hi, lo), &r| (hi.max(r), lo.min(r)));
+                for x0 in (0..coarse.width).step_by(BLOCK) {
+                    let x1 = (x0 + BLOCK).min(coarse.width);
+                    let middle = coarse.direction_at(0.5 * (x0 + x1) as f64, 0.5 * (y0 + y1) as f64);
+                    let (mut d, mut nearest) = ([0.0; 3], 1.0f64);
+                    for y in y0..y1 {
+                        for x in x0..x1 {
+                            let texel = filtering.deviation[y * width + x];
+                            if texel != [0.0; 3] {
+                                nearest = nearest.min(middle.dot(filtering.centre(x, y)));
+                                (0..3).for_each(|c| d[c] += texel[c]);
+                            }
                         }
                     }
+                    if d != [0.0; 3] {
+                        // The farthest texel centre: acos falls as the cosine grows.
+                        let spread = (nearest.clamp(-1.0, 1.0).acos() + texel_radius).min(PI);
+                        let spread = (spread.cos(), spread.sin());
+                        let (columns, rows) = (x0..x1, y0..y1);
+                        blocks.push(Block { centre: middle, spread, texel_radius, texel_radius_min, d, columns, rows });
+                    }
                 }
-                if members.len() > start {
-                    // The farthest texel centre: acos falls as the cosine grows.
-                    let spread = nearest.clamp(-1.0, 1.0).acos() + texel_radius;
-                    let (centre, members) = (middle, start..members.len());
-                    blocks.push(Block { centre, spread, texel_radius, texel_radius_min, d, members });
-                }
-            }
-            (members, blocks)
-        })
-        .collect();
-    let (mut members, mut blocks) = (Vec::new(), Vec::new());
-    for (band_members, band_blocks) in bands {
-        let offset = members.len();
-        members.extend(band_members);
-        blocks.extend(
-            band_blocks.into_iter().map(|b| Block { members: b.members.start + offset..b.members.end + offset, ..b }),
-        );
+                blocks
+            })
+            .collect();
+        filtering.blocks = bands.into_iter().flatten().collect();
+        filtering
     }
-    (members, blocks)
 }
 
 /// The largest angle from the centre of a texel of row `y` to a point of the texel: over its
@@ -541,7 +575,7 @@ const TWO_LEVEL_TOLERANCE: f64 = 1e-4;
 /// Coarse texels over which the kernel's second-order term ½ max|f''| Δs² exceeds this (in units
 /// of the normalized kernel) are always refined: near the peak of a sharp lobe no coarse texel
 /// rule is exact, whatever the radiance.
-const COARSE_CURVATURE: f64 = 1e-2;
+const COARSE_CURVATURE: f64 = 1.0;
 
 /// The lobe's reference integral B(R) = Σ_t L_t ∫_t k(R·ω) dω over a grid (the input, or its
 /// box filtering), summed on two levels when the grid is large.
@@ -587,7 +621,8 @@ impl LobeIntegral {
         let CoarsePass { mut whole, mut refined, estimate } = self.coarse_pass(coarse_sum, coarse, axis);
         // Refine the largest bounds until the rest's is within the tolerance.
         let target = TWO_LEVEL_TOLERANCE * estimate.iter().map(|e| e.abs()).sum::<f64>();
-        refined.extend(largest_bounds(&mut whole, target));
+        let size = |t: &Whole| t.bound.iter().sum::<f64>();
+        refined.extend(take_largest(&mut whole, size, |t| t.index, target).into_iter().map(|t| t.index));
         let (mut value, mut bound) = ([0.0; 3], [0.0; 3]);
         for t in &whole {
             for c in 0..3 {
@@ -653,35 +688,33 @@ struct CoarsePass {
     estimate: [f64; 3],
 }
 
-/// Takes out of `whole` the texels of largest bound (summed over the channels) until the rest's
-/// is at most `target`, and returns their indices. Largest first, ties by position, so the same
-/// texels on any machine; only the largest few are ordered (a prefix selected, then sorted,
-/// doubled until it is enough).
-fn largest_bounds(whole: &mut Vec<Whole>, target: f64) -> Vec<usize> {
-    let size = |t: &Whole| t.bound.iter().sum::<f64>();
-    let rest: f64 = whole.iter().map(size).sum();
+/// Takes out of `items` the largest (by `size`) until what is left sums to at most `target`,
+/// and returns them largest first. Ties by `index`, so the same items on any machine; only the
+/// largest few are ordered (a prefix selected, then sorted, doubled until it is enough).
+fn take_largest<T>(items: &mut Vec<T>, size: impl Fn(&T) -> f64, index: impl Fn(&T) -> usize, target: f64) -> Vec<T> {
+    let rest: f64 = items.iter().map(&size).sum();
     if rest <= target {
         return Vec::new();
     }
-    let order = |x: &Whole, y: &Whole| size(y).total_cmp(&size(x)).then(x.index.cmp(&y.index));
-    let mut prefix = 64.min(whole.len());
+    let order = |x: &T, y: &T| size(y).total_cmp(&size(x)).then(index(x).cmp(&index(y)));
+    let mut prefix = 64.min(items.len());
     loop {
-        if prefix < whole.len() {
-            whole.select_nth_unstable_by(prefix - 1, order);
+        if prefix < items.len() {
+            items.select_nth_unstable_by(prefix - 1, order);
         }
-        whole[..prefix].sort_unstable_by(order);
+        items[..prefix].sort_unstable_by(order);
         let (mut left, mut taken) = (rest, 0);
-        for t in &whole[..prefix] {
+        for t in &items[..prefix] {
             if left <= target {
                 break;
             }
             left -= size(t);
             taken += 1;
         }
-        if left <= target || prefix == whole.len() {
-            return whole.drain(..taken).map(|t| t.index).collect();
+        if left <= target || prefix == items.len() {
+            return items.drain(..taken).collect();
         }
-        prefix = (2 * prefix).min(whole.len());
+        prefix = (2 * prefix).min(items.len());
     }
 }
 
@@ -1303,13 +1336,14 @@ mod tests {
             assert!(coarse.describe().contains(&format!("256x128 box-filtered to {grid}")), "{}", coarse.describe());
             for (r, vacuous) in [(0.2, 1.0), (0.5, 0.1), (1.0, 0.1)] {
                 let lobe = SplitSumLobe::new(r).unwrap();
-                let (f, c) = (fine.lobe(&lobe), coarse.lobe(&lobe));
+                let (f, c, slope) = (fine.lobe(&lobe), coarse.lobe(&lobe), Slope::of(&lobe));
                 let mut widest: f64 = 0.0;
                 for k in 0..40 {
                     let z = 1.0 - 2.0 * (k as f64 + 0.5) / 40.0;
                     let phi = k as f64 * 2.399_963;
                     let axis = DVec3::new((1.0 - z * z).sqrt() * phi.cos(), (1.0 - z * z).sqrt() * phi.sin(), z);
-                    let (b_fine, b_coarse, bound) = (f.at(axis), c.at(axis), coarse.grid.filtering_bound(axis, &lobe));
+                    let (b_fine, b_coarse, bound) =
+                        (f.at(axis), c.at(axis), coarse.grid.filtering_bound(axis, &lobe, &slope));
                     for ch in 0..3 {
                         let diff = (b_fine[ch] - b_coarse[ch]).abs();
                         // The two sums' texel rules misplace at most 1e-5 of the kernel's weight each.
@@ -1333,7 +1367,7 @@ mod tests {
         let map = detailed(64, 32);
         let (fine, coarse) = (LatLong::new(64, 32), LatLong::new(16, 8));
         let filtered = box_latlong(map.image(), 16, 8);
-        let (found, _) = deviations(map.image(), &filtered, 4);
+        let found = Filtering::of(map.image(), &filtered, 4);
         for y in 0..8 {
             for x in 0..16 {
                 let (mut energy, mut d) = ([0.0f64; 3], [0.0f64; 3]);
@@ -1347,9 +1381,8 @@ mod tests {
                         }
                     }
                 }
-                // Texels with D_T = 0 are not kept.
-                let kept_d = found.iter().find(|t| t.centre.distance(coarse.texel_direction(x, y)) < 1e-12);
-                let got_d = kept_d.map_or([0.0; 3], |t| t.d);
+                let got_d = found.deviation[y * 16 + x];
+                assert!(found.centre(x, y).distance(coarse.texel_direction(x, y)) < 1e-12);
                 for c in 0..3 {
                     let kept = mean[c] as f64 * coarse.row_solid_angle(y);
                     assert!((kept - energy[c]).abs() <= 1e-6 * energy[c], "({x}, {y}): {kept} vs {}", energy[c]);
@@ -1358,7 +1391,8 @@ mod tests {
             }
         }
         let flat = RgbImage::from_fn(64, 32, |_, _| [2.0, 1.0, 0.5]);
-        let bound = Grid::new(&flat, 4).filtering_bound(DVec3::Z, &SplitSumLobe::new(0.5).unwrap());
+        let lobe = SplitSumLobe::new(0.5).unwrap();
+        let bound = Grid::new(&flat, 4).filtering_bound(DVec3::Z, &lobe, &Slope::of(&lobe));
         assert!(bound.iter().all(|b| *b < 1e-6), "{bound:?}");
     }
 
