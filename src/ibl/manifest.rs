@@ -30,7 +30,7 @@ pub struct IblBody {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source_hash: Option<String>,
     /// What the levels' errors were measured against when it is not the texel-by-texel sum over
-    /// the input (a large input box-filtered, or summed on two levels, `ibl::reference`);
+    /// the input (a large input box-filtered, or summed on coarser levels, `ibl::reference`);
     /// absent when it is.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub measured_against: Option<String>,

@@ -17,7 +17,10 @@
 //! the horizon crosses are taken whole with a bound from the kernel's largest value there; the
 //! blocks over which the kernel curves too much for a coarse rule, and those whose remainder bound
 //! is largest, are summed texel by texel, until what the rest may still be off by is at most 1e-4
-//! of the sum. That bound is recorded beside the errors (`reference_bound`).
+//! of the sum. That bound is recorded beside the errors (`reference_bound`). The blocks grouped
+//! 4 × 4, their moments from theirs, form a third level above them, summed first the same way:
+//! only the groups it cannot take whole are visited block by block, so a sum costs a few hundred
+//! groups, not every block of the hemisphere.
 //!
 //! A level is compared on a fixed, evenly strided set of its texels, with the errors pooled
 //! by [`LevelError::pool`]: the relative error ‖a − r‖/‖r‖ over the texels whose reference is
@@ -94,8 +97,10 @@ struct Grid {
     radiance: Arc<Vec<[f32; 3]>>,
     /// What the box filtering changed, for the bound (none when the grid is the input).
     filtering: Option<Filtering>,
-    /// This grid box-filtered, for the two-level sum ([`LobeIntegral`]).
+    /// This grid box-filtered, for the two-level sum ([`LobeIntegral`]), and the coarse level's
+    /// texels grouped [`TOP_GROUP`] × [`TOP_GROUP`] above it.
     coarse: Option<Arc<Coarse>>,
+    top: Option<Arc<Coarse>>,
 }
 
 /// The directions a texel rule is chosen at: one on the equator, where lat-long texels are
@@ -189,7 +194,7 @@ impl Reference {
 
     /// Whether the reference may differ from the texel-by-texel sum over the input (then
     /// [`Measured::reference_bound`] bounds by how much): the input was box-filtered, or is
-    /// summed on two levels ([`LobeIntegral`]).
+    /// summed on two or three levels ([`LobeIntegral`]).
     pub fn is_bounded(&self) -> bool {
         self.is_filtered() || self.grid.coarse.is_some()
     }
@@ -197,12 +202,17 @@ impl Reference {
     /// What the levels are measured against, in words for the manifest.
     pub fn describe(&self) -> String {
         let grid = self.grid.geometry;
-        let summed = match &self.grid.coarse {
-            Some(coarse) => format!(
+        let summed = match (&self.grid.coarse, &self.grid.top) {
+            (Some(coarse), Some(top)) => format!(
+                "summed in angle on three levels ({t}x{t} and {f}x{f} texels taken whole with their first and second moments where the bound allows)",
+                t = top.factor,
+                f = coarse.factor
+            ),
+            (Some(coarse), None) => format!(
                 "summed in angle on two levels ({f}x{f} texels taken whole with their first and second moments where the bound allows)",
                 f = coarse.factor
             ),
-            None => "summed in angle".to_string(),
+            _ => "summed in angle".to_string(),
         };
         if self.is_filtered() {
             format!(
@@ -269,14 +279,14 @@ impl Grid {
         if factor == 1 {
             let geometry = LatLong::new(input.width, input.height);
             let radiance = radiance(input);
-            let coarse = Coarse::of(geometry, &radiance);
-            return Grid { geometry, radiance, filtering: None, coarse };
+            let (coarse, top) = Coarse::levels(geometry, &radiance);
+            return Grid { geometry, radiance, filtering: None, coarse, top };
         }
         let filtered = box_latlong(input, input.width / factor, input.height / factor);
         let filtering = Some(Filtering::of(input, &filtered, factor));
         let (geometry, radiance) = (LatLong::new(filtered.width, filtered.height), radiance(&filtered));
-        let coarse = Coarse::of(geometry, &radiance);
-        Grid { geometry, radiance, filtering, coarse }
+        let (coarse, top) = Coarse::levels(geometry, &radiance);
+        Grid { geometry, radiance, filtering, coarse, top }
     }
 
     /// The lobe's integral: on this grid with the coarsest texel rule whose texel integrals move
@@ -330,25 +340,9 @@ impl Grid {
                 })
             }
         };
-        let coarse = self.coarse.as_ref().map(|coarse| {
-            // The coarse rule need only be exact on the texels the sum may take whole: those
-            // over which the kernel is smooth (the others are always refined).
-            let choice = choose_rule(REFERENCE_RULE_TOLERANCE, |rule| {
-                let with = ConeSum::new(coarse.geometry, coarse.radiance.clone(), rule, lobe);
-                let mut weights = Vec::new();
-                for axis in probe_axes(coarse.geometry) {
-                    let axis = axis.normalize();
-                    with.texel_integrals(axis, |y, x, w| {
-                        if coarse.span(axis, x, y).is_some_and(|span| !curve.too_curved(span)) {
-                            weights.push(w);
-                        }
-                    });
-                }
-                weights
-            });
-            (ConeSum::new(coarse.geometry, coarse.radiance.clone(), &choice.rule, lobe), coarse.clone())
-        });
-        LobeIntegral { fine: fine(&choice.rule), coarse, curve }
+        let (coarse, top) = (self.coarse.as_ref(), self.top.as_ref());
+        let (coarse, top) = (coarse.map(|c| level_sum(c, lobe, &curve)), top.map(|t| level_sum(t, lobe, &curve)));
+        LobeIntegral { fine: fine(&choice.rule), coarse, top, curve }
     }
 
     /// Per channel, the bound of the module docs on |B_input(R) − B_grid(R)| for `lobe`, within
@@ -414,6 +408,26 @@ impl Grid {
         }
         bound
     }
+}
+
+/// A coarse level's cone sum: the coarsest texel rule exact to [`REFERENCE_RULE_TOLERANCE`] on
+/// the texels the sum may take whole, those over which the kernel is smooth (the others are
+/// always refined), seen from the probe directions.
+fn level_sum(level: &Arc<Coarse>, lobe: &SplitSumLobe, curve: &Curve) -> (ConeSum, Arc<Coarse>) {
+    let choice = choose_rule(REFERENCE_RULE_TOLERANCE, |rule| {
+        let with = ConeSum::new(level.geometry, level.radiance.clone(), rule, lobe);
+        let mut weights = Vec::new();
+        for axis in probe_axes(level.geometry) {
+            let axis = axis.normalize();
+            with.texel_integrals(axis, |y, x, w| {
+                if level.span(axis, x, y).is_some_and(|span| !curve.too_curved(span)) {
+                    weights.push(w);
+                }
+            });
+        }
+        weights
+    });
+    (ConeSum::new(level.geometry, level.radiance.clone(), &choice.rule, lobe), level.clone())
 }
 
 /// |dk/dγ| of the split-sum kernel on [0, π/2]: with k = f(cos γ) ([`Curve`]),
@@ -565,6 +579,12 @@ const COARSE_FACTOR: usize = 8;
 /// costs a few operations per coarse texel and sample, so it stays this size.
 const COARSE_WIDTH: usize = 128;
 
+/// Coarse texels per top texel edge ([`LobeIntegral`]'s third level).
+const TOP_GROUP: usize = 4;
+
+/// Coarse levels narrower than this have no top level.
+const TOP_MIN_WIDTH: usize = 64;
+
 /// Grids narrower than this are summed texel by texel alone: the coarse level would save little.
 const TWO_LEVEL_MIN_WIDTH: usize = 512;
 
@@ -578,7 +598,7 @@ const TWO_LEVEL_TOLERANCE: f64 = 1e-4;
 const COARSE_CURVATURE: f64 = 1.0;
 
 /// The lobe's reference integral B(R) = Σ_t L_t ∫_t k(R·ω) dω over a grid (the input, or its
-/// box filtering), summed on two levels when the grid is large.
+/// box filtering), summed on two levels (three with the top one) when the grid is large.
 ///
 /// With the grid box-filtered by F into coarse texels T (radiance L̄_T, the solid-angle-weighted
 /// mean), the sum over the fine texels t of T splits as
@@ -599,9 +619,16 @@ const COARSE_CURVATURE: f64 = 1.0;
 /// too curved for a coarse rule, and those with the largest bounds (until the rest's is at most
 /// [`TWO_LEVEL_TOLERANCE`] of the sum) are summed texel by texel on the fine grid; the bound of the
 /// others is returned beside the value.
+///
+/// A third level above the coarse one ([`Coarse::levels`]) is summed the same way first: its
+/// texels too curved for its rule, and those of largest bound until the rest's is at most half
+/// the tolerance, are opened into their coarse texels, and only those are visited on the coarse
+/// level. Far from a sharp lobe's peak, and inside the cosine lobe, a top texel stands for
+/// [`TOP_GROUP`]² coarse ones.
 pub struct LobeIntegral {
     fine: ConeSum,
     coarse: Option<(ConeSum, Arc<Coarse>)>,
+    top: Option<(ConeSum, Arc<Coarse>)>,
     curve: Curve,
 }
 
@@ -618,42 +645,101 @@ impl LobeIntegral {
             return (self.fine.at(axis), [0.0; 3]);
         };
         let axis = axis.normalize();
-        let CoarsePass { mut whole, mut refined, estimate } = self.coarse_pass(coarse_sum, coarse, axis);
-        // Refine the largest bounds until the rest's is within the tolerance.
-        let target = TWO_LEVEL_TOLERANCE * estimate.iter().map(|e| e.abs()).sum::<f64>();
         let size = |t: &Whole| t.bound.iter().sum::<f64>();
-        refined.extend(take_largest(&mut whole, size, |t| t.index, target).into_iter().map(|t| t.index));
         let (mut value, mut bound) = ([0.0; 3], [0.0; 3]);
-        for t in &whole {
-            for c in 0..3 {
-                value[c] += t.value[c];
-                bound[c] += t.bound[c];
+        let mut add = |whole: &[Whole]| {
+            for t in whole {
+                for c in 0..3 {
+                    value[c] += t.value[c];
+                    bound[c] += t.bound[c];
+                }
             }
-        }
+        };
+        let share = |estimate: [f64; 3]| TWO_LEVEL_TOLERANCE * estimate.iter().map(|e| e.abs()).sum::<f64>();
+        // The top level's texels no rule of its integrates are opened first: the coarse level
+        // visits their texels, and its estimate of them joins the top's of the others, the total
+        // the tolerance is a share of. Then the top texels of largest bound are opened too, until
+        // the rest's is half the tolerance.
+        let (CoarsePass { mut whole, mut refined, .. }, target) = match &self.top {
+            Some((top_sum, top)) => {
+                let (g, width) = (top.factor / coarse.factor, top.geometry.width);
+                let children = |opened: &[usize]| -> Vec<(usize, std::ops::Range<usize>)> {
+                    opened
+                        .iter()
+                        .flat_map(|&i| {
+                            let (x, y) = (i % width, i / width);
+                            (g * y..g * (y + 1)).map(move |cy| (cy, g * x..g * (x + 1)))
+                        })
+                        .collect()
+                };
+                let CoarsePass { whole: mut top_whole, refined: curved, estimate, refined_estimate } =
+                    self.coarse_pass(top_sum, top, axis, None);
+                let mut pass = self.coarse_pass(coarse_sum, coarse, axis, Some(&children(&curved)));
+                let target = share([0, 1, 2].map(|c| estimate[c] - refined_estimate[c] + pass.estimate[c]));
+                let mut opened: Vec<usize> = take_largest(&mut top_whole, size, |t| t.index, 0.5 * target)
+                    .into_iter()
+                    .map(|t| t.index)
+                    .collect();
+                opened.sort_unstable();
+                let more = self.coarse_pass(coarse_sum, coarse, axis, Some(&children(&opened)));
+                pass.whole.extend(more.whole);
+                pass.refined.extend(more.refined);
+                add(&top_whole);
+                (pass, target - top_whole.iter().map(size).sum::<f64>())
+            }
+            None => {
+                let pass = self.coarse_pass(coarse_sum, coarse, axis, None);
+                let target = share(pass.estimate);
+                (pass, target)
+            }
+        };
+        // Refine the largest bounds until the rest's is within the tolerance.
+        refined.extend(take_largest(&mut whole, size, |t| t.index, target).into_iter().map(|t| t.index));
+        add(&whole);
         // The refined texels on the fine grid.
         refined.sort_unstable();
-        let fine_width = self.fine.grid.width;
+        let f = coarse.factor;
         self.fine.within(coarse, &refined, axis, |y, columns, weights| {
-            let radiance = &self.fine.radiance[y * fine_width + columns.start..y * fine_width + columns.end];
             let mut run = [0.0; 3];
-            for (l, k) in radiance.iter().zip(weights) {
-                (0..3).for_each(|c| run[c] += l[c] as f64 * k);
+            for (x, weights) in columns.step_by(f).zip(weights.chunks_exact(f)) {
+                for (l, k) in coarse.tile_row(x / f, y).iter().zip(weights) {
+                    (0..3).for_each(|c| run[c] += l[c] as f64 * k);
+                }
             }
             (0..3).for_each(|c| value[c] += run[c]);
         });
         (value, bound)
     }
 
-    /// The coarse texels within the kernel's support about `axis`: each taken whole (value and
-    /// bound) unless no coarse rule integrates the kernel over it, and the coarse estimate
-    /// Σ_T L̄_T K̂_T the tolerance is a share of.
-    fn coarse_pass(&self, coarse_sum: &ConeSum, coarse: &Coarse, axis: DVec3) -> CoarsePass {
+    /// The texels of a coarse level within the kernel's support about `axis` (of the `runs` of
+    /// columns, row by row, when given): each taken whole (value and bound) unless no coarse
+    /// rule integrates the kernel over it, and the coarse estimate Σ_T L̄_T K̂_T the tolerance
+    /// is a share of.
+    fn coarse_pass(
+        &self,
+        coarse_sum: &ConeSum,
+        coarse: &Coarse,
+        axis: DVec3,
+        runs: Option<&[(usize, std::ops::Range<usize>)]>,
+    ) -> CoarsePass {
         let (width, table, squares) = (coarse.geometry.width, coarse_sum.axis_tables(axis), Squares::of(axis));
         let mut scratch = coarse_sum.scratch();
         let mut pass =
-            CoarsePass { whole: Vec::with_capacity(coarse.centres.len() / 2), refined: Vec::new(), estimate: [0.0; 3] };
-        for y in 0..coarse.geometry.height {
-            for (start, end) in coarse_sum.cone_columns(&table, y) {
+            CoarsePass { whole: Vec::new(), refined: Vec::new(), estimate: [0.0; 3], refined_estimate: [0.0; 3] };
+        let cone: Vec<(usize, std::ops::Range<usize>)>;
+        let runs = match runs {
+            Some(runs) => runs,
+            None => {
+                cone = (0..coarse.geometry.height)
+                    .flat_map(|y| coarse_sum.cone_columns(&table, y).map(|(start, end)| (y, start..end)))
+                    .filter(|(_, columns)| !columns.is_empty())
+                    .collect();
+                &cone
+            }
+        };
+        for (y, columns) in runs {
+            let (y, start, end) = (*y, columns.start, columns.end);
+            {
                 coarse_sum.columns(&table, y, start..end, &mut scratch);
                 for x in start..end {
                     let Some(span) = coarse.span(axis, x, y) else { continue };
@@ -661,6 +747,7 @@ impl LobeIntegral {
                     let (mean, k) = (coarse.radiance[index], scratch.texel[x]);
                     (0..3).for_each(|c| pass.estimate[c] += mean[c] as f64 * k);
                     if !crosses_horizon(span) && self.curve.too_curved(span) {
+                        (0..3).for_each(|c| pass.refined_estimate[c] += mean[c] as f64 * k);
                         pass.refined.push(index);
                         continue;
                     }
@@ -685,7 +772,10 @@ struct CoarsePass {
     whole: Vec<Whole>,
     /// Coarse texels to sum texel by texel.
     refined: Vec<usize>,
+    /// Σ_T L̄_T K̂_T over the texels visited, and over those refined (where K̂_T is not to be
+    /// trusted: no rule was chosen for them).
     estimate: [f64; 3],
+    refined_estimate: [f64; 3],
 }
 
 /// Takes out of `items` the largest (by `size`) until what is left sums to at most `target`,
@@ -768,6 +858,10 @@ struct Coarse {
     radius: Vec<(f64, f64)>,
     /// The direction of every texel's centre.
     centres: Vec<DVec3>,
+    /// The fine grid's radiance texel by texel of each coarse texel in turn (its F rows of F),
+    /// so that the texels a refined coarse texel sums lie together in memory rather than F
+    /// rows of the map apart (empty on the top level, which refines into the coarse one).
+    tiles: Vec<[f32; 3]>,
 }
 
 /// Where s = R·ω lies over a coarse texel: at its centre and its extremes.
@@ -866,6 +960,8 @@ struct BlockMoments {
     moment: [DVec3; 3],
     second: [DMat3; 3],
     spread: [DMat3; 3],
+    /// Σ |ΔL_t| ∫_t e dω, for grouping blocks ([`BlockMoments::group`]).
+    spread_first: [DVec3; 3],
 }
 
 impl BlockMoments {
@@ -887,8 +983,8 @@ impl BlockMoments {
             moment: [DVec3::ZERO; 3],
             second: [DMat3::ZERO; 3],
             spread: [DMat3::ZERO; 3],
+            spread_first: [DVec3::ZERO; 3],
         };
-        let mut spread_first = [DVec3::ZERO; 3];
         for fy in f * y..f * (y + 1) {
             let (mut signed, mut absolute) = ([[0.0; 5]; 3], [[0.0; 5]; 3]);
             for fx in f * x..f * (x + 1) {
@@ -909,30 +1005,88 @@ impl BlockMoments {
                 m.moment[c] += first;
                 m.second[c] += second;
                 let (first, second) = row_moments(&rows[fy], width, &absolute[c]);
-                spread_first[c] += first;
+                m.spread_first[c] += first;
                 m.spread[c] += second;
                 m.deviation[c] += rows[fy].solid_angle * absolute[c][0];
             }
         }
-        let shift = |m: DVec3| DMat3::from_cols(centre * m.x, centre * m.y, centre * m.z);
-        let outer = DMat3::from_cols(centre * centre.x, centre * centre.y, centre * centre.z);
         for c in 0..3 {
-            let about_origin = shift(m.moment[c]);
+            let about_origin = outer(centre, m.moment[c]);
             m.second[c] -= about_origin + about_origin.transpose();
-            let about_origin = shift(spread_first[c]);
+            let about_origin = outer(centre, m.spread_first[c]);
             m.spread[c] -= about_origin + about_origin.transpose();
-            m.spread[c] += outer * m.deviation[c];
+            m.spread[c] += outer(centre, centre) * m.deviation[c];
+            m.spread_first[c] -= centre * m.deviation[c];
+        }
+        m
+    }
+
+    /// The g × g blocks of `level` (row-major, texels of `grid`) at (x, y) of the grid they
+    /// group into, taken as one block T about its centre c_T. A block b's texels t deviate from
+    /// T's mean by w_t = δ_t + Δ_b (δ_t from b's mean, Δ_b = L̄_b − L̄_T), and e_T = e_b + d_b
+    /// (d_b = c_b − c_T), so with b's own integrals W_b = ∫_b ω dω and G_b = ∫_b e_T e_Tᵀ dω:
+    ///
+    ///   M_T = Σ_b M_b + Δ_b W_b,   Q_T = Σ_b Q_b + M_b d_bᵀ + d_b M_bᵀ + Δ_b G_b,
+    ///
+    /// exactly (Σ_t δ_t Ω_t = 0 within b). The absolute deviations only have a bound,
+    /// |w_t| ≤ |δ_t| + |Δ_b|: D_T ≤ Σ_b D_b + |Δ_b| Ω_b and, with F_b = Σ |δ_t| ∫ e_b,
+    /// A_T ≤ Σ_b A_b + F_b d_bᵀ + d_b F_bᵀ + D_b d_b d_bᵀ + |Δ_b| G_b in the order of positive
+    /// semidefinite matrices, which is what the remainder bound C Rᵀ A_T R needs.
+    fn group(grid: LatLong, level: &[BlockMoments], [x, y, g]: [usize; 3]) -> BlockMoments {
+        let centre = LatLong::new(grid.width / g, grid.height / g).texel_direction(x, y);
+        let width = TAU / grid.width as f64;
+        let blocks: Vec<(&BlockMoments, f64, DVec3, DMat3, DVec3)> = (g * y..g * (y + 1))
+            .flat_map(|by| (g * x..g * (x + 1)).map(move |bx| (bx, by)))
+            .map(|(bx, by)| {
+                let (row, [c1, s1, cc, sc]) = (RowFactors::of(grid, by), column_factors(grid, bx));
+                let (first, second) = row_moments(&row, width, &[1.0, c1, s1, cc, sc]);
+                // ∫_b e_T e_Tᵀ from the moments about the origin.
+                let about = outer(centre, first);
+                let g_b = second - about - about.transpose() + outer(centre, centre) * row.solid_angle;
+                (&level[by * grid.width + bx], row.solid_angle, first, g_b, grid.texel_direction(bx, by) - centre)
+            })
+            .collect();
+        let area: f64 = blocks.iter().map(|b| b.1).sum();
+        let mean = [0, 1, 2].map(|c| blocks.iter().map(|(b, omega, ..)| b.mean[c] * omega).sum::<f64>() / area);
+        let mut m = BlockMoments {
+            mean,
+            deviation: [0.0; 3],
+            moment: [DVec3::ZERO; 3],
+            second: [DMat3::ZERO; 3],
+            spread: [DMat3::ZERO; 3],
+            spread_first: [DVec3::ZERO; 3],
+        };
+        for &(b, omega, first, g_b, d) in &blocks {
+            for c in 0..3 {
+                let delta = b.mean[c] - mean[c];
+                m.moment[c] += b.moment[c] + first * delta;
+                m.second[c] += b.second[c] + outer(b.moment[c], d) + outer(d, b.moment[c]) + g_b * delta;
+                m.deviation[c] += b.deviation[c] + delta.abs() * omega;
+                m.spread[c] += b.spread[c]
+                    + outer(b.spread_first[c], d)
+                    + outer(d, b.spread_first[c])
+                    + outer(d, d) * b.deviation[c]
+                    + g_b * delta.abs();
+                m.spread_first[c] += b.spread_first[c] + d * b.deviation[c] + (first - centre * omega) * delta.abs();
+            }
         }
         m
     }
 }
 
+/// a bᵀ.
+fn outer(a: DVec3, b: DVec3) -> DMat3 {
+    DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
 impl Coarse {
-    /// The coarse level of a fine grid, when it is wide enough and divides by the factor.
-    fn of(fine: LatLong, radiance: &[[f32; 3]]) -> Option<Arc<Coarse>> {
+    /// The coarse level of a fine grid, when it is wide enough and divides by the factor, and
+    /// the top level grouping its texels [`TOP_GROUP`] × [`TOP_GROUP`] when it is wide enough
+    /// ([`BlockMoments::group`]).
+    fn levels(fine: LatLong, radiance: &[[f32; 3]]) -> (Option<Arc<Coarse>>, Option<Arc<Coarse>>) {
         let f = COARSE_FACTOR.max(fine.width / COARSE_WIDTH);
         if fine.width < TWO_LEVEL_MIN_WIDTH || fine.width % f != 0 || fine.height % f != 0 {
-            return None;
+            return (None, None);
         }
         let geometry = LatLong::new(fine.width / f, fine.height / f);
         let rows: Vec<RowFactors> = (0..fine.height).map(|y| RowFactors::of(fine, y)).collect();
@@ -941,9 +1095,31 @@ impl Coarse {
             .into_par_iter()
             .map(|i| BlockMoments::of(fine, radiance, &rows, &columns, [i % geometry.width, i / geometry.width, f]))
             .collect();
-        Some(Arc::new(Coarse {
+        // Each tile written once, in place (no page is read before it is written).
+        let mut tiles = vec![[0.0f32; 3]; fine.width * fine.height];
+        tiles.par_chunks_mut(f * f).enumerate().for_each(|(i, tile)| {
+            let (x, y) = (i % geometry.width, i / geometry.width);
+            for (row, fy) in tile.chunks_exact_mut(f).zip(f * y..f * (y + 1)) {
+                row.copy_from_slice(&radiance[fy * fine.width + f * x..fy * fine.width + f * (x + 1)]);
+            }
+        });
+        let g = TOP_GROUP;
+        let top = (geometry.width >= TOP_MIN_WIDTH && geometry.width % g == 0 && geometry.height % g == 0).then(|| {
+            let grid = LatLong::new(geometry.width / g, geometry.height / g);
+            let grouped: Vec<BlockMoments> = (0..grid.height * grid.width)
+                .into_par_iter()
+                .map(|i| BlockMoments::group(geometry, &blocks, [i % grid.width, i / grid.width, g]))
+                .collect();
+            Arc::new(Coarse::of_blocks(grid, f * g, &grouped, Vec::new()))
+        });
+        (Some(Arc::new(Coarse::of_blocks(geometry, f, &blocks, tiles))), top)
+    }
+
+    /// A level of `factor` fine texels per edge from its blocks' moments.
+    fn of_blocks(geometry: LatLong, factor: usize, blocks: &[BlockMoments], tiles: Vec<[f32; 3]>) -> Coarse {
+        Coarse {
             geometry,
-            factor: f,
+            factor,
             radiance: Arc::new(blocks.iter().map(|b| b.mean.map(|v| v as f32)).collect()),
             deviation: blocks.iter().map(|b| b.deviation).collect(),
             moment: blocks.iter().map(|b| b.moment).collect(),
@@ -953,7 +1129,15 @@ impl Coarse {
             centres: (0..geometry.height)
                 .flat_map(|y| (0..geometry.width).map(move |x| geometry.texel_direction(x, y)))
                 .collect(),
-        }))
+            tiles,
+        }
+    }
+
+    /// The fine texels of row `y` (fine) inside coarse column `x`.
+    fn tile_row(&self, x: usize, y: usize) -> &[[f32; 3]] {
+        let f = self.factor;
+        let start = ((y / f) * self.geometry.width + x) * f * f + (y % f) * f;
+        &self.tiles[start..start + f]
     }
 
     /// s = R·ω over texel (x, y): cos(γ ∓ ρ) from cos γ = R·c, γ the angle to the centre and ρ
@@ -1447,7 +1631,7 @@ mod tests {
     fn the_two_level_sum_is_within_its_bound_of_the_texel_sum() {
         let map = detailed(512, 256);
         let grid = Grid::new(map.image(), 1);
-        assert!(grid.coarse.is_some(), "a 512-wide grid is summed on two levels");
+        assert!(grid.coarse.is_some() && grid.top.is_some(), "a 512-wide grid is summed on three levels");
         let exact = TexelRule::new(6).unwrap();
         for r in [0.1, 0.25, 0.5, 1.0] {
             let lobe = SplitSumLobe::new(r).unwrap();
@@ -1498,7 +1682,7 @@ mod tests {
         for (x0, y0) in [(3, 1), (200, 60), (511, 130), (77, 255)] {
             let mut map = vec![[0.0; 3]; w * h];
             map[y0 * w + x0] = [1.0, 2.0, 0.0];
-            let coarse = Coarse::of(fine, &map).unwrap();
+            let coarse = Coarse::levels(fine, &map).0.unwrap();
             let f = coarse.factor;
             let t = (y0 / f) * coarse.geometry.width + x0 / f;
             let texels =
@@ -1516,8 +1700,58 @@ mod tests {
             }
             assert!(coarse.moment[t][2].length() == 0.0 && (coarse.radiance[t][0] as f64 - mean).abs() < 1e-7);
         }
-        let flat = Coarse::of(fine, &vec![[1.0; 3]; w * h]).unwrap();
+        let flat = Coarse::levels(fine, &vec![[1.0; 3]; w * h]).0.unwrap();
         assert!(flat.moment.iter().all(|m| m[0].length() < 1e-15) && flat.deviation.iter().all(|d| d[0] < 1e-15));
+    }
+
+    /// Blocks grouped from their moments ([`BlockMoments::group`]) have the mean and signed
+    /// moments of the same texels taken as one block ([`BlockMoments::of`]), and the absolute
+    /// ones bounded from above, within a small factor: D_T and Rᵀ A_T R at directions all round.
+    #[test]
+    fn grouped_blocks_have_their_texels_moments() {
+        let map = detailed(512, 256);
+        let fine = LatLong::new(512, 256);
+        let rows: Vec<RowFactors> = (0..256).map(|y| RowFactors::of(fine, y)).collect();
+        let columns: Vec<[f64; 4]> = (0..512).map(|x| column_factors(fine, x)).collect();
+        let radiance = &map.image().pixels;
+        let (f, g) = (8, 4);
+        let coarse = LatLong::new(512 / f, 256 / f);
+        let blocks: Vec<BlockMoments> = (0..coarse.height * coarse.width)
+            .map(|i| BlockMoments::of(fine, radiance, &rows, &columns, [i % coarse.width, i / coarse.width, f]))
+            .collect();
+        let directions: Vec<DVec3> = (0..16)
+            .map(|k| {
+                let z = 1.0 - 2.0 * (k as f64 + 0.5) / 16.0;
+                let phi = k as f64 * 2.399_963;
+                DVec3::new((1.0 - z * z).sqrt() * phi.cos(), (1.0 - z * z).sqrt() * phi.sin(), z)
+            })
+            .collect();
+        let (mut loosest, mut checked): (f64, usize) = (1.0, 0);
+        for (x, y) in [(0, 0), (5, 1), (9, 3), (15, 7), (3, 4), (12, 2)] {
+            let grouped = BlockMoments::group(coarse, &blocks, [x, y, g]);
+            let direct = BlockMoments::of(fine, radiance, &rows, &columns, [x, y, f * g]);
+            for c in 0..3 {
+                let scale = direct.mean[c].abs() * fine.row_solid_angle(128) * (f * g * f * g) as f64;
+                assert!((grouped.mean[c] - direct.mean[c]).abs() <= 1e-12 * direct.mean[c].abs(), "({x}, {y}) mean");
+                assert!((grouped.moment[c] - direct.moment[c]).length() <= 1e-9 * scale, "({x}, {y}) M");
+                let q = (grouped.second[c] - direct.second[c]).to_cols_array();
+                assert!(q.iter().all(|v| v.abs() <= 1e-9 * scale), "({x}, {y}) Q {q:?}");
+                assert!(grouped.deviation[c] >= direct.deviation[c] - 1e-12 * scale, "({x}, {y}) D below");
+                for r in &directions {
+                    let (a, b) = (r.dot(grouped.spread[c] * *r), r.dot(direct.spread[c] * *r));
+                    assert!(a >= b - 1e-12 * scale, "({x}, {y}) {c} RᵀAR {a:e} < {b:e}");
+                    if b > 1e-6 * scale {
+                        loosest = loosest.max(a / b);
+                        checked += 1;
+                    }
+                }
+                if direct.deviation[c] > 1e-6 * scale {
+                    loosest = loosest.max(grouped.deviation[c] / direct.deviation[c]);
+                }
+            }
+        }
+        assert!(checked > 50, "only {checked} spreads compared");
+        assert!(loosest < 2.0, "the grouped bounds are {loosest} times the texels'");
     }
 
     /// `Curve`'s f' and |f''| are the kernel's derivatives in s = cos γ (central differences of
@@ -1578,6 +1812,7 @@ mod tests {
         let integral = LobeIntegral {
             fine: ConeSum::new(grid.geometry, grid.radiance.clone(), &exact, &lobe),
             coarse: None,
+            top: None,
             curve: Curve::of(&lobe),
         };
         let axis = DVec3::new(0.3, -0.5, 0.8).normalize();
