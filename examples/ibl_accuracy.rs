@@ -23,9 +23,9 @@ fn main() {
          the 32² irradiance cube), and Filament's roughness mapping on `grace_latlong.exr`. Each level with \
          r > 0 is compared on {samples} texels at a fixed stride with the angular integral of the input \
          (`ibl::reference`: every input texel within the kernel's support, texel integrals by a rule \
-         misplacing at most 1e-5 of the kernel's weight; 8 × 8 blocks of texels taken whole with their \
-         first and second moments where the remainder bound allows, which keeps the reference within 1e-4 of the \
-         texel-by-texel sum); relative error ‖a − r‖/‖r‖ over the texels \
+         misplacing at most 1e-5 of the kernel's weight; 8 × 8 blocks of texels, and groups of 4 × 4 blocks, \
+         taken whole with their first and second moments where the remainder bound allows, which keeps the \
+         reference within 1e-4 of the texel-by-texel sum); relative error ‖a − r‖/‖r‖ over the texels \
          whose reference is above 1 % of the mean. Inputs that are not lat-long are first resampled to a \
          1024 × 512 lat-long (2 × 2 supersampling), which both the bake and the reference read. Errors are \
          of the f32 values, before packing into the texel format. Targets (issue 12): RMS ≤ 1 %, max ≤ 5 % \
