@@ -514,14 +514,14 @@ impl Filtering {
                 row
             })
             .collect();
+        let radii: Vec<f64> = (0..coarse.height).map(|y| angular_radius(coarse, y)).collect();
         let mut filtering = Filtering {
             deviation,
             blocks: Vec::new(),
             rows: (0..coarse.height).map(|y| coarse.row_theta(y).sin_cos()).collect(),
             columns: (0..coarse.width).map(|x| coarse.column_phi(x).sin_cos()).collect(),
-            radius: (0..coarse.height).map(|y| angular_radius(coarse, y).sin_cos()).map(|(s, c)| (c, s)).collect(),
+            radius: radii.iter().map(|r| r.sin_cos()).map(|(s, c)| (c, s)).collect(),
         };
-        let radii: Vec<f64> = (0..coarse.height).map(|y| angular_radius(coarse, y)).collect();
         let bands: Vec<Vec<Block>> = (0..coarse.height)
             .into_par_iter()
             .step_by(BLOCK)
@@ -965,6 +965,18 @@ struct BlockMoments {
 }
 
 impl BlockMoments {
+    /// A block of mean radiance `mean` with its sums still to add.
+    fn about(mean: [f64; 3]) -> BlockMoments {
+        BlockMoments {
+            mean,
+            deviation: [0.0; 3],
+            moment: [DVec3::ZERO; 3],
+            second: [DMat3::ZERO; 3],
+            spread: [DMat3::ZERO; 3],
+            spread_first: [DVec3::ZERO; 3],
+        }
+    }
+
     fn of(fine: LatLong, radiance: &[[f32; 3]], rows: &[RowFactors], columns: &[[f64; 4]], block: [usize; 3]) -> Self {
         let [x, y, f] = block;
         let centre = LatLong::new(fine.width / f, fine.height / f).texel_direction(x, y);
@@ -977,14 +989,7 @@ impl BlockMoments {
         }
         let mean = energy.map(|e| e / area);
         let width = TAU / fine.width as f64;
-        let mut m = BlockMoments {
-            mean,
-            deviation: [0.0; 3],
-            moment: [DVec3::ZERO; 3],
-            second: [DMat3::ZERO; 3],
-            spread: [DMat3::ZERO; 3],
-            spread_first: [DVec3::ZERO; 3],
-        };
+        let mut m = BlockMoments::about(mean);
         for fy in f * y..f * (y + 1) {
             let (mut signed, mut absolute) = ([[0.0; 5]; 3], [[0.0; 5]; 3]);
             for fx in f * x..f * (x + 1) {
@@ -1048,14 +1053,7 @@ impl BlockMoments {
             .collect();
         let area: f64 = blocks.iter().map(|b| b.1).sum();
         let mean = [0, 1, 2].map(|c| blocks.iter().map(|(b, omega, ..)| b.mean[c] * omega).sum::<f64>() / area);
-        let mut m = BlockMoments {
-            mean,
-            deviation: [0.0; 3],
-            moment: [DVec3::ZERO; 3],
-            second: [DMat3::ZERO; 3],
-            spread: [DMat3::ZERO; 3],
-            spread_first: [DVec3::ZERO; 3],
-        };
+        let mut m = BlockMoments::about(mean);
         for &(b, omega, first, g_b, d) in &blocks {
             for c in 0..3 {
                 let delta = b.mean[c] - mean[c];
