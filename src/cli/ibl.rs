@@ -89,12 +89,13 @@ impl Stage for Args {
         stage_bake(&mut outputs, &self.output, &out)?;
         let t = &body.timings;
         ctx.note(format!(
-            "baked in {:.3} s (prepare {:.3}, specular {:.3}, irradiance and SH {:.3}, DFG {:.3} beside them), encoded in {:.3} s, measured in {:.3} s",
+            "baked in {:.3} s (prepare {:.3}, specular {:.3}, irradiance and SH {:.3}, DFG {:.3} and the reference {:.3} beside them), encoded in {:.3} s, measured in {:.3} s",
             t.bake,
             t.prepare,
             t.specular,
             t.irradiance,
             t.dfg,
+            t.reference,
             t_encode.elapsed().as_secs_f64(),
             t.measure
         ));

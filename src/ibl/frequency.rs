@@ -192,20 +192,38 @@ impl Step {
 /// A lat-long input and the working grids the zonal path filters it on (each size made once:
 /// the wide levels and the irradiance cube share theirs).
 #[derive(Debug)]
-pub struct LatLongSource {
-    base: Arc<RgbImage>,
+pub struct LatLongSource<'a> {
+    base: &'a RgbImage,
     grids: Mutex<Vec<Arc<RgbImage>>>,
 }
 
-impl LatLongSource {
-    /// Wraps a W × H lat-long image.
-    pub fn new(base: RgbImage) -> Self {
-        LatLongSource { base: Arc::new(base), grids: Mutex::new(Vec::new()) }
+/// A working grid of a [`LatLongSource`]: the input itself, or one of its resamplings.
+pub enum WorkingGrid<'a> {
+    /// The input, when the lobe needs its rows as they are.
+    Input(&'a RgbImage),
+    /// A box filtering or a split of the input, made once per size.
+    Resampled(Arc<RgbImage>),
+}
+
+impl std::ops::Deref for WorkingGrid<'_> {
+    type Target = RgbImage;
+    fn deref(&self) -> &RgbImage {
+        match self {
+            WorkingGrid::Input(image) => image,
+            WorkingGrid::Resampled(image) => image,
+        }
+    }
+}
+
+impl<'a> LatLongSource<'a> {
+    /// Wraps a W × H lat-long image (borrowed: the largest inputs are not copied).
+    pub fn new(base: &'a RgbImage) -> Self {
+        LatLongSource { base, grids: Mutex::new(Vec::new()) }
     }
 
     /// The input.
-    pub fn base(&self) -> &RgbImage {
-        &self.base
+    pub fn base(&self) -> &'a RgbImage {
+        self.base
     }
 
     /// Rows of the working grid for a lobe of width `lobe_width` radians (module docs).
@@ -235,15 +253,15 @@ impl LatLongSource {
     }
 
     /// The working grid for a lobe of width `lobe_width` radians (see the module docs).
-    pub fn working_grid(&self, lobe_width: f64) -> Arc<RgbImage> {
+    pub fn working_grid(&self, lobe_width: f64) -> WorkingGrid<'a> {
         let (w, h) = self.working_size(lobe_width);
-        let base = &self.base;
+        let base = self.base;
         if (w, h) == (base.width, base.height) {
-            return base.clone();
+            return WorkingGrid::Input(base);
         }
         let mut grids = self.grids.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(g) = grids.iter().find(|g| (g.width, g.height) == (w, h)) {
-            return g.clone();
+            return WorkingGrid::Resampled(g.clone());
         }
         let grid = Arc::new(if h > base.height {
             let f = h / base.height;
@@ -252,7 +270,7 @@ impl LatLongSource {
             box_latlong(base, w, h)
         });
         grids.push(grid.clone());
-        grid
+        WorkingGrid::Resampled(grid)
     }
 
     /// The zonal passes that filter with `lobe`: the whole kernel on the grid it needs, or, when
@@ -417,7 +435,7 @@ mod tests {
     #[test]
     fn working_grid_splits_texels_when_the_input_is_too_coarse() {
         let img = RgbImage::from_fn(32, 16, |x, y| [x as f32, y as f32, 0.0]);
-        let p = LatLongSource::new(img.clone());
+        let p = LatLongSource::new(&img);
         // A lobe of width 0.05 rad: the source needs no more than the input's 16 rows, the
         // read-back ⌈3π/0.05⌉ = 189: the input split 12 ways.
         let g = p.working_grid(0.05);
@@ -425,7 +443,8 @@ mod tests {
         assert_eq!(p.working_size(0.05), (384, 192));
         assert_eq!(g.get(12 + 5, 24 + 7), img.get(1, 2));
         // A fine input: the rows the lobe needs, rounded up to GRID_STEP, at least MIN_ROWS.
-        let fine = LatLongSource::new(RgbImage::new(1024, 512));
+        let fine_input = RgbImage::new(1024, 512);
+        let fine = LatLongSource::new(&fine_input);
         assert_eq!(fine.working_size(2.0), (2 * MIN_ROWS, MIN_ROWS));
         // w = 0.08: ⌈4π/0.08⌉ = 158 rows → 160.
         assert_eq!(fine.working_size(0.08), (320, 160));
@@ -508,7 +527,7 @@ mod tests {
                 [0.2 + 0.1 * ((x / 8 + y / 8) % 2) as f32, 0.15, 0.1]
             }
         });
-        let source = LatLongSource::new(img);
+        let source = LatLongSource::new(&img);
         let lobe = SplitSumLobe::new(0.134).unwrap();
         let passes = source.passes(&lobe);
         let [Pass { part: Part::Peak(step), .. }, Pass { part: Part::Tail(_), .. }] = passes[..] else {
@@ -549,7 +568,8 @@ mod tests {
         // lights (the tail is read back from 128 rows instead of 384).
         assert!((err2 / ref2).sqrt() < 1e-5 && worst < 1e-2, "rms {:.2e} max {worst:.2e}", (err2 / ref2).sqrt());
         // Each pass is normalized and the shares sum to one: white stays exactly white.
-        let white = LatLongSource::new(RgbImage::from_fn(w, h, |_, _| [1.0; 3]));
+        let white_input = RgbImage::from_fn(w, h, |_, _| [1.0; 3]);
+        let white = LatLongSource::new(&white_input);
         let white_split = white.filter(&lobe, &NoProgress).unwrap();
         assert_eq!(white_split.parts.len(), 2);
         for d in [DVec3::X, DVec3::new(0.3, -0.2, 0.93).normalize(), -DVec3::Z] {

@@ -212,6 +212,8 @@ pub struct Timings {
     pub dfg: f64,
     /// The bake without measurement (the files are encoded by the caller, after it).
     pub bake: f64,
+    /// Preparing the angular reference the levels are measured against (beside the bake).
+    pub reference: f64,
     /// Measuring the levels against the angular reference.
     pub measure: f64,
 }

@@ -53,11 +53,12 @@ use super::cube::{texel_direction, CubeMap};
 use crate::brdf::ggx::SplitSumLobe;
 use crate::envmap::resample::box_latlong;
 use crate::envmap::zonal::{choose_rule, TexelRule};
-use crate::envmap::{EnvMap, FACES};
+use crate::envmap::{EnvMap, Face, FACES};
 use crate::io::RgbImage;
 use crate::sphere::{self, LatLong};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::sync::Arc;
 
@@ -92,15 +93,20 @@ pub struct Reference {
 /// One box filtering of the input, ready for cone sums and for the bound.
 struct Grid {
     geometry: LatLong,
-    /// Radiance of every texel, row-major (f32 as read: the sums read it once per texel and
-    /// sample, so its size is what they wait on).
-    radiance: Arc<Vec<[f32; 3]>>,
+    texels: Texels,
     /// What the box filtering changed, for the bound (none when the grid is the input).
     filtering: Option<Filtering>,
-    /// This grid box-filtered, for the two-level sum ([`LobeIntegral`]), and the coarse level's
-    /// texels grouped [`TOP_GROUP`] × [`TOP_GROUP`] above it.
-    coarse: Option<Arc<Coarse>>,
-    top: Option<Arc<Coarse>>,
+}
+
+/// How a grid's radiance is kept for the sums (f32 as read: the sums read it once per texel
+/// and sample, so its size is what they wait on).
+enum Texels {
+    /// Row by row, for a grid summed texel by texel.
+    Rows(Arc<Vec<[f32; 3]>>),
+    /// The grid box-filtered into a coarse level, for the two-level sum ([`LobeIntegral`]), which
+    /// keeps the fine texels in its tiles, and the coarse level's texels grouped
+    /// [`TOP_GROUP`] × [`TOP_GROUP`] above it.
+    Levels(Arc<Coarse>, Option<Arc<Coarse>>),
 }
 
 /// The directions a texel rule is chosen at: one on the equator, where lat-long texels are
@@ -196,30 +202,30 @@ impl Reference {
     /// [`Measured::reference_bound`] bounds by how much): the input was box-filtered, or is
     /// summed on two or three levels ([`LobeIntegral`]).
     pub fn is_bounded(&self) -> bool {
-        self.is_filtered() || self.grid.coarse.is_some()
+        self.is_filtered() || matches!(self.grid.texels, Texels::Levels(..))
     }
 
     /// What the levels are measured against, in words for the manifest.
     pub fn describe(&self) -> String {
         let grid = self.grid.geometry;
-        let summed = match (&self.grid.coarse, &self.grid.top) {
-            (Some(coarse), Some(top)) => format!(
+        let summed = match &self.grid.texels {
+            Texels::Levels(coarse, Some(top)) => format!(
                 "summed in angle on three levels ({t}x{t} and {f}x{f} texels taken whole with their first and second moments where the bound allows)",
                 t = top.factor,
                 f = coarse.factor
             ),
-            (Some(coarse), None) => format!(
+            Texels::Levels(coarse, None) => format!(
                 "summed in angle on two levels ({f}x{f} texels taken whole with their first and second moments where the bound allows)",
                 f = coarse.factor
             ),
-            _ => "summed in angle".to_string(),
+            Texels::Rows(_) => "summed in angle".to_string(),
         };
         if self.is_filtered() {
             format!(
                 "the input latlong {}x{} box-filtered to {}x{} and {summed}; reference_bound bounds what the filtering and the summation change",
                 self.input.0, self.input.1, grid.width, grid.height
             )
-        } else if self.grid.coarse.is_some() {
+        } else if self.is_bounded() {
             format!(
                 "the input, latlong {}x{}, {summed}; reference_bound bounds what the summation changes",
                 grid.width, grid.height
@@ -237,31 +243,78 @@ impl Reference {
     /// Measures `level` (cube frame; `env_from_cube` takes its directions to prtkit's frame) on
     /// `samples` texels at a fixed stride.
     pub fn measure(&self, level: &CubeMap, lobe: &SplitSumLobe, env_from_cube: DMat3, samples: usize) -> Measured {
-        let m = level.size();
-        let total = 6 * m * m;
-        let stride = (total / samples.max(1)).max(1);
-        let picks: Vec<usize> = (0..total).step_by(stride).map(|i| (i + stride / 2).min(total - 1)).collect();
+        self.expect(lobe, env_from_cube, samples, &[level.size()]).remove(0).measure(level)
+    }
+
+    /// What [`Reference::measure`] compares a level of each face size in `sizes` with: the
+    /// reference at its sampled texels, which needs nothing of the level but its size, so it can
+    /// be summed while the level is baked. The lobe's texel rule is chosen once for them all.
+    pub fn expect(&self, lobe: &SplitSumLobe, env_from_cube: DMat3, samples: usize, sizes: &[usize]) -> Vec<Expected> {
         let (integral, slope) = (self.lobe(lobe), Slope::of(lobe));
-        let length = |v: [f64; 3]| v.iter().map(|c| c * c).sum::<f64>().sqrt();
-        let measured: Vec<((f64, f64), f64)> = picks
-            .par_iter()
-            .map(|&i| {
-                let (face, row, col) = (FACES[i / (m * m)], (i / m) % m, i % m);
-                let axis = (env_from_cube * texel_direction(face, m, row, col)).normalize();
-                let (reference, two_level) = integral.at_with_bound(axis);
-                let filtering = self.grid.filtering_bound(axis, lobe, &slope);
-                let got = level.get(face, row, col);
-                let diff = length([0, 1, 2].map(|c| got[c] as f64 - reference[c]));
-                let bound = length([0, 1, 2].map(|c| filtering[c] + two_level[c]));
-                ((diff, length(reference)), bound)
+        sizes
+            .iter()
+            .map(|&size| {
+                let total = 6 * size * size;
+                let stride = (total / samples.max(1)).max(1);
+                let texels = (0..total)
+                    .step_by(stride)
+                    .map(|i| (i + stride / 2).min(total - 1))
+                    .collect::<Vec<usize>>()
+                    .into_par_iter()
+                    .map(|i| {
+                        let (face, row, col) = (FACES[i / (size * size)], (i / size) % size, i % size);
+                        let axis = (env_from_cube * texel_direction(face, size, row, col)).normalize();
+                        let (reference, two_level) = integral.at_with_bound(axis);
+                        let filtering = self.grid.filtering_bound(axis, lobe, &slope);
+                        let bound = [0, 1, 2].map(|c| filtering[c] + two_level[c]);
+                        ExpectedTexel { at: (face, row, col), reference, bound: length(bound) }
+                    })
+                    .collect();
+                Expected { size, texels }
+            })
+            .collect()
+    }
+}
+
+/// The reference at the sampled texels of a level not yet baked ([`Reference::expect`]).
+pub struct Expected {
+    size: usize,
+    texels: Vec<ExpectedTexel>,
+}
+
+struct ExpectedTexel {
+    at: (Face, usize, usize),
+    reference: [f64; 3],
+    /// ‖β‖: the bound on how far `reference` may be from the texel-by-texel sum over the input.
+    bound: f64,
+}
+
+impl Expected {
+    /// The face size of the level the samples are taken for.
+    pub fn size(&self) -> usize {
+        self.size
+    }
+
+    /// The level's error at the sampled texels.
+    ///
+    /// # Panics
+    /// When `level` is not of the size the samples were taken for (a caller's mistake).
+    pub fn measure(&self, level: &CubeMap) -> Measured {
+        assert_eq!(level.size(), self.size, "a level is measured at the size its samples were taken for");
+        let pairs: Vec<(f64, f64)> = self
+            .texels
+            .iter()
+            .map(|t| {
+                let got = level.get(t.at.0, t.at.1, t.at.2);
+                (length([0, 1, 2].map(|c| got[c] as f64 - t.reference[c])), length(t.reference))
             })
             .collect();
-        let pairs: Vec<(f64, f64)> = measured.iter().map(|m| m.0).collect();
         let pooled = LevelError::pool(&pairs);
-        let reference_bound = measured
+        let reference_bound = pairs
             .iter()
+            .zip(&self.texels)
             .filter(|((_, norm), _)| *norm > pooled.floor)
-            .map(|((_, norm), bound)| bound / norm)
+            .map(|((_, norm), t)| t.bound / norm)
             .fold(0.0, f64::max);
         Measured {
             samples: pooled.samples,
@@ -272,21 +325,27 @@ impl Reference {
     }
 }
 
+/// The Euclidean length of an RGB triple.
+fn length(v: [f64; 3]) -> f64 {
+    v.iter().map(|c| c * c).sum::<f64>().sqrt()
+}
+
 impl Grid {
     /// The input box-filtered by `factor` (1: as it is), with its texels' D_T.
     fn new(input: &RgbImage, factor: usize) -> Grid {
-        let radiance = |image: &RgbImage| Arc::new(image.pixels.clone());
+        // The texels row by row only where no coarse level keeps them: the input is not copied.
+        let texels = |geometry: LatLong, pixels: Cow<'_, [[f32; 3]]>| match Coarse::levels(geometry, &pixels) {
+            Some((coarse, top)) => Texels::Levels(coarse, top),
+            None => Texels::Rows(Arc::new(pixels.into_owned())),
+        };
         if factor == 1 {
             let geometry = LatLong::new(input.width, input.height);
-            let radiance = radiance(input);
-            let (coarse, top) = Coarse::levels(geometry, &radiance);
-            return Grid { geometry, radiance, filtering: None, coarse, top };
+            return Grid { geometry, texels: texels(geometry, Cow::Borrowed(&input.pixels)), filtering: None };
         }
         let filtered = box_latlong(input, input.width / factor, input.height / factor);
         let filtering = Some(Filtering::of(input, &filtered, factor));
-        let (geometry, radiance) = (LatLong::new(filtered.width, filtered.height), radiance(&filtered));
-        let (coarse, top) = Coarse::levels(geometry, &radiance);
-        Grid { geometry, radiance, filtering, coarse, top }
+        let geometry = LatLong::new(filtered.width, filtered.height);
+        Grid { geometry, texels: texels(geometry, Cow::Owned(filtered.pixels)), filtering }
     }
 
     /// The lobe's integral: on this grid with the coarsest texel rule whose texel integrals move
@@ -297,14 +356,14 @@ impl Grid {
     fn lobe(&self, lobe: &SplitSumLobe) -> LobeIntegral {
         let grid = self.geometry;
         let curve = Curve::of(lobe);
-        let fine = |rule: &TexelRule| ConeSum::new(grid, self.radiance.clone(), rule, lobe);
+        let fine = |rule: &TexelRule| ConeSum::new(grid, rule, lobe);
         // With a coarse level the fine rule need only be exact where the fine grid is summed
         // whatever the radiance: inside the coarse texels that are always refined. The other
         // texels' weight still counts in the total the tolerance is a share of: it enters once,
         // the same for every rule compared.
         let probes = probe_axes(grid).map(DVec3::normalize);
-        let choice = match &self.coarse {
-            None => choose_rule(REFERENCE_RULE_TOLERANCE, |rule| {
+        let choice = match &self.texels {
+            Texels::Rows(_) => choose_rule(REFERENCE_RULE_TOLERANCE, |rule| {
                 let with = fine(rule);
                 let mut weights = Vec::new();
                 for axis in probes {
@@ -312,7 +371,7 @@ impl Grid {
                 }
                 weights
             }),
-            Some(coarse) => {
+            Texels::Levels(coarse, _) => {
                 let refined: Vec<Vec<usize>> = probes
                     .iter()
                     .map(|&axis| {
@@ -340,9 +399,14 @@ impl Grid {
                 })
             }
         };
-        let (coarse, top) = (self.coarse.as_ref(), self.top.as_ref());
-        let (coarse, top) = (coarse.map(|c| level_sum(c, lobe, &curve)), top.map(|t| level_sum(t, lobe, &curve)));
-        LobeIntegral { fine: fine(&choice.rule), coarse, top, curve }
+        let sums = match &self.texels {
+            Texels::Rows(radiance) => Sums::Rows(radiance.clone()),
+            Texels::Levels(coarse, top) => Sums::Levels {
+                coarse: level_sum(coarse, lobe, &curve),
+                top: top.as_ref().map(|t| level_sum(t, lobe, &curve)),
+            },
+        };
+        LobeIntegral { fine: fine(&choice.rule), sums, curve }
     }
 
     /// Per channel, the bound of the module docs on |B_input(R) − B_grid(R)| for `lobe`, within
@@ -415,7 +479,7 @@ impl Grid {
 /// always refined), seen from the probe directions.
 fn level_sum(level: &Arc<Coarse>, lobe: &SplitSumLobe, curve: &Curve) -> (ConeSum, Arc<Coarse>) {
     let choice = choose_rule(REFERENCE_RULE_TOLERANCE, |rule| {
-        let with = ConeSum::new(level.geometry, level.radiance.clone(), rule, lobe);
+        let with = ConeSum::new(level.geometry, rule, lobe);
         let mut weights = Vec::new();
         for axis in probe_axes(level.geometry) {
             let axis = axis.normalize();
@@ -427,7 +491,7 @@ fn level_sum(level: &Arc<Coarse>, lobe: &SplitSumLobe, curve: &Curve) -> (ConeSu
         }
         weights
     });
-    (ConeSum::new(level.geometry, level.radiance.clone(), &choice.rule, lobe), level.clone())
+    (ConeSum::new(level.geometry, &choice.rule, lobe), level.clone())
 }
 
 /// |dk/dγ| of the split-sum kernel on [0, π/2]: with k = f(cos γ) ([`Curve`]),
@@ -627,9 +691,15 @@ const COARSE_CURVATURE: f64 = 1.0;
 /// [`TOP_GROUP`]² coarse ones.
 pub struct LobeIntegral {
     fine: ConeSum,
-    coarse: Option<(ConeSum, Arc<Coarse>)>,
-    top: Option<(ConeSum, Arc<Coarse>)>,
+    sums: Sums,
     curve: Curve,
+}
+
+/// What a [`LobeIntegral`] sums besides its fine rule, by how its grid keeps its texels
+/// ([`Texels`]): the texels row by row, or the coarse level's cone sum (and the top level's).
+enum Sums {
+    Rows(Arc<Vec<[f32; 3]>>),
+    Levels { coarse: (ConeSum, Arc<Coarse>), top: Option<(ConeSum, Arc<Coarse>)> },
 }
 
 impl LobeIntegral {
@@ -641,8 +711,9 @@ impl LobeIntegral {
     /// B(R) and, per channel, the bound on how far it may be from the texel-by-texel sum over
     /// the whole grid (zero when the grid was summed texel by texel).
     pub fn at_with_bound(&self, axis: DVec3) -> ([f64; 3], [f64; 3]) {
-        let Some((coarse_sum, coarse)) = &self.coarse else {
-            return (self.fine.at(axis), [0.0; 3]);
+        let ((coarse_sum, coarse), top) = match &self.sums {
+            Sums::Rows(radiance) => return (self.fine.at(radiance, axis), [0.0; 3]),
+            Sums::Levels { coarse, top } => (coarse, top),
         };
         let axis = axis.normalize();
         let size = |t: &Whole| t.bound.iter().sum::<f64>();
@@ -660,7 +731,7 @@ impl LobeIntegral {
         // visits their texels, and its estimate of them joins the top's of the others, the total
         // the tolerance is a share of. Then the top texels of largest bound are opened too, until
         // the rest's is half the tolerance.
-        let (CoarsePass { mut whole, mut refined, .. }, target) = match &self.top {
+        let (CoarsePass { mut whole, mut refined, .. }, target) = match top {
             Some((top_sum, top)) => {
                 let (g, width) = (top.factor / coarse.factor, top.geometry.width);
                 let children = |opened: &[usize]| -> Vec<(usize, std::ops::Range<usize>)> {
@@ -849,7 +920,7 @@ impl LobeIntegral {
 struct Coarse {
     geometry: LatLong,
     factor: usize,
-    radiance: Arc<Vec<[f32; 3]>>,
+    radiance: Vec<[f32; 3]>,
     deviation: Vec<[f64; 3]>,
     moment: Vec<[DVec3; 3]>,
     second: Vec<[Symmetric; 3]>,
@@ -1081,10 +1152,10 @@ impl Coarse {
     /// The coarse level of a fine grid, when it is wide enough and divides by the factor, and
     /// the top level grouping its texels [`TOP_GROUP`] × [`TOP_GROUP`] when it is wide enough
     /// ([`BlockMoments::group`]).
-    fn levels(fine: LatLong, radiance: &[[f32; 3]]) -> (Option<Arc<Coarse>>, Option<Arc<Coarse>>) {
+    fn levels(fine: LatLong, radiance: &[[f32; 3]]) -> Option<(Arc<Coarse>, Option<Arc<Coarse>>)> {
         let f = COARSE_FACTOR.max(fine.width / COARSE_WIDTH);
         if fine.width < TWO_LEVEL_MIN_WIDTH || fine.width % f != 0 || fine.height % f != 0 {
-            return (None, None);
+            return None;
         }
         let geometry = LatLong::new(fine.width / f, fine.height / f);
         let rows: Vec<RowFactors> = (0..fine.height).map(|y| RowFactors::of(fine, y)).collect();
@@ -1110,7 +1181,7 @@ impl Coarse {
                 .collect();
             Arc::new(Coarse::of_blocks(grid, f * g, &grouped, Vec::new()))
         });
-        (Some(Arc::new(Coarse::of_blocks(geometry, f, &blocks, tiles))), top)
+        Some((Arc::new(Coarse::of_blocks(geometry, f, &blocks, tiles)), top))
     }
 
     /// A level of `factor` fine texels per edge from its blocks' moments.
@@ -1118,7 +1189,7 @@ impl Coarse {
         Coarse {
             geometry,
             factor,
-            radiance: Arc::new(blocks.iter().map(|b| b.mean.map(|v| v as f32)).collect()),
+            radiance: blocks.iter().map(|b| b.mean.map(|v| v as f32)).collect(),
             deviation: blocks.iter().map(|b| b.deviation).collect(),
             moment: blocks.iter().map(|b| b.moment).collect(),
             second: blocks.iter().map(|b| b.second.map(Symmetric::of)).collect(),
@@ -1278,7 +1349,6 @@ impl HalfChord {
 /// serves every row, and the kernel, a rational function of R·ω, is one division per node.
 struct ConeSum {
     grid: LatLong,
-    radiance: Arc<Vec<[f32; 3]>>,
     /// n sub-rows per row: (θ, sin θ, weight).
     sub_rows: Vec<(f64, f64, f64)>,
     /// sin(φ/2) and cos(φ/2) of the n sub-columns of every column, column-major in blocks of n.
@@ -1309,7 +1379,7 @@ struct RowScratch {
 }
 
 impl ConeSum {
-    fn new(grid: LatLong, radiance: Arc<Vec<[f32; 3]>>, rule: &TexelRule, lobe: &SplitSumLobe) -> Self {
+    fn new(grid: LatLong, rule: &TexelRule, lobe: &SplitSumLobe) -> Self {
         let columns = rule.sub_columns(grid);
         let h = TAU / grid.width as f64;
         let (mut sin_half_phi, mut cos_half_phi) = (Vec::new(), Vec::new());
@@ -1326,7 +1396,6 @@ impl ConeSum {
             .collect();
         ConeSum {
             grid,
-            radiance,
             sub_rows,
             sin_half_phi,
             cos_half_phi,
@@ -1343,12 +1412,12 @@ impl ConeSum {
         RowScratch { kernel: vec![0.0; self.grid.width * self.n], texel: vec![0.0; self.grid.width] }
     }
 
-    /// B(R) at the direction `axis` of prtkit's frame.
-    fn at(&self, axis: DVec3) -> [f64; 3] {
+    /// B(R) at the direction `axis` of prtkit's frame over the grid's `radiance`, row by row.
+    fn at(&self, radiance: &[[f32; 3]], axis: DVec3) -> [f64; 3] {
         let w = self.grid.width;
         let mut acc = [0.0; 3];
         self.texel_integrals(axis, |y, x, weight| {
-            let l = self.radiance[y * w + x];
+            let l = radiance[y * w + x];
             for k in 0..3 {
                 acc[k] += l[k] as f64 * weight;
             }
@@ -1590,7 +1659,7 @@ mod tests {
             let lobe = SplitSumLobe::new(r).unwrap();
             for n in [1, 3] {
                 let rule = TexelRule::new(n).unwrap();
-                let integral = ConeSum::new(grid.geometry, grid.radiance.clone(), &rule, &lobe);
+                let integral = ConeSum::new(grid.geometry, &rule, &lobe);
                 for axis in [DVec3::Z, -DVec3::Z, DVec3::X, DVec3::new(0.3, -0.8, 0.2), DVec3::new(-1.0, -1e-3, 0.4)] {
                     let axis = axis.normalize();
                     let mut plain = [0.0; 3];
@@ -1608,7 +1677,7 @@ mod tests {
                             }
                         }
                     }
-                    let got = integral.at(axis);
+                    let got = integral.at(&map.image().pixels, axis);
                     for c in 0..3 {
                         assert!(
                             (got[c] - plain[c]).abs() <= 1e-6 * plain[c],
@@ -1629,17 +1698,16 @@ mod tests {
     fn the_two_level_sum_is_within_its_bound_of_the_texel_sum() {
         let map = detailed(512, 256);
         let grid = Grid::new(map.image(), 1);
-        assert!(grid.coarse.is_some() && grid.top.is_some(), "a 512-wide grid is summed on three levels");
+        assert!(matches!(grid.texels, Texels::Levels(_, Some(_))), "a 512-wide grid is summed on three levels");
         let exact = TexelRule::new(6).unwrap();
         for r in [0.1, 0.25, 0.5, 1.0] {
             let lobe = SplitSumLobe::new(r).unwrap();
-            let (two_level, plain) =
-                (grid.lobe(&lobe), ConeSum::new(grid.geometry, grid.radiance.clone(), &exact, &lobe));
+            let (two_level, plain) = (grid.lobe(&lobe), ConeSum::new(grid.geometry, &exact, &lobe));
             for k in 0..24 {
                 let z = 1.0 - 2.0 * (k as f64 + 0.5) / 24.0;
                 let phi = k as f64 * 2.399_963;
                 let axis = DVec3::new((1.0 - z * z).sqrt() * phi.cos(), (1.0 - z * z).sqrt() * phi.sin(), z);
-                let ((got, bound), want) = (two_level.at_with_bound(axis), plain.at(axis));
+                let ((got, bound), want) = (two_level.at_with_bound(axis), plain.at(&map.image().pixels, axis));
                 for c in 0..3 {
                     // Both texel rules misplace at most 1e-5 of the kernel's weight.
                     assert!(
@@ -1680,7 +1748,7 @@ mod tests {
         for (x0, y0) in [(3, 1), (200, 60), (511, 130), (77, 255)] {
             let mut map = vec![[0.0; 3]; w * h];
             map[y0 * w + x0] = [1.0, 2.0, 0.0];
-            let coarse = Coarse::levels(fine, &map).0.unwrap();
+            let coarse = Coarse::levels(fine, &map).unwrap().0;
             let f = coarse.factor;
             let t = (y0 / f) * coarse.geometry.width + x0 / f;
             let texels =
@@ -1698,7 +1766,7 @@ mod tests {
             }
             assert!(coarse.moment[t][2].length() == 0.0 && (coarse.radiance[t][0] as f64 - mean).abs() < 1e-7);
         }
-        let flat = Coarse::levels(fine, &vec![[1.0; 3]; w * h]).0.unwrap();
+        let flat = Coarse::levels(fine, &vec![[1.0; 3]; w * h]).unwrap().0;
         assert!(flat.moment.iter().all(|m| m[0].length() < 1e-15) && flat.deviation.iter().all(|d| d[0] < 1e-15));
     }
 
@@ -1804,13 +1872,12 @@ mod tests {
     fn a_block_taken_whole_is_within_its_bound_of_its_texels() {
         let map = detailed(512, 256);
         let grid = Grid::new(map.image(), 1);
-        let coarse = grid.coarse.clone().unwrap();
+        let Texels::Levels(coarse, _) = &grid.texels else { panic!("a 512-wide grid has a coarse level") };
         let exact = TexelRule::new(6).unwrap();
         let lobe = SplitSumLobe::new(0.3).unwrap();
         let integral = LobeIntegral {
-            fine: ConeSum::new(grid.geometry, grid.radiance.clone(), &exact, &lobe),
-            coarse: None,
-            top: None,
+            fine: ConeSum::new(grid.geometry, &exact, &lobe),
+            sums: Sums::Rows(Arc::new(map.image().pixels.clone())),
             curve: Curve::of(&lobe),
         };
         let axis = DVec3::new(0.3, -0.5, 0.8).normalize();
@@ -1826,7 +1893,7 @@ mod tests {
                 let (mut sum, mut kernel) = ([0.0; 3], 0.0);
                 integral.fine.within(&coarse, &[index], axis, |fy, columns, weights| {
                     for (fx, k) in columns.zip(weights) {
-                        let l = grid.radiance[fy * grid.geometry.width + fx];
+                        let l = map.image().pixels[fy * grid.geometry.width + fx];
                         (0..3).for_each(|c| sum[c] += l[c] as f64 * k);
                         kernel += k;
                     }

@@ -26,7 +26,7 @@ use super::cube::{CubeError, CubeMap, CubeMipChain, WORLD_FROM_PRTKIT};
 use super::dfg::{self, DfgError, DfgTable, DfgVariant};
 use super::frequency::{FilteredSphere, LatLongSource};
 use super::manifest::{self, Costs, IblBody, Level, ShBody, Timings};
-use super::reference::{Reference, ReferenceError};
+use super::reference::{Expected, Reference, ReferenceError};
 use super::sh_irradiance::IrradianceSh;
 use crate::brdf::ggx::{GgxError, SplitSumLobe};
 use crate::envmap::zonal::ZonalError;
@@ -38,6 +38,7 @@ use crate::limits::{LimitError, MAX_IBL_FACE_SIZE};
 use crate::progress::Progress;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::time::Instant;
 
 /// How level index maps to roughness.
@@ -447,16 +448,17 @@ pub fn choose_method(costs: &Costs) -> Method {
     }
 }
 
-/// The working lat-long map: the input (a lat-long is used as it is; other layouts are
-/// resampled to 4n × 2n with 2 × 2 supersampling, n the output face size), clamped if asked.
-fn working_latlong(config: &Config, env: &EnvMap) -> Result<EnvMap, Error> {
+/// The working lat-long map: the input (a lat-long is used as it is, not copied unless it is
+/// clamped; other layouts are resampled to 4n × 2n with 2 × 2 supersampling, n the output face
+/// size), clamped if asked.
+fn working_latlong<'a>(config: &Config, env: &'a EnvMap) -> Result<Cow<'a, EnvMap>, Error> {
     let mut latlong = if env.layout() == Layout::LatLong {
-        env.clone()
+        Cow::Borrowed(env)
     } else {
-        envmap::resample(env, Layout::LatLong, 4 * config.size, 2 * config.size, 2)?
+        Cow::Owned(envmap::resample(env, Layout::LatLong, 4 * config.size, 2 * config.size, 2)?)
     };
     if let Some(max) = config.clamp {
-        for img in latlong.images_mut() {
+        for img in latlong.to_mut().images_mut() {
             for p in &mut img.pixels {
                 for v in p.iter_mut() {
                     *v = v.min(max as f32);
@@ -574,35 +576,72 @@ fn bake_cubes(
     Ok(Cubes { specular, irradiance, specular_seconds, irradiance_seconds: t_irr.elapsed().as_secs_f64() })
 }
 
-/// Records every level's most negative texel and, with `samples` > 0, measures the levels with
-/// r > 0 against the angular integral of the input ([`Reference`]). Returns what they were
-/// measured against when it is not the texel-by-texel sum over the input.
-fn measure(config: &Config, latlong: &EnvMap, levels: Vec<&mut Baked>) -> Result<Option<String>, Error> {
-    let mut levels = levels;
-    for b in levels.iter_mut() {
-        b.level.min_value = b.cube.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64;
-    }
+/// The reference the levels with r > 0 are measured against and its values at their sampled
+/// texels (`samples` > 0): none of it needs the levels themselves, so it is summed beside the
+/// bake. One lobe rule serves every level of a roughness (the last level and the irradiance
+/// share r = 1).
+fn expect(config: &Config, latlong: &EnvMap) -> Result<Option<Expectation>, Error> {
     if config.samples == 0 {
         return Ok(None);
     }
     let reference = Reference::new(latlong)?;
+    let levels = config.levels();
+    let measured: Vec<(f64, usize)> = (1..levels)
+        .map(|k| (config.roughness_map.roughness(k, levels), config.size >> k))
+        .chain([(1.0, config.irradiance_size)])
+        .filter(|&(r, _)| r > 0.0)
+        .collect();
+    let mut roughness: Vec<f64> = measured.iter().map(|&(r, _)| r).collect();
+    roughness.sort_by(f64::total_cmp);
+    roughness.dedup();
     let env_from_cube = config.world_from_prtkit().transpose();
-    // The levels are measured side by side: each sets up its own lobe's texel rule.
-    let levels: Vec<&mut Baked> = levels.into_iter().filter(|b| b.level.roughness > 0.0).collect();
-    let measured = levels
+    let expected = roughness
         .par_iter()
-        .map(|b| {
-            let lobe = SplitSumLobe::new(b.level.roughness)?;
-            Ok(reference.measure(&b.cube, &lobe, env_from_cube, config.samples))
+        .map(|&r| {
+            let sizes: Vec<usize> = measured.iter().filter(|l| l.0 == r).map(|l| l.1).collect();
+            let expected = reference.expect(&SplitSumLobe::new(r)?, env_from_cube, config.samples, &sizes);
+            Ok(expected.into_iter().map(|e| (r, e)).collect::<Vec<_>>())
         })
         .collect::<Result<Vec<_>, Error>>()?;
-    for (b, m) in levels.into_iter().zip(measured) {
+    let against = reference.is_bounded().then(|| reference.describe());
+    Ok(Some(Expectation {
+        expected: expected.into_iter().flatten().collect(),
+        bounded: reference.is_bounded(),
+        against,
+    }))
+}
+
+/// What [`expect`] finds: per roughness and face size, the reference at the sampled texels.
+struct Expectation {
+    expected: Vec<(f64, Expected)>,
+    /// Whether the reference may differ from the texel-by-texel sum over the input (then each
+    /// level records the bound).
+    bounded: bool,
+    /// What the levels are measured against, when it is not the texel-by-texel sum.
+    against: Option<String>,
+}
+
+/// Records every level's most negative texel and, with the reference's values ([`expect`]),
+/// the error of the levels with r > 0. Returns what they were measured against when it is not
+/// the texel-by-texel sum over the input.
+fn measure(expectation: Option<Expectation>, levels: Vec<&mut Baked>) -> Option<String> {
+    let mut levels = levels;
+    for b in levels.iter_mut() {
+        b.level.min_value = b.cube.texels().iter().fold(0.0f32, |m, &v| m.min(v)) as f64;
+    }
+    let expectation = expectation?;
+    for b in levels {
+        let (r, size) = (b.level.roughness, b.level.size);
+        let Some((_, expected)) = expectation.expected.iter().find(|(er, e)| *er == r && e.size() == size) else {
+            continue; // r = 0: the resampled input, not a lobe's integral
+        };
+        let m = expected.measure(&b.cube);
         b.level.max_rel_error = Some(m.max_rel_error);
         b.level.rms_rel_error = Some(m.rms_rel_error);
-        b.level.reference_bound = reference.is_bounded().then_some(m.reference_bound);
+        b.level.reference_bound = expectation.bounded.then_some(m.reference_bound);
         b.level.samples = m.samples;
     }
-    Ok(reference.is_bounded().then(|| reference.describe()))
+    expectation.against
 }
 
 /// What a texel of the irradiance cube and the SH snippets' result are.
@@ -707,32 +746,45 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     let t0 = Instant::now();
     let mut timings = Timings::default();
     let latlong = working_latlong(config, env)?;
-    let source = LatLongSource::new(latlong.image().clone());
+    let source = LatLongSource::new(latlong.image());
     timings.prepare = t0.elapsed().as_secs_f64();
 
-    // The DFG table depends on nothing else, the SH only on the input: they run beside the cubes.
+    // The DFG table depends on nothing else, the SH only on the input: they run beside the cubes,
+    // and so does the measurement's reference, which needs only the input: it fills the cores
+    // the bake's narrower steps leave idle.
     let t_dfg = Instant::now();
-    let ((dfg, (sh, sh_time)), cubes) = rayon::join(
+    let (((dfg, (sh, sh_time)), cubes), reference) = rayon::join(
         || {
             rayon::join(
-                || DfgTable::new(config.dfg_size, config.dfg).map(|t| (t, t_dfg.elapsed())),
                 || {
-                    let t_sh = Instant::now();
-                    (IrradianceSh::project(&latlong, config.world_from_prtkit()), t_sh.elapsed())
+                    rayon::join(
+                        || DfgTable::new(config.dfg_size, config.dfg).map(|t| (t, t_dfg.elapsed())),
+                        || {
+                            let t_sh = Instant::now();
+                            (IrradianceSh::project(&latlong, config.world_from_prtkit()), t_sh.elapsed())
+                        },
+                    )
                 },
+                || bake_cubes(config, &latlong, &source, progress),
             )
         },
-        || bake_cubes(config, &latlong, &source, progress),
+        || {
+            let t_reference = Instant::now();
+            expect(config, &latlong).map(|e| e.map(|e| (e, t_reference.elapsed())))
+        },
     );
     let (dfg, dfg_time) = dfg?;
     let Cubes { mut specular, mut irradiance, specular_seconds, irradiance_seconds } = cubes?;
+    let reference = reference?;
     timings.dfg = dfg_time.as_secs_f64();
     timings.specular = specular_seconds;
     timings.irradiance = irradiance_seconds + sh_time.as_secs_f64();
+    timings.reference = reference.as_ref().map_or(0.0, |(_, t)| t.as_secs_f64());
     timings.bake = t0.elapsed().as_secs_f64();
 
     let t_measure = Instant::now();
-    let measured_against = measure(config, &latlong, specular.iter_mut().chain([&mut irradiance]).collect())?;
+    let levels = specular.iter_mut().chain([&mut irradiance]).collect();
+    let measured_against = measure(reference.map(|(r, _)| r), levels);
     timings.measure = t_measure.elapsed().as_secs_f64();
 
     // The levels move into the chain: the largest bakes hold one copy of their cubes.
