@@ -697,6 +697,7 @@ pub struct LobeIntegral {
 
 /// What a [`LobeIntegral`] sums besides its fine rule, by how its grid keeps its texels
 /// ([`Texels`]): the texels row by row, or the coarse level's cone sum (and the top level's).
+#[expect(clippy::large_enum_variant, reason = "one per lobe, made once and never moved in a loop")]
 enum Sums {
     Rows(Arc<Vec<[f32; 3]>>),
     Levels { coarse: (ConeSum, Arc<Coarse>), top: Option<(ConeSum, Arc<Coarse>)> },
@@ -1891,15 +1892,14 @@ mod tests {
                     continue; // only where the kernel curves strongly
                 }
                 let (mut sum, mut kernel) = ([0.0; 3], 0.0);
-                integral.fine.within(&coarse, &[index], axis, |fy, columns, weights| {
+                integral.fine.within(coarse, &[index], axis, |fy, columns, weights| {
                     for (fx, k) in columns.zip(weights) {
                         let l = map.image().pixels[fy * grid.geometry.width + fx];
                         (0..3).for_each(|c| sum[c] += l[c] as f64 * k);
                         kernel += k;
                     }
                 });
-                let (value, bound) =
-                    integral.taken_whole(&coarse, (index, y), (axis, &Squares::of(axis)), span, kernel);
+                let (value, bound) = integral.taken_whole(coarse, (index, y), (axis, &Squares::of(axis)), span, kernel);
                 for c in 0..3 {
                     let diff = (value[c] - sum[c]).abs();
                     // The fine rule and the f32 radiance add a few 1e-7 of the texel's sum.

@@ -19,7 +19,8 @@
 //!
 //! **Measured, not assumed.** With `samples` > 0 every level with r > 0 and the irradiance cube
 //! are compared with the angular integral of the input ([`super::reference`]) on that many
-//! texels; the manifest records the errors.
+//! texels; the manifest records the errors. The reference's values at those texels need only
+//! the input and the levels' sizes, so they are summed beside the bake (`expect`).
 
 use super::angular::{AngularError, AngularOptions, AngularPrefilter};
 use super::cube::{CubeError, CubeMap, CubeMipChain, WORLD_FROM_PRTKIT};
@@ -829,6 +830,43 @@ mod tests {
         assert!((turned.world_from_prtkit() * DVec3::X - DVec3::Y).length() < 1e-12);
         let mirrored = Config { mirror: true, up: Up::Z, ..Config::default() };
         assert_eq!(mirrored.world_from_prtkit() * DVec3::Y, -DVec3::Y);
+    }
+
+    /// The errors the bake records, whose reference is summed beside it once per roughness,
+    /// are those of measuring each finished level on its own: each level is compared with the
+    /// samples of its own size and lobe (the last level, 4², and the 32² irradiance share r = 1).
+    #[test]
+    fn errors_summed_beside_the_bake_are_each_levels_own() {
+        let grid = crate::sphere::LatLong::new(64, 32);
+        let sun = DVec3::new(0.3, -0.5, 0.8).normalize();
+        let env = EnvMap::latlong(crate::io::RgbImage::from_fn(64, 32, |x, y| {
+            let d = grid.texel_direction(x, y);
+            let glow = (-(1.0 - d.dot(sun)) * 40.0).exp() * 20.0;
+            [(0.5 + 0.3 * d.x + glow) as f32, (0.4 + glow) as f32, (0.3 + 0.2 * d.z.abs()) as f32]
+        }))
+        .unwrap();
+        let config = Config { size: 32, min_size: 4, irradiance_size: 32, samples: 48, ..Config::default() };
+        let out = run(&config, &env, &crate::progress::NoProgress).unwrap();
+        let body = &out.document.body;
+        let reference = Reference::new(&env).unwrap();
+        let env_from_cube = config.world_from_prtkit().transpose();
+        let cubes = out.specular.levels().iter().chain([&out.irradiance]);
+        let levels = body.specular.levels.iter().chain([&body.irradiance.level]);
+        let mut measured = 0;
+        for (cube, level) in cubes.zip(levels).filter(|(_, l)| l.roughness > 0.0) {
+            let own = reference.measure(cube, &SplitSumLobe::new(level.roughness).unwrap(), env_from_cube, 48);
+            assert_eq!(
+                (level.max_rel_error, level.rms_rel_error, level.samples),
+                (Some(own.max_rel_error), Some(own.rms_rel_error), own.samples),
+                "level {} ({}², r = {})",
+                level.level,
+                level.size,
+                level.roughness
+            );
+            measured += 1;
+        }
+        assert_eq!(measured, 4, "three levels with r > 0 and the irradiance");
+        assert_eq!(body.specular.levels.last().map(|l| (l.size, l.roughness)), Some((4, 1.0)));
     }
 
     #[test]
