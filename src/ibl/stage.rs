@@ -340,6 +340,13 @@ impl Config {
         (self.size / self.min_size).trailing_zeros() as usize + 1
     }
 
+    /// The specular levels the split-sum lobe filters, every one but level 0 (the resampled
+    /// input): (k, face size, r).
+    fn filtered_levels(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        let levels = self.levels();
+        (1..levels).map(move |k| (k, self.size >> k, self.roughness_map.roughness(k, levels)))
+    }
+
     /// The texel format of the DFG table: two channels, single floats beside RGBA32F cubes.
     pub fn dfg_format(&self) -> TexelFormat {
         if self.format == TexelFormat::Rgba32Float {
@@ -567,15 +574,12 @@ fn bake_cubes(
         ..unmeasured(0, config.size, 0.0, Method::Resample, resampled)
     };
     let mut specular = vec![Baked { cube: base.clone(), level }];
-    let levels = config.levels();
-    for k in 1..levels {
-        let r = config.roughness_map.roughness(k, levels);
-        specular.push(bake_level(config, source, &base, (k, config.size >> k, r), progress)?);
+    for level in config.filtered_levels() {
+        specular.push(bake_level(config, source, &base, level, progress)?);
     }
     let specular_seconds = t_spec.elapsed().as_secs_f64();
-    // Irradiance: the r = 1 lobe is the clamped cosine over π, so the level is E/π.
     let t_irr = Instant::now();
-    let irradiance = bake_level(config, source, &base, (0, config.irradiance_size, 1.0), progress)?;
+    let irradiance = bake_level(config, source, &base, (0, config.irradiance_size, IRRADIANCE_ROUGHNESS), progress)?;
     Ok(Cubes { specular, irradiance, specular_seconds, irradiance_seconds: t_irr.elapsed().as_secs_f64() })
 }
 
@@ -588,11 +592,10 @@ fn expect(config: &Config, latlong: &EnvMap) -> Result<Option<Expectation>, Erro
         return Ok(None);
     }
     let reference = Reference::new(latlong)?;
-    let levels = config.levels();
-    let measured: Vec<(f64, usize)> = (1..levels)
-        .map(|k| (config.roughness_map.roughness(k, levels), config.size >> k))
-        .chain([(1.0, config.irradiance_size)])
-        .filter(|&(r, _)| r > 0.0)
+    let measured: Vec<(f64, usize)> = config
+        .filtered_levels()
+        .map(|(_, size, r)| (r, size))
+        .chain([(IRRADIANCE_ROUGHNESS, config.irradiance_size)])
         .collect();
     let mut roughness: Vec<f64> = measured.iter().map(|&(r, _)| r).collect();
     roughness.sort_by(f64::total_cmp);
@@ -646,6 +649,10 @@ fn measure(expectation: Option<Expectation>, levels: Vec<&mut Baked>) -> Option<
     }
     expectation.against
 }
+
+/// The irradiance cube is the split-sum level of r = 1: GGX's D is 1/π there, so the lobe is the
+/// clamped cosine over π and the level is E/π.
+const IRRADIANCE_ROUGHNESS: f64 = 1.0;
 
 /// What a texel of the irradiance cube and the SH snippets' result are.
 const IRRADIANCE_SCALE: &str = "E(n)/pi: the radiance a white Lambertian surface reflects (multiply by the albedo)";
