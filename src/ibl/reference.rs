@@ -419,12 +419,10 @@ impl Grid {
         let mut blocks = Vec::with_capacity(filtering.blocks.len());
         let mut lower_total = 0.0;
         for (i, block) in filtering.blocks.iter().enumerate() {
-            // cos(γ ∓ s) of the block's interval [γ − s, γ + s] from cos γ = R·c: no angle.
+            // cos(γ ∓ s) of the block's interval [γ − s, γ + s].
             let cos_gamma = axis.dot(block.centre).clamp(-1.0, 1.0);
-            let sin_gamma = (1.0 - cos_gamma * cos_gamma).sqrt();
-            let ((cs, ss), reaches_axis) = (block.spread, cos_gamma >= block.spread.0);
-            let near = if reaches_axis { 1.0 } else { cos_gamma * cs + sin_gamma * ss };
-            let far = cos_gamma * cs - sin_gamma * ss;
+            let Span { lo: far, hi: near, .. } = Span::about(cos_gamma, block.spread);
+            let reaches_axis = cos_gamma >= block.spread.0;
             if near <= 0.0 {
                 continue; // every texel of the block lies where the kernel is zero
             }
@@ -450,20 +448,16 @@ impl Grid {
         for b in refined {
             let block = &filtering.blocks[b.index];
             for y in block.rows.clone() {
-                let (cos_radius, sin_radius) = filtering.radius[y];
                 for x in block.columns.clone() {
                     let d = filtering.deviation[y * width + x];
                     if d == [0.0; 3] {
                         continue;
                     }
-                    // cos(γ ∓ ρ) from cos γ = R·c: no angle is computed.
+                    // k over the texel: from its value nearest R (R itself when the texel holds
+                    // it, where k peaks) to its farthest.
                     let cos_gamma = axis.dot(filtering.centre(x, y)).clamp(-1.0, 1.0);
-                    let sin_gamma = (1.0 - cos_gamma * cos_gamma).sqrt();
-                    let (cc, ss) = (cos_gamma * cos_radius, sin_gamma * sin_radius);
-                    // γ − ρ < 0 when cos γ > cos ρ: the texel holds R, where k peaks. γ + ρ past
-                    // π when cos γ < −cos ρ; the kernel is zero there anyway, as it is past π/2.
-                    let nearest = if cos_gamma >= cos_radius { 1.0 } else { cc + ss };
-                    let half_range = 0.5 * (lobe.kernel(nearest) - lobe.kernel((cc - ss).max(-1.0)));
+                    let span = Span::about(cos_gamma, filtering.radius[y]);
+                    let half_range = 0.5 * (lobe.kernel(span.hi) - lobe.kernel(span.lo));
                     for c in 0..3 {
                         bound[c] += d[c] * half_range;
                     }
@@ -944,6 +938,18 @@ struct Span {
     hi: f64,
 }
 
+impl Span {
+    /// s over a disc of angular radius ρ (given by its cosine and sine) whose centre c has
+    /// R·c = `centre` = cos γ: cos(γ ∓ ρ), with no angle computed. The disc holds R when γ < ρ
+    /// (then s reaches 1); γ + ρ may pass π, where s is −1 at the least.
+    fn about(centre: f64, (cos_radius, sin_radius): (f64, f64)) -> Span {
+        let sin_gamma = (1.0 - centre * centre).sqrt();
+        let hi = if centre >= cos_radius { 1.0 } else { centre * cos_radius + sin_gamma * sin_radius };
+        let lo = (centre * cos_radius - sin_gamma * sin_radius).max(-1.0);
+        Span { centre, lo, hi }
+    }
+}
+
 /// A symmetric 3 × 3 matrix Q by its six entries (xx, yy, zz, xy, xz, yz), for Rᵀ Q R.
 #[derive(Clone, Copy)]
 struct Symmetric([f64; 6]);
@@ -1210,16 +1216,11 @@ impl Coarse {
         &self.tiles[start..start + f]
     }
 
-    /// s = R·ω over texel (x, y): cos(γ ∓ ρ) from cos γ = R·c, γ the angle to the centre and ρ
-    /// the texel's angular radius; `None` when the whole texel lies where the kernel is zero.
+    /// s = R·ω over texel (x, y) ([`Span::about`] its centre, with the texel's angular radius);
+    /// `None` when the whole texel lies where the kernel is zero.
     fn span(&self, axis: DVec3, x: usize, y: usize) -> Option<Span> {
         let centre = axis.dot(self.centres[y * self.geometry.width + x]).clamp(-1.0, 1.0);
-        let (cos_radius, sin_radius) = self.radius[y];
-        let sin_gamma = (1.0 - centre * centre).sqrt();
-        // The texel holds R when γ < ρ; γ + ρ may pass π, where s is −1 at the least.
-        let hi = if centre >= cos_radius { 1.0 } else { centre * cos_radius + sin_gamma * sin_radius };
-        let lo = (centre * cos_radius - sin_gamma * sin_radius).max(-1.0);
-        (hi > 0.0).then_some(Span { centre, lo, hi })
+        Some(Span::about(centre, self.radius[y])).filter(|span| span.hi > 0.0)
     }
 }
 
