@@ -72,23 +72,19 @@ fn read_within(
     let mut bytes = Vec::with_capacity(hint as usize + 1);
     (&mut input).take(64.min(ceiling.saturating_add(1))).read_to_end(&mut bytes).map_err(os)?;
     check_start(&bytes).map_err(|reason| IoError::invalid(name, format, reason))?;
-    // Read in chunks into a buffer that grows by doubling but never past ceiling + 1 bytes
-    // (`read_to_end` would double to twice that): the most any input costs is its ceiling.
+    // Read straight into a buffer that grows by doubling but never past ceiling + 1 bytes
+    // (`read_to_end` alone would double to twice that): the most any input costs is its ceiling.
+    // Each read is limited to the spare capacity, so `read_to_end` never grows the buffer itself.
     let limit = ceiling.saturating_add(1);
-    let mut chunk = vec![0u8; 64 << 10];
     while (bytes.len() as u64) < limit {
-        let want = (chunk.len() as u64).min(limit - bytes.len() as u64) as usize;
-        let n = match input.read(&mut chunk[..want]) {
-            Ok(0) => break,
-            Ok(n) => n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            Err(e) => return Err(os(e)),
-        };
-        if bytes.len() + n > bytes.capacity() {
-            let grown = (bytes.capacity() as u64 * 2).clamp((bytes.len() + n) as u64, limit);
+        if bytes.len() == bytes.capacity() {
+            let grown = (bytes.capacity() as u64 * 2).max(bytes.len() as u64 + (64 << 10)).min(limit);
             bytes.reserve_exact(grown as usize - bytes.len());
         }
-        bytes.extend_from_slice(&chunk[..n]);
+        let want = ((bytes.capacity() - bytes.len()) as u64).min(limit - bytes.len() as u64);
+        if (&mut input).take(want).read_to_end(&mut bytes).map_err(os)? == 0 {
+            break;
+        }
     }
     if bytes.len() as u64 > ceiling {
         return Err(too_large(name, format, format!("more than {}", human_bytes(ceiling as u128)), ceiling));
