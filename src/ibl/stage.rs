@@ -673,6 +673,7 @@ fn dfg_layout(variant: DfgVariant) -> &'static str {
 fn manifest_body(
     config: &Config,
     env: &EnvMap,
+    source_hash: String,
     cubes: (Vec<Level>, Level),
     dfg: &DfgTable,
     measured_against: Option<String>,
@@ -682,7 +683,7 @@ fn manifest_body(
     let (levels, irradiance) = cubes;
     IblBody {
         source: config.source.clone(),
-        source_hash: Some(env.content_hash()),
+        source_hash: Some(source_hash),
         measured_against,
         frame: config.frame(env.orientation()),
         specular: manifest::Specular {
@@ -759,16 +760,19 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     let source = LatLongSource::new(latlong.image());
     timings.prepare = t0.elapsed().as_secs_f64();
 
-    // The DFG table depends on nothing else, the SH only on the input: they run beside the cubes,
-    // and so does the measurement's reference, which needs only the input: it fills the cores
-    // the bake's narrower steps leave idle.
+    // The DFG table depends on nothing else, the SH and the input's fingerprint only on the
+    // input: they run beside the cubes, and so does the measurement's reference, which needs only
+    // the input: it fills the cores the bake's narrower steps leave idle.
     let t_dfg = Instant::now();
-    let (((dfg, (sh, sh_time)), cubes), reference) = rayon::join(
+    let ((((dfg, source_hash), (sh, sh_time)), cubes), reference) = rayon::join(
         || {
             rayon::join(
                 || {
                     rayon::join(
-                        || DfgTable::new(config.dfg_size, config.dfg).map(|t| (t, t_dfg.elapsed())),
+                        || {
+                            let dfg = DfgTable::new(config.dfg_size, config.dfg).map(|t| (t, t_dfg.elapsed()));
+                            (dfg, env.content_hash())
+                        },
                         || {
                             let t_sh = Instant::now();
                             (IrradianceSh::project(&latlong, config.world_from_prtkit()), t_sh.elapsed())
@@ -799,7 +803,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
 
     // The levels move into the chain: the largest bakes hold one copy of their cubes.
     let (cubes, levels): (Vec<CubeMap>, Vec<Level>) = specular.into_iter().map(|b| (b.cube, b.level)).unzip();
-    let body = manifest_body(config, env, (levels, irradiance.level), &dfg, measured_against, timings);
+    let body = manifest_body(config, env, source_hash, (levels, irradiance.level), &dfg, measured_against, timings);
     let (frame, input) = (config.frame_words(env.orientation()), env.orientation());
     let provenance = Provenance::new("ibl", &config.args, vec![config.source.clone()]);
     let sh_document = document(manifest::SH_FORMAT, provenance.clone(), sh_body(config, input, &sh), &frame, input);
