@@ -121,27 +121,28 @@ pub fn box_latlong(img: &RgbImage, width: usize, height: usize) -> RgbImage {
     for &(y_out, y_in, len) in &rows {
         sources[y_out].push((y_in, len / (z_out[y_out + 1] - z_out[y_out])));
     }
-    let pixels = sources
-        .par_iter()
-        .flat_map_iter(|sources| {
-            let (mut out, mut wide) = (vec![[0.0f64; 3]; width], vec![[0.0f64; 3]; width]);
-            for &(y_in, share) in sources {
-                wide.fill([0.0; 3]);
-                for &(x_out, x_in, len) in &columns {
-                    let v = img.get(x_in, y_in);
-                    for c in 0..3 {
-                        wide[x_out][c] += v[c] as f64 * len * width as f64;
-                    }
-                }
-                for (o, w) in out.iter_mut().zip(&wide) {
-                    for c in 0..3 {
-                        o[c] += w[c] * share;
-                    }
+    // Each row written once, in place (no page is read before it is written).
+    let mut pixels = vec![[0.0f32; 3]; width * height];
+    pixels.par_chunks_mut(width.max(1)).zip(&sources).for_each(|(row, sources)| {
+        let (mut out, mut wide) = (vec![[0.0f64; 3]; width], vec![[0.0f64; 3]; width]);
+        for &(y_in, share) in sources {
+            wide.fill([0.0; 3]);
+            for &(x_out, x_in, len) in &columns {
+                let v = img.get(x_in, y_in);
+                for c in 0..3 {
+                    wide[x_out][c] += v[c] as f64 * len * width as f64;
                 }
             }
-            out.into_iter().map(|p| p.map(|v| v as f32))
-        })
-        .collect();
+            for (o, w) in out.iter_mut().zip(&wide) {
+                for c in 0..3 {
+                    o[c] += w[c] * share;
+                }
+            }
+        }
+        for (p, o) in row.iter_mut().zip(&out) {
+            *p = o.map(|v| v as f32);
+        }
+    });
     RgbImage { width, height, pixels }
 }
 

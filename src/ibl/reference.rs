@@ -551,27 +551,25 @@ impl Filtering {
     fn of(input: &RgbImage, filtered: &RgbImage, factor: usize) -> Filtering {
         let (fine, coarse) = (LatLong::new(input.width, input.height), LatLong::new(filtered.width, filtered.height));
         let width = filtered.width;
-        // Row by row into the result, each value written once: a zeroed vector updated in place
-        // would fault every page twice (read as the zero page, then copied on the first write).
-        let deviation: Vec<[f64; 3]> = (0..filtered.height)
-            .into_par_iter()
-            .flat_map_iter(|y| {
-                let mut row = vec![[0.0f64; 3]; width];
-                let means = &filtered.pixels[y * width..(y + 1) * width];
-                for yy in y * factor..(y + 1) * factor {
-                    let omega = fine.row_solid_angle(yy);
-                    let line = &input.pixels[yy * input.width..(yy + 1) * input.width];
-                    for ((d, mean), texels) in row.iter_mut().zip(means).zip(line.chunks_exact(factor)) {
-                        let mut spread = [0.0f64; 3];
-                        for l in texels {
-                            (0..3).for_each(|c| spread[c] += (l[c] as f64 - mean[c] as f64).abs());
-                        }
-                        (0..3).for_each(|c| d[c] += omega * spread[c]);
+        // Row by row, each summed aside and written once: a row updated in place would fault
+        // each page twice (read as the zero page, then copied on the first write).
+        let mut deviation = vec![[0.0f64; 3]; width * filtered.height];
+        deviation.par_chunks_mut(width).enumerate().for_each(|(y, out)| {
+            let mut row = vec![[0.0f64; 3]; width];
+            let means = &filtered.pixels[y * width..(y + 1) * width];
+            for yy in y * factor..(y + 1) * factor {
+                let omega = fine.row_solid_angle(yy);
+                let line = &input.pixels[yy * input.width..(yy + 1) * input.width];
+                for ((d, mean), texels) in row.iter_mut().zip(means).zip(line.chunks_exact(factor)) {
+                    let mut spread = [0.0f64; 3];
+                    for l in texels {
+                        (0..3).for_each(|c| spread[c] += (l[c] as f64 - mean[c] as f64).abs());
                     }
+                    (0..3).for_each(|c| d[c] += omega * spread[c]);
                 }
-                row
-            })
-            .collect();
+            }
+            out.copy_from_slice(&row);
+        });
         let radii: Vec<f64> = (0..coarse.height).map(|y| angular_radius(coarse, y)).collect();
         let mut filtering = Filtering {
             deviation,
