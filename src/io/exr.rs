@@ -10,6 +10,7 @@ use exr::prelude::{
     read, AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, ReadChannels, ReadLayers,
     WritableImage,
 };
+use rayon::prelude::*;
 use std::io::Cursor;
 use std::path::Path;
 
@@ -150,15 +151,32 @@ pub fn decode_layers(path: &Path, bytes: &[u8]) -> Result<Vec<(String, RgbImage)
             if channels.iter().any(|c| c.len() != width * height) {
                 return Err(IoError::invalid(path, FORMAT, "channel sizes do not match the data window"));
             }
-            let [r, g, b] = channels.map(|c| c.values_as_f32());
-            let pixels = r.zip(g).zip(b).map(|((r, g), b)| [r, g, b]).collect();
-            out.push((name, RgbImage { width, height, pixels }));
+            out.push((name, interleave(width, height, channels)));
         }
     }
     if out.is_empty() {
         return Err(IoError::unsupported(path, FORMAT, "no R,G,B or Y channels found"));
     }
     Ok(out)
+}
+
+/// Three channels of `width` × `height` samples as RGB pixels, row by row in parallel, each
+/// channel's sample type matched once per row (`FlatSamples::values_as_f32` matches it per
+/// sample).
+fn interleave(width: usize, height: usize, channels: [&FlatSamples; 3]) -> RgbImage {
+    let mut pixels = vec![[0.0f32; 3]; width * height];
+    pixels.par_chunks_mut(width.max(1)).enumerate().for_each(|(y, row)| {
+        let columns = y * width..(y + 1) * width;
+        for (c, channel) in channels.iter().enumerate() {
+            let texels = row.iter_mut();
+            match channel {
+                FlatSamples::F16(v) => texels.zip(&v[columns.clone()]).for_each(|(p, s)| p[c] = s.to_f32()),
+                FlatSamples::F32(v) => texels.zip(&v[columns.clone()]).for_each(|(p, s)| p[c] = *s),
+                FlatSamples::U32(v) => texels.zip(&v[columns.clone()]).for_each(|(p, s)| p[c] = *s as f32),
+            }
+        }
+    });
+    RgbImage { width, height, pixels }
 }
 
 /// Encodes float RGB layers of equal size into one EXR (ZIP-compressed, single part). The layer
@@ -269,6 +287,29 @@ mod tests {
             assert_eq!(&got, want);
         }
         assert!(encode_grey_layers(4, 4, &[("g", &g)]).is_err(), "a size mismatch is an error");
+    }
+
+    /// Half, float and unsigned-integer channels each read as the value they hold: R stored as
+    /// f16, G as f32, B as u32, over several rows (the pixels are filled row by row).
+    #[test]
+    fn every_sample_type_reads_as_its_value() {
+        let (w, h) = (7, 5);
+        let reds: Vec<f32> = (0..w * h).map(|i| i as f32 * 0.5 - 3.0).collect();
+        let greens: Vec<f32> = (0..w * h).map(|i| (i as f32).sqrt() * 1e-3).collect();
+        let blues: Vec<u32> = (0..w * h).map(|i| (i * 977) as u32).collect();
+        let samples = [
+            ("R", FlatSamples::F16(reds.iter().map(|&v| exr::prelude::f16::from_f32(v)).collect())),
+            ("G", FlatSamples::F32(greens.clone())),
+            ("B", FlatSamples::U32(blues.clone())),
+        ];
+        let channels = samples.map(|(name, data)| AnyChannel::new(exr::prelude::Text::from(name), data));
+        let bytes = encode_channels((w, h), channels.into_iter().collect()).unwrap();
+        let image = decode(Path::new("t.exr"), &bytes).unwrap();
+        assert_eq!((image.width, image.height), (w, h));
+        for (i, p) in image.pixels.iter().enumerate() {
+            // The reds are multiples of 0.5 below 2048: exact in f16.
+            assert_eq!(*p, [reds[i], greens[i], blues[i] as f32], "texel {i}");
+        }
     }
 
     #[test]
