@@ -4,6 +4,7 @@
 
 use super::{EnvMap, EnvMapError, Layout, Orientation, FACES};
 use crate::io::{self, IoError, RgbImage};
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// What to do with negative pixel components (NaN and ±Inf are always an error).
@@ -149,26 +150,37 @@ impl LoadOptions {
         Ok(Loaded { map: map.oriented(self.orientation), clamped })
     }
 
-    /// Applies the policy to every pixel; returns how many components were clamped.
+    /// Applies the policy to every pixel; returns how many components were clamped. Rows are
+    /// checked in parallel; the pixel named in an error is the first faulty one in row order,
+    /// whatever the threads.
     pub fn check_pixels(&self, path: &Path, image: &mut RgbImage) -> Result<usize, LoadError> {
-        let width = image.width;
+        let rows: Vec<Result<usize, (usize, usize, f32, PixelFault)>> =
+            image.pixels.par_chunks_mut(image.width.max(1)).map(|row| self.check_row(row)).collect();
         let mut clamped = 0;
-        for (i, px) in image.pixels.iter_mut().enumerate() {
+        for (y, row) in rows.into_iter().enumerate() {
+            match row {
+                Ok(n) => clamped += n,
+                Err((x, c, value, fault)) => {
+                    let channel = ["R", "G", "B"][c];
+                    return Err(LoadError::BadPixel { path: path.into(), x, y, channel, value, fault });
+                }
+            }
+        }
+        Ok(clamped)
+    }
+
+    /// One row of [`LoadOptions::check_pixels`]: the components clamped, or the first fault as
+    /// (column, channel, value, fault).
+    fn check_row(&self, row: &mut [[f32; 3]]) -> Result<usize, (usize, usize, f32, PixelFault)> {
+        let mut clamped = 0;
+        for (x, px) in row.iter_mut().enumerate() {
             for (c, v) in px.iter_mut().enumerate() {
-                let bad = |fault| LoadError::BadPixel {
-                    path: path.into(),
-                    x: i % width,
-                    y: i / width,
-                    channel: ["R", "G", "B"][c],
-                    value: *v,
-                    fault,
-                };
                 if !v.is_finite() {
-                    return Err(bad(PixelFault::NotFinite));
+                    return Err((x, c, *v, PixelFault::NotFinite));
                 }
                 if *v < 0.0 {
                     match self.negative {
-                        NegativePolicy::Error => return Err(bad(PixelFault::Negative)),
+                        NegativePolicy::Error => return Err((x, c, *v, PixelFault::Negative)),
                         NegativePolicy::Clamp => {
                             *v = 0.0;
                             clamped += 1;
@@ -227,6 +239,35 @@ mod tests {
         let keep = LoadOptions { negative: NegativePolicy::Keep, ..strict };
         assert_eq!(keep.check_pixels(path, &mut image_with(-0.5)).unwrap(), 0);
         assert!(keep.check_pixels(path, &mut image_with(f32::INFINITY)).is_err());
+    }
+
+    /// Rows checked in parallel still name the first fault in row order and count the clamps
+    /// of every row, on one thread or several.
+    #[test]
+    fn the_first_fault_in_row_order_is_named_on_any_number_of_threads() {
+        let faulty = || {
+            RgbImage::from_fn(64, 96, |x, y| match (x, y) {
+                (5, 70) => [1.0, 1.0, f32::NAN],
+                (40, 3) | (2, 50) | (63, 95) => [-0.25, 1.0, 1.0],
+                _ => [1.0; 3],
+            })
+        };
+        let path = Path::new("sky.exr");
+        let strict = LoadOptions::default();
+        let clamp = LoadOptions { negative: NegativePolicy::Clamp, ..strict };
+        for threads in [1, 4] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let e = strict.check_pixels(path, &mut faulty()).unwrap_err().to_string();
+                assert!(e.contains("(40, 3) channel R is -0.25"), "{e}");
+                let e = clamp.check_pixels(path, &mut faulty()).unwrap_err().to_string();
+                assert!(e.contains("(5, 70) channel B is NaN"), "{e}");
+                let mut no_nan = faulty();
+                no_nan.pixels[70 * 64 + 5] = [1.0; 3];
+                assert_eq!(clamp.check_pixels(path, &mut no_nan).unwrap(), 3);
+                assert!(no_nan.pixels.iter().flatten().all(|v| *v >= 0.0));
+            });
+        }
     }
 
     #[test]
