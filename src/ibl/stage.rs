@@ -578,9 +578,9 @@ fn bake_cubes(
         specular.push(bake_level(config, source, &base, level, progress)?);
     }
     let specular_seconds = t_spec.elapsed().as_secs_f64();
-    let t_irr = Instant::now();
-    let irradiance = bake_level(config, source, &base, (0, config.irradiance_size, IRRADIANCE_ROUGHNESS), progress)?;
-    Ok(Cubes { specular, irradiance, specular_seconds, irradiance_seconds: t_irr.elapsed().as_secs_f64() })
+    let (irradiance, irradiance_seconds) =
+        timed(|| bake_level(config, source, &base, (0, config.irradiance_size, IRRADIANCE_ROUGHNESS), progress));
+    Ok(Cubes { specular, irradiance: irradiance?, specular_seconds, irradiance_seconds })
 }
 
 /// The reference the levels with r > 0 are measured against and its values at their sampled
@@ -749,6 +749,12 @@ fn document<T: serde::Serialize>(
     document.with_input_orientation(input.describe())
 }
 
+/// `f`'s result and the seconds it took.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let start = Instant::now();
+    (f(), start.elapsed().as_secs_f64())
+}
+
 /// Runs `ibl` on `env` (any layout, prtkit's frame).
 pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Output, Error> {
     config.check()?;
@@ -763,43 +769,32 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
     // The DFG table depends on nothing else, the SH and the input's fingerprint only on the
     // input: they run beside the cubes, and so does the measurement's reference, which needs only
     // the input: it fills the cores the bake's narrower steps leave idle.
-    let t_dfg = Instant::now();
-    let ((((dfg, source_hash), (sh, sh_time)), cubes), reference) = rayon::join(
-        || {
-            rayon::join(
-                || {
-                    rayon::join(
-                        || {
-                            let dfg = DfgTable::new(config.dfg_size, config.dfg).map(|t| (t, t_dfg.elapsed()));
-                            (dfg, env.content_hash())
-                        },
-                        || {
-                            let t_sh = Instant::now();
-                            (IrradianceSh::project(&latlong, config.world_from_prtkit()), t_sh.elapsed())
-                        },
-                    )
-                },
-                || bake_cubes(config, &latlong, &source, progress),
-            )
-        },
-        || {
-            let t_reference = Instant::now();
-            expect(config, &latlong).map(|e| e.map(|e| (e, t_reference.elapsed())))
-        },
-    );
-    let (dfg, dfg_time) = dfg?;
+    let (((((dfg, dfg_seconds), source_hash), (sh, sh_seconds)), cubes), (expectation, reference_seconds)) =
+        rayon::join(
+            || {
+                rayon::join(
+                    || {
+                        rayon::join(
+                            || (timed(|| DfgTable::new(config.dfg_size, config.dfg)), env.content_hash()),
+                            || timed(|| IrradianceSh::project(&latlong, config.world_from_prtkit())),
+                        )
+                    },
+                    || bake_cubes(config, &latlong, &source, progress),
+                )
+            },
+            || timed(|| expect(config, &latlong)),
+        );
+    let (dfg, expectation) = (dfg?, expectation?);
     let Cubes { mut specular, mut irradiance, specular_seconds, irradiance_seconds } = cubes?;
-    let reference = reference?;
-    timings.dfg = dfg_time.as_secs_f64();
+    timings.dfg = dfg_seconds;
     timings.specular = specular_seconds;
-    timings.irradiance = irradiance_seconds + sh_time.as_secs_f64();
-    timings.reference = reference.as_ref().map_or(0.0, |(_, t)| t.as_secs_f64());
+    timings.irradiance = irradiance_seconds + sh_seconds;
+    timings.reference = reference_seconds;
     timings.bake = t0.elapsed().as_secs_f64();
 
-    let t_measure = Instant::now();
     let levels = specular.iter_mut().chain([&mut irradiance]).collect();
-    let measured_against = measure(reference.map(|(r, _)| r), levels);
-    timings.measure = t_measure.elapsed().as_secs_f64();
+    let (measured_against, measure_seconds) = timed(|| measure(expectation, levels));
+    timings.measure = measure_seconds;
 
     // The levels move into the chain: the largest bakes hold one copy of their cubes.
     let (cubes, levels): (Vec<CubeMap>, Vec<Level>) = specular.into_iter().map(|b| (b.cube, b.level)).unzip();
