@@ -170,7 +170,7 @@ fn the_ibl_sh_irradiance_compiles_as_hlsl() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let sh = IrradianceSh::project(&common::sky(64, 32), DMat3::IDENTITY);
+    let sh = IrradianceSh::project(&common::sky(64, 32), DMat3::IDENTITY).unwrap();
     let call = "float4 main(float3 n : NORMAL) : SV_Target { return float4(prtkitIrradiance(normalize(n)), 1.0); }\n";
     compile(dir.path(), "irradiance", &(sh.hlsl("prtkit's own (+Z up)") + call));
 }

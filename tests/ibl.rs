@@ -345,6 +345,12 @@ fn bad_input_exits_2_and_writes_nothing() {
         .code(2)
         .stderr(predicates::str::contains("not an empty directory"));
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
+    // A map too coarse for order-2 SH (2 × 1: φ holds no cos 2φ) is refused, naming it.
+    let coarse = common::write_pfm(dir.path(), "coarse.pfm", &common::sky_image(2, 1));
+    cmd("ibl").arg(&coarse).arg("-o").arg(dir.path().join("coarse")).assert().code(2).stderr(
+        predicates::str::contains("coarse.pfm: too coarse for the SH irradiance: order 2 is beyond what this 2x1"),
+    );
+    assert!(!dir.path().join("coarse").exists());
     // `-o -`: a bake is a directory, never a directory named `-` (issue 34).
     cmd("ibl")
         .arg(&env)

@@ -60,7 +60,10 @@ impl Stage for Args {
         // Before the long work: DIR's parent exists (DIR is created, not the path to it).
         check_output_dir(&self.output)?;
         let map = self.input.load(ctx)?;
-        let out = stage::run(&config, &map, ctx.progress())?;
+        let out = stage::run(&config, &map, ctx.progress()).map_err(|error| match error {
+            Error::Project(e) => anyhow!("{}: too coarse for the SH irradiance: {e}", self.input.name()),
+            error => error.into(),
+        })?;
 
         let body = &out.document.body;
         for level in body.specular.levels.iter().chain(std::iter::once(&body.irradiance.level)) {

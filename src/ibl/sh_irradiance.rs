@@ -10,21 +10,18 @@
 //! (`docs/conventions.md`: Y_1,−1 ∝ y, Y_1,0 ∝ z, Y_1,1 ∝ x, no Condon–Shortley phase) and K_lm
 //! the constant of Y_lm = K_lm b_i. Multiply by the albedo; multiply by π for the irradiance E.
 //!
-//! The L_lm are projected directly in the output frame, L_lm = Σ_t L_t Ω_t Y_lm(M d_t) over the
-//! input lat-long texels (midpoint rule with exact solid angles, as `sh-project`), with M the
-//! output frame's matrix from prtkit's (rotation, `--rotate`, `--mirror` included).
-//!
-//! Every b_i is a polynomial of degree at most 2, so these sums need only the map's moments
-//! Σ L Ω, Σ L Ω d and Σ L Ω d dᵀ ([`Moments`]), which M carries to the output frame as M m and
-//! M S Mᵀ. On a lat-long map a row's moments factor into five sums over its columns,
-//! Σ L · (1, cos φ, sin φ, cos² φ, cos φ sin φ), since d = (sin θ cos φ, sin θ sin φ, cos θ) has
-//! one θ per row: five products per texel and channel where the basis took twenty-seven.
+//! The L_lm are prtkit's projection of the input (`sh::project`: the midpoint rule with exact
+//! solid angles, separable on a lat-long map, as `sh-project`) carried to the output frame by
+//! M, the output frame's matrix from prtkit's (rotation, `--rotate`, `--mirror` included):
+//! L'_lm = Σ_t L_t Ω_t Y_lm(M d_t) are the coefficients of L∘M⁻¹, which `ShRotation` gives for
+//! any orthogonal M, a mirror too (band l of a degree-l harmonic polynomial).
 
-use crate::envmap::{EnvMap, Layout};
+use crate::envmap::EnvMap;
+use crate::progress::NoProgress;
+use crate::sh::project::{project, ProjectError};
+use crate::sh::rotate::ShRotation;
 use crate::sh::{convolve::clamped_cosine, lm, ShCoeffs};
-use crate::sphere::latlong::LatLong;
 use glam::{DMat3, DVec3};
-use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// The polynomial constants K_lm of prtkit's order-2 basis, Y_lm = K_lm b_i, in index order.
@@ -66,22 +63,19 @@ pub struct IrradianceSh {
 }
 
 impl IrradianceSh {
-    /// Projects `latlong` (any layout works; prtkit's frame) with its directions taken to the
-    /// output frame by `world_from_env`.
-    pub fn project(env: &EnvMap, world_from_env: DMat3) -> Self {
-        let sums = Moments::of(env).rotated(world_from_env).polynomial_sums();
+    /// Projects `env` (any layout; prtkit's frame) with its directions taken to the output frame
+    /// by `world_from_env`. A map too coarse for order 2 (a lat-long map narrower than 4 texels)
+    /// is an error.
+    pub fn project(env: &EnvMap, world_from_env: DMat3) -> Result<Self, ProjectError> {
+        let radiance = ShRotation::new(world_from_env, 2).apply(&project(env, 2, &NoProgress)?);
         let k = basis_constants();
-        let mut radiance = ShCoeffs::zeros(2);
-        for ((c, sum), ki) in radiance.rgb.iter_mut().zip(&sums).zip(&k) {
-            *c = sum.map(|v| v * ki);
-        }
         let mut shader = [[0.0; 3]; 9];
         for i in 0..9 {
             let (l, _) = lm(i);
             let factor = clamped_cosine(l) / PI * k[i];
             shader[i] = radiance.rgb[i].map(|v| v * factor);
         }
-        IrradianceSh { radiance, shader }
+        Ok(IrradianceSh { radiance, shader })
     }
 
     /// E(n)/π at an output-frame normal.
@@ -153,113 +147,6 @@ impl IrradianceSh {
     }
 }
 
-/// The zeroth, first and second moments of a map's radiance over the sphere, per channel:
-/// Σ_t L_t Ω_t, Σ_t L_t Ω_t d_t and Σ_t L_t Ω_t d_t d_tᵀ (midpoint rule, exact solid angles).
-struct Moments {
-    zero: [f64; 3],
-    first: [DVec3; 3],
-    second: [DMat3; 3],
-}
-
-impl Moments {
-    fn zeros() -> Moments {
-        Moments { zero: [0.0; 3], first: [DVec3::ZERO; 3], second: [DMat3::ZERO; 3] }
-    }
-
-    /// The moments of `env`: row by row on a lat-long map (rows summed in parallel, then added in
-    /// order, so the same sums on any number of threads), texel by texel otherwise.
-    fn of(env: &EnvMap) -> Moments {
-        let mut moments = Moments::zeros();
-        if env.layout() != Layout::LatLong {
-            env.for_each_texel(|t| moments.add(t.rgb.map(|v| v as f64 * t.solid_angle), t.dir));
-            return moments;
-        }
-        let image = env.image();
-        let grid = LatLong::new(image.width, image.height);
-        let columns: Vec<[f64; 4]> = (0..grid.width)
-            .map(|x| {
-                let (sin, cos) = grid.column_phi(x).sin_cos();
-                [cos, sin, cos * cos, cos * sin]
-            })
-            .collect();
-        let rows: Vec<[[f64; 5]; 3]> = (0..grid.height)
-            .into_par_iter()
-            .map(|y| {
-                let mut sums = [[0.0; 5]; 3];
-                for (l, [cos, sin, cos2, cos_sin]) in
-                    image.pixels[y * grid.width..(y + 1) * grid.width].iter().zip(&columns)
-                {
-                    for (s, &l) in sums.iter_mut().zip(l) {
-                        let l = l as f64;
-                        s[0] += l;
-                        s[1] += l * cos;
-                        s[2] += l * sin;
-                        s[3] += l * cos2;
-                        s[4] += l * cos_sin;
-                    }
-                }
-                sums
-            })
-            .collect();
-        for (y, sums) in rows.iter().enumerate() {
-            let (sin_t, cos_t) = grid.row_theta(y).sin_cos();
-            let solid_angle = grid.row_solid_angle(y);
-            for (c, [l, l_cos, l_sin, l_cos2, l_cos_sin]) in sums.iter().enumerate() {
-                let (xx, yy, xy) = (sin_t * sin_t * l_cos2, sin_t * sin_t * (l - l_cos2), sin_t * sin_t * l_cos_sin);
-                let (xz, yz, zz) = (sin_t * cos_t * l_cos, sin_t * cos_t * l_sin, cos_t * cos_t * l);
-                moments.zero[c] += solid_angle * l;
-                moments.first[c] += solid_angle * DVec3::new(sin_t * l_cos, sin_t * l_sin, cos_t * l);
-                moments.second[c] += solid_angle
-                    * DMat3::from_cols(DVec3::new(xx, xy, xz), DVec3::new(xy, yy, yz), DVec3::new(xz, yz, zz));
-            }
-        }
-        moments
-    }
-
-    /// Adds one texel: its radiance times its solid angle, `weighted`, in direction `d`.
-    fn add(&mut self, weighted: [f64; 3], d: DVec3) {
-        let outer = DMat3::from_cols(d * d.x, d * d.y, d * d.z);
-        for (c, w) in weighted.into_iter().enumerate() {
-            self.zero[c] += w;
-            self.first[c] += w * d;
-            self.second[c] += w * outer;
-        }
-    }
-
-    /// The moments of the directions taken by `m`: M m and M S Mᵀ.
-    fn rotated(&self, m: DMat3) -> Moments {
-        Moments {
-            zero: self.zero,
-            first: self.first.map(|v| m * v),
-            second: self.second.map(|s| m * s * m.transpose()),
-        }
-    }
-
-    /// Σ L Ω b_i(d) for the shader form's polynomials b = (1, y, z, x, xy, yz, 3z² − 1, xz,
-    /// x² − y²), per channel.
-    fn polynomial_sums(&self) -> [[f64; 3]; 9] {
-        let mut sums = [[0.0; 3]; 9];
-        for c in 0..3 {
-            let (zero, m, s) = (self.zero[c], self.first[c], self.second[c]);
-            let b = [
-                zero,
-                m.y,
-                m.z,
-                m.x,
-                s.x_axis.y,
-                s.y_axis.z,
-                3.0 * s.z_axis.z - zero,
-                s.x_axis.z,
-                s.x_axis.x - s.y_axis.y,
-            ];
-            for (sum, b) in sums.iter_mut().zip(b) {
-                sum[c] = b;
-            }
-        }
-        sums
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -267,8 +154,8 @@ mod tests {
     use crate::sh::legendre::LegendreTable;
     use crate::sphere::latlong::LatLong;
 
-    /// Σ_t L_t Ω_t Y_lm(M d_t) texel by texel with the library's basis: what `project`'s
-    /// moments must sum to.
+    /// Σ_t L_t Ω_t Y_lm(M d_t) texel by texel with the library's basis, M applied to each
+    /// direction: what `project` must give.
     fn projected_texel_by_texel(env: &EnvMap, m: DMat3) -> Vec<[f64; 3]> {
         let (table, mut y) = (LegendreTable::new(2), vec![0.0; 9]);
         let mut sums = vec![[0.0; 3]; 9];
@@ -289,7 +176,7 @@ mod tests {
     }
 
     #[test]
-    fn moments_project_as_the_basis_does_texel_by_texel() {
+    fn projects_as_the_basis_does_texel_by_texel_in_the_output_frame() {
         let grid = LatLong::new(96, 48);
         let latlong =
             EnvMap::latlong(crate::io::RgbImage::from_fn(96, 48, |x, y| uneven(grid.texel_direction(x, y)))).unwrap();
@@ -308,7 +195,7 @@ mod tests {
         let mirrored = DMat3::from_diagonal(DVec3::new(1.0, -1.0, 1.0)) * turned;
         for env in [&latlong, &faces] {
             for m in [DMat3::IDENTITY, turned, mirrored] {
-                let got = IrradianceSh::project(env, m).radiance.rgb;
+                let got = IrradianceSh::project(env, m).unwrap().radiance.rgb;
                 let want = projected_texel_by_texel(env, m);
                 for (i, (g, w)) in got.iter().zip(&want).enumerate() {
                     for c in 0..3 {
@@ -325,18 +212,6 @@ mod tests {
                 assert!(want.iter().all(|w| w.iter().all(|v| v.abs() > 1e-4)), "{want:?}");
             }
         }
-    }
-
-    #[test]
-    fn moments_are_the_same_on_any_number_of_threads() {
-        let grid = LatLong::new(512, 256);
-        let env =
-            EnvMap::latlong(crate::io::RgbImage::from_fn(512, 256, |x, y| uneven(grid.texel_direction(x, y)))).unwrap();
-        let on = |threads| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| IrradianceSh::project(&env, DMat3::IDENTITY))
-        };
-        assert_eq!(on(1), on(3));
     }
 
     #[test]

@@ -37,6 +37,7 @@ use crate::io::texture::Container;
 use crate::io::{Document, Provenance};
 use crate::limits::{LimitError, MAX_IBL_FACE_SIZE};
 use crate::progress::Progress;
+use crate::sh::project::ProjectError;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -252,6 +253,9 @@ pub enum Error {
     /// The reference.
     #[error("angular reference: {0}")]
     Reference(#[from] ReferenceError),
+    /// The SH projection (an input too coarse for order 2).
+    #[error("the SH irradiance")]
+    Project(#[from] ProjectError),
     /// GGX.
     #[error(transparent)]
     Ggx(#[from] GgxError),
@@ -784,7 +788,7 @@ pub fn run(config: &Config, env: &EnvMap, progress: &dyn Progress) -> Result<Out
             },
             || timed(|| expect(config, &latlong)),
         );
-    let (dfg, expectation) = (dfg?, expectation?);
+    let (dfg, sh, expectation) = (dfg?, sh?, expectation?);
     let Cubes { mut specular, mut irradiance, specular_seconds, irradiance_seconds } = cubes?;
     timings.dfg = dfg_seconds;
     timings.specular = specular_seconds;
