@@ -1136,12 +1136,13 @@ impl BlockMoments {
         let width = TAU / fine.width as f64;
         let mut m = BlockMoments::about(mean);
         for fy in f * y..f * (y + 1) {
-            let (mut signed, mut absolute) = ([[0.0; 5]; 3], [[0.0; 5]; 3]);
-            for fx in f * x..f * (x + 1) {
-                let (l, [c1, s1, cc, sc]) = (radiance[fy * fine.width + fx], columns[fx]);
-                for c in 0..3 {
+            let texels = &radiance[fy * fine.width + f * x..fy * fine.width + f * (x + 1)];
+            // A channel at a time, so that its ten sums stay in registers.
+            for c in 0..3 {
+                let (mut signed, mut absolute) = ([0.0; 5], [0.0; 5]);
+                for (l, &[c1, s1, cc, sc]) in texels.iter().zip(&columns[f * x..f * (x + 1)]) {
                     let d = l[c] as f64 - mean[c];
-                    for (sums, w) in [(&mut signed[c], d), (&mut absolute[c], d.abs())] {
+                    for (sums, w) in [(&mut signed, d), (&mut absolute, d.abs())] {
                         sums[0] += w;
                         sums[1] += w * c1;
                         sums[2] += w * s1;
@@ -1149,15 +1150,13 @@ impl BlockMoments {
                         sums[4] += w * sc;
                     }
                 }
-            }
-            for c in 0..3 {
-                let (first, second) = row_moments(&rows[fy], width, &signed[c]);
+                let (first, second) = row_moments(&rows[fy], width, &signed);
                 m.moment[c] += first;
                 m.second[c] += second;
-                let (first, second) = row_moments(&rows[fy], width, &absolute[c]);
+                let (first, second) = row_moments(&rows[fy], width, &absolute);
                 m.spread_first[c] += first;
                 m.spread[c] += second;
-                m.deviation[c] += rows[fy].solid_angle * absolute[c][0];
+                m.deviation[c] += rows[fy].solid_angle * absolute[0];
             }
         }
         for c in 0..3 {
