@@ -1393,15 +1393,17 @@ impl Curve {
 
     /// f'(s_T), f''(s_T)/2 and C with |f(s) − f(s_T) − f'(s_T)(s − s_T) − ½ f''(s_T)(s − s_T)²|
     /// ≤ C (s − s_T)² over a texel inside the support ([`LobeIntegral`]). The remainder is
-    /// ½ (f''(ξ) − f''(s_T)) (s − s_T)² for some ξ in the span (Lagrange), at most
-    /// ½ (f''(hi) − f''(lo)) (s − s_T)² as f'' is monotone; it is also f'''(η)/6 (s − s_T)³, at
-    /// most f'''(hi)/6 · reach · (s − s_T)². The first is the smaller where f''' changes fast
-    /// across the span (near the peak).
+    /// ½ (f''(ξ) − f''(s_T)) (s − s_T)² for some ξ between s_T and s (Lagrange), and also
+    /// f'''(η)/6 (s − s_T)³ for some η there. f'' and f''' grow with s, so above the centre it is
+    /// at most the smaller of ½ (f''(hi) − f''(s_T)) and f'''(hi)/6 · (hi − s_T) times
+    /// (s − s_T)², below it the smaller of ½ (f''(s_T) − f''(lo)) and f'''(s_T)/6 · (s_T − lo);
+    /// C is the larger side's. The f'' form is the smaller where f''' changes fast across the
+    /// span (near the peak).
     fn expansion(&self, span: Span) -> (f64, f64, f64) {
         let [centre, hi, lo] = [span.centre, span.hi, span.lo].map(|s| self.derivatives(s));
-        let reach = (span.hi - span.centre).max(span.centre - span.lo);
-        let remainder = (0.5 * (hi[2] - lo[2])).min(hi[3] / 6.0 * reach);
-        (centre[1], 0.5 * centre[2], remainder)
+        let above = (0.5 * (hi[2] - centre[2])).min(hi[3] / 6.0 * (span.hi - span.centre));
+        let below = (0.5 * (centre[2] - lo[2])).min(centre[3] / 6.0 * (span.centre - span.lo));
+        (centre[1], 0.5 * centre[2], above.max(below))
     }
 
     /// Whether no coarse texel rule integrates the kernel over a coarse texel: the horizon
