@@ -973,8 +973,9 @@ impl LobeIntegral {
     ///
     /// |L̄_T (K_T − middle)| is at most |L̄_T| times half the interval. Σ ΔL_t Ω_t being 0 and every
     /// K_t/Ω_t lying in [0, f(hi)], |Σ ΔL_t K_t| = |Σ ΔL_t Ω_t (K_t/Ω_t − f(hi)/2)| ≤ D_T f(hi)/2.
-    /// The kernel is small there for all but the widest lobes, and the interval a few times
-    /// narrower than [0, f(hi) Ω_T] for those, so most such texels are taken whole.
+    /// The kernel is small there for all but the widest lobes, and for those the interval is what
+    /// the block's geometry allows rather than all of [0, f(hi) Ω_T], so most such texels are
+    /// taken whole.
     fn taken_whole(
         &self,
         coarse: &Coarse,
