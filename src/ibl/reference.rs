@@ -1127,6 +1127,14 @@ fn row_moments(row: &RowFactors, width: f64, sums: &[f64; 5]) -> (DVec3, DMat3) 
     (first, second)
 }
 
+/// Texel (x, y)'s solid angle Ω_t and its geometric moments ∫_t ω dω and ∫_t ω ωᵀ dω
+/// ([`row_moments`] with a weight of one).
+fn texel_moments(grid: LatLong, x: usize, y: usize) -> (f64, DVec3, DMat3) {
+    let (row, [c1, s1, cc, sc]) = (RowFactors::of(grid, y), column_factors(grid, x));
+    let (first, second) = row_moments(&row, TAU / grid.width as f64, &[1.0, c1, s1, cc, sc]);
+    (row.solid_angle, first, second)
+}
+
 /// What a coarse texel T keeps of its fine texels t (per channel, ΔL_t = L_t − L̄_T and e = ω −
 /// c_T, c_T the centre): D_T = Σ Ω_t |ΔL_t|, M_T = Σ ΔL_t ∫_t e dω (= Σ ΔL_t ∫_t ω dω, as
 /// Σ ΔL_t Ω_t = 0), Q_T = Σ ΔL_t ∫_t e eᵀ dω and A_T = Σ |ΔL_t| ∫_t e eᵀ dω. The second moments
@@ -1217,16 +1225,14 @@ impl BlockMoments {
     /// semidefinite matrices, which is what the remainder bound C Rᵀ A_T R needs.
     fn group(grid: LatLong, level: &[BlockMoments], [x, y, g]: [usize; 3]) -> BlockMoments {
         let centre = LatLong::new(grid.width / g, grid.height / g).texel_direction(x, y);
-        let width = TAU / grid.width as f64;
         let blocks: Vec<(&BlockMoments, f64, DVec3, DMat3, DVec3)> = (g * y..g * (y + 1))
             .flat_map(|by| (g * x..g * (x + 1)).map(move |bx| (bx, by)))
             .map(|(bx, by)| {
-                let (row, [c1, s1, cc, sc]) = (RowFactors::of(grid, by), column_factors(grid, bx));
-                let (first, second) = row_moments(&row, width, &[1.0, c1, s1, cc, sc]);
+                let (omega, first, second) = texel_moments(grid, bx, by);
                 // ∫_b e_T e_Tᵀ from the moments about the origin.
                 let about = outer(centre, first);
-                let g_b = second - about - about.transpose() + outer(centre, centre) * row.solid_angle;
-                (&level[by * grid.width + bx], row.solid_angle, first, g_b, grid.texel_direction(bx, by) - centre)
+                let g_b = second - about - about.transpose() + outer(centre, centre) * omega;
+                (&level[by * grid.width + bx], omega, first, g_b, grid.texel_direction(bx, by) - centre)
             })
             .collect();
         let area: f64 = blocks.iter().map(|b| b.1).sum();
@@ -1308,15 +1314,8 @@ impl Coarse {
                 .flat_map(|y| (0..geometry.width).map(move |x| geometry.texel_direction(x, y)))
                 .collect(),
             mean_directions: (0..geometry.height)
-                .flat_map(|y| {
-                    let row = RowFactors::of(geometry, y);
-                    (0..geometry.width).map(move |x| {
-                        let [c1, s1, cc, sc] = column_factors(geometry, x);
-                        let width = TAU / geometry.width as f64;
-                        let (first, second) = row_moments(&row, width, &[1.0, c1, s1, cc, sc]);
-                        (first / row.solid_angle, Symmetric::of(second / row.solid_angle))
-                    })
-                })
+                .flat_map(|y| (0..geometry.width).map(move |x| texel_moments(geometry, x, y)))
+                .map(|(omega, first, second)| (first / omega, Symmetric::of(second / omega)))
                 .collect(),
             tiles,
         }
