@@ -445,7 +445,10 @@ impl Grid {
         // With a coarse level the fine rule need only be exact where the fine grid is summed
         // whatever the radiance: inside the coarse texels that are always refined. The other
         // texels' weight still counts in the total the tolerance is a share of: it enters once,
-        // the same for every rule compared.
+        // the same for every rule compared. Texels refined for their bound are summed with the
+        // same rule: the kernel is smoother over them than over those it was tried on or, where
+        // the horizon crosses them, near its least (f(s) ≤ f(ρ) for s within a fine texel's
+        // radius ρ of the kink).
         let probes = probe_axes(grid).map(DVec3::normalize);
         let choice = match &self.texels {
             Texels::Rows(_) => choose_rule(REFERENCE_RULE_TOLERANCE, |rule| {
@@ -463,7 +466,7 @@ impl Grid {
                         (0..coarse.geometry.height * coarse.geometry.width)
                             .filter(|&i| {
                                 let (x, y) = (i % coarse.geometry.width, i / coarse.geometry.width);
-                                coarse.span(axis, x, y).is_some_and(|span| curve.too_curved(span))
+                                coarse.span(axis, x, y).is_some_and(|span| curve.always_refined(span))
                             })
                             .collect()
                     })
@@ -893,7 +896,7 @@ impl LobeIntegral {
                     let index = y * width + x;
                     let (mean, k) = (coarse.radiance[index], scratch.texel[x]);
                     (0..3).for_each(|c| pass.estimate[c] += mean[c] as f64 * k);
-                    if !crosses_horizon(span) && self.curve.too_curved(span) {
+                    if self.curve.always_refined(span) {
                         (0..3).for_each(|c| pass.refined_estimate[c] += mean[c] as f64 * k);
                         pass.refined.push(index);
                         continue;
@@ -1411,6 +1414,13 @@ impl Curve {
     /// it (near the peak of a sharp lobe).
     fn too_curved(&self, span: Span) -> bool {
         crosses_horizon(span) || self.second_order(span) > COARSE_CURVATURE
+    }
+
+    /// Whether a coarse texel is summed texel by texel whatever the radiance: too curved, and
+    /// not one the horizon crosses (those are taken whole by their interval,
+    /// [`LobeIntegral::taken_whole`], and refined only for their bound, like any other).
+    fn always_refined(&self, span: Span) -> bool {
+        !crosses_horizon(span) && self.too_curved(span)
     }
 }
 
