@@ -1473,8 +1473,11 @@ impl HalfChord {
 /// serves every row, and the kernel, a rational function of R·ω, is one division per node.
 struct ConeSum {
     grid: LatLong,
-    /// n sub-rows per row: (θ, sin θ, weight).
-    sub_rows: Vec<(f64, f64, f64)>,
+    /// n sub-rows per row: (sin(θ/2), cos(θ/2), sin θ, weight), the half angle's sine and
+    /// cosine for sin((θ − θ_R)/2) as for φ, without a sine per row and direction.
+    sub_rows: Vec<[f64; 4]>,
+    /// (sin θ, cos θ) of every row's centre, for the cone's columns.
+    rows: Vec<(f64, f64)>,
     /// sin(φ/2) and cos(φ/2) of the n sub-columns of every column, column-major in blocks of n.
     sin_half_phi: Vec<f64>,
     cos_half_phi: Vec<f64>,
@@ -1482,16 +1485,19 @@ struct ConeSum {
     node_weights: Vec<f32>,
     /// Sub-samples per axis.
     n: usize,
+    /// The cone's half-angle and its cosine.
     cone: f64,
+    cos_cone: f64,
     kernel: HalfChord,
 }
 
-/// The direction R of a cone sum: z_R, sin θ_R, θ_R, φ_R, and sin²((φ − φ_R)/2) at every node
-/// column of the grid.
+/// The direction R of a cone sum: z_R, sin θ_R, θ_R, sin(θ_R/2), cos(θ_R/2), φ_R, and
+/// sin²((φ − φ_R)/2) at every node column of the grid.
 struct AxisTables {
     z: f64,
     sin_theta: f64,
     theta: f64,
+    half_theta: (f64, f64),
     phi: f64,
     sin2_half_dphi: Vec<f32>,
 }
@@ -1516,8 +1522,14 @@ impl ConeSum {
         }
         let sub_rows = (0..grid.height)
             .flat_map(|y| rule.sub_rows(grid, y))
-            .map(|r| (r.z.clamp(-1.0, 1.0).acos(), r.sin_theta, r.weight))
+            .map(|r| {
+                let (s, c) = (0.5 * r.z.clamp(-1.0, 1.0).acos()).sin_cos();
+                [s, c, r.sin_theta, r.weight]
+            })
             .collect();
+        // The kernel vanishes beyond π/2; texels whose centres lie within two rows of it may
+        // still reach inside.
+        let cone = (FRAC_PI_2 + 2.0 * PI / grid.height as f64).min(PI);
         ConeSum {
             grid,
             sub_rows,
@@ -1525,9 +1537,9 @@ impl ConeSum {
             cos_half_phi,
             node_weights: (0..grid.width).flat_map(|_| columns.iter().map(|c| c.1 as f32)).collect(),
             n: columns.len(),
-            // The kernel vanishes beyond π/2; texels whose centres lie within two rows of it
-            // may still reach inside.
-            cone: (FRAC_PI_2 + 2.0 * PI / grid.height as f64).min(PI),
+            rows: (0..grid.height).map(|y| grid.row_theta(y).sin_cos()).collect(),
+            cone,
+            cos_cone: cone.cos(),
             kernel: HalfChord::of(lobe),
         }
     }
@@ -1580,10 +1592,12 @@ impl ConeSum {
                 (d * d) as f32
             })
             .collect();
+        let theta = sphere::theta(axis);
         AxisTables {
             z: axis.z,
             sin_theta: axis.x.hypot(axis.y),
-            theta: sphere::theta(axis),
+            theta,
+            half_theta: (0.5 * theta).sin_cos(),
             phi: phi_r,
             sin2_half_dphi,
         }
@@ -1600,9 +1614,9 @@ impl ConeSum {
         }
         // Closed form of cos θ cos θ_R + sin θ sin θ_R cos Δφ ≥ cos θ*.
         let h = TAU / w as f64;
-        let (st, ct) = theta.sin_cos();
+        let (st, ct) = self.rows[y];
         let denom = st * table.sin_theta;
-        let c = if denom > 1e-300 { (self.cone.cos() - ct * table.z) / denom } else { -2.0 };
+        let c = if denom > 1e-300 { (self.cos_cone - ct * table.z) / denom } else { -2.0 };
         let half = if c <= -1.0 { PI } else { c.min(1.0).acos() };
         let lo = ((table.phi - half) / h - 0.5).ceil() as i64 - 1;
         let hi = ((table.phi + half) / h - 0.5).floor() as i64 + 1;
@@ -1654,8 +1668,9 @@ impl ConeSum {
         texel.fill(0.0);
         let (nodes, out) = (&table.sin2_half_dphi[start * n..end * n], &mut scratch.kernel[start * n..end * n]);
         let weights = &self.node_weights[start * n..end * n];
-        for &(theta, sin_theta, weight) in &self.sub_rows[y * n..(y + 1) * n] {
-            let d = (0.5 * (theta - table.theta)).sin();
+        let (s_half_r, c_half_r) = table.half_theta;
+        for &[s_half, c_half, sin_theta, weight] in &self.sub_rows[y * n..(y + 1) * n] {
+            let d = s_half * c_half_r - c_half * s_half_r;
             let (a, b) = ((2.0 * d * d) as f32, (2.0 * table.sin_theta * sin_theta) as f32);
             for ((k, s), wj) in out.iter_mut().zip(nodes).zip(weights) {
                 *k = wj * self.kernel.at(a + b * s);
