@@ -972,11 +972,16 @@ impl LobeIntegral {
     ///   K_T ∈ [max(Ω_T g(s̄), f'(0) P), min(Ω_T f(hi) (s̄ − lo)/(hi − lo), f(hi)/hi · P)];
     /// - mean |s| lies in [max(|s̄|, m₂/max|s|), √m₂] (|s| ≥ s²/max|s|; Cauchy–Schwarz).
     ///
-    /// |L̄_T (K_T − middle)| is at most |L̄_T| times half the interval. Σ ΔL_t Ω_t being 0 and every
-    /// K_t/Ω_t lying in [0, f(hi)], |Σ ΔL_t K_t| = |Σ ΔL_t Ω_t (K_t/Ω_t − f(hi)/2)| ≤ D_T f(hi)/2.
-    /// The kernel is small there for all but the widest lobes, and for those the interval is what
-    /// the block's geometry allows rather than all of [0, f(hi) Ω_T], so most such texels are
-    /// taken whole.
+    /// |L̄_T (K_T − middle)| is at most |L̄_T| times half the interval. The texels' deviations are
+    /// taken against a line ℓ(s) = a + b s: Σ ΔL_t Ω_t being 0, Σ ΔL_t ∫_t ℓ dω = b R·M_T, and
+    /// |Σ ΔL_t ∫_t (g − ℓ) dω| ≤ D_T max |g − ℓ|. ℓ is the chord from lo to hi (b = f(hi)/(hi − lo))
+    /// lowered by half its largest gap G above g, so max |g − ℓ| = G/2. On [lo, 0] the gap grows
+    /// to the chord's value at 0; on [0, hi] g lies above its tangent at 0, so the gap is at most
+    /// the chord less that tangent, largest at an end: G ≤ max(−b lo, f(hi) − f'(0) hi). For the
+    /// cosine lobe (f linear) the second term is 0, and a block the horizon only grazes has a
+    /// small first. The kernel is small there for all but the widest lobes, and for those the
+    /// interval is what the block's geometry allows rather than all of [0, f(hi) Ω_T], so most
+    /// such texels are taken whole.
     fn taken_whole(
         &self,
         coarse: &Coarse,
@@ -994,8 +999,11 @@ impl LobeIntegral {
             let least = (omega * self.curve.value(s.max(0.0))).max(self.curve.first(0.0) * least_p);
             let most = (omega * top * (s - span.lo) / (span.hi - span.lo)).min(top / span.hi * most_p);
             let (kernel, gap) = (0.5 * (most + least), 0.5 * (most - least).abs());
-            let bound = [0, 1, 2].map(|c| mean[c].abs() * gap + 0.5 * spread[c] * top);
-            return (mean.map(|m| m * kernel), bound);
+            let slope = top / (span.hi - span.lo);
+            let widest_gap = (-slope * span.lo).max(top - self.curve.first(0.0) * span.hi);
+            let value = [0, 1, 2].map(|c| mean[c] * kernel + slope * axis.dot(coarse.moment[index][c]));
+            let bound = [0, 1, 2].map(|c| mean[c].abs() * gap + 0.5 * spread[c] * widest_gap);
+            return (value, bound);
         }
         let (first, half_second, remainder) = self.curve.expansion(span);
         let (mut value, mut bound) = ([0.0; 3], [0.0; 3]);
