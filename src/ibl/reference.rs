@@ -419,8 +419,11 @@ impl Grid {
     /// The input box-filtered by `factor` (1: as it is), with its texels' D_T.
     fn new(input: &RgbImage, factor: usize) -> Grid {
         // The texels row by row only where no coarse level keeps them: the input is not copied.
-        let texels = |geometry: LatLong, pixels: Cow<'_, [[f32; 3]]>| match Coarse::levels(geometry, &pixels) {
-            Some((coarse, top)) => Texels::Levels(coarse, top),
+        let texels = |geometry: LatLong, pixels: Cow<'_, [[f32; 3]]>| match Coarse::factor(geometry) {
+            Some(f) => {
+                let (coarse, top) = Coarse::levels(geometry, f, pixels);
+                Texels::Levels(coarse, top)
+            }
             None => Texels::Rows(Arc::new(pixels.into_owned())),
         };
         if factor == 1 {
@@ -1173,12 +1176,24 @@ impl BlockMoments {
         }
     }
 
-    fn of(fine: LatLong, radiance: &[[f32; 3]], rows: &[RowFactors], columns: &[[f64; 4]], block: [usize; 3]) -> Self {
+    /// The block of `f` × `f` texels at (x, y) of the grid they form, from `radiance`: the fine
+    /// grid's rows from `first_row` on.
+    fn of(
+        fine: LatLong,
+        (radiance, first_row): (&[[f32; 3]], usize),
+        rows: &[RowFactors],
+        columns: &[[f64; 4]],
+        block: [usize; 3],
+    ) -> Self {
         let [x, y, f] = block;
+        let texels = |fy: usize| {
+            let start = (fy - first_row) * fine.width + f * x;
+            &radiance[start..start + f]
+        };
         let centre = LatLong::new(fine.width / f, fine.height / f).texel_direction(x, y);
         let (mut energy, mut area) = ([0.0; 3], 0.0);
         for fy in f * y..f * (y + 1) {
-            for l in &radiance[fy * fine.width + f * x..fy * fine.width + f * (x + 1)] {
+            for l in texels(fy) {
                 area += rows[fy].solid_angle;
                 (0..3).for_each(|c| energy[c] += rows[fy].solid_angle * l[c] as f64);
             }
@@ -1187,11 +1202,10 @@ impl BlockMoments {
         let width = TAU / fine.width as f64;
         let mut m = BlockMoments::about(mean);
         for fy in f * y..f * (y + 1) {
-            let texels = &radiance[fy * fine.width + f * x..fy * fine.width + f * (x + 1)];
             // A channel at a time, so that its ten sums stay in registers.
             for c in 0..3 {
                 let (mut signed, mut absolute) = ([0.0; 5], [0.0; 5]);
-                for (l, &[c1, s1, cc, sc]) in texels.iter().zip(&columns[f * x..f * (x + 1)]) {
+                for (l, &[c1, s1, cc, sc]) in texels(fy).iter().zip(&columns[f * x..f * (x + 1)]) {
                     let d = l[c] as f64 - mean[c];
                     for (sums, w) in [(&mut signed, d), (&mut absolute, d.abs())] {
                         sums[0] += w;
@@ -1271,30 +1285,52 @@ fn outer(a: DVec3, b: DVec3) -> DMat3 {
 }
 
 impl Coarse {
-    /// The coarse level of a fine grid, when it is wide enough and divides by the factor, and
-    /// the top level grouping its texels [`TOP_GROUP`] × [`TOP_GROUP`] when it is wide enough
-    /// ([`BlockMoments::group`]).
-    fn levels(fine: LatLong, radiance: &[[f32; 3]]) -> Option<(Arc<Coarse>, Option<Arc<Coarse>>)> {
+    /// Fine texels per coarse texel edge for a fine grid, when it is wide enough for a coarse
+    /// level and divides by the factor.
+    fn factor(fine: LatLong) -> Option<usize> {
         let f = COARSE_FACTOR.max(fine.width / COARSE_WIDTH);
-        if fine.width < TWO_LEVEL_MIN_WIDTH || fine.width % f != 0 || fine.height % f != 0 {
-            return None;
-        }
+        (fine.width >= TWO_LEVEL_MIN_WIDTH && fine.width % f == 0 && fine.height % f == 0).then_some(f)
+    }
+
+    /// The coarse level of `f` × `f` texels ([`Coarse::factor`]) of a fine grid's `radiance`
+    /// (row-major), and the top level grouping its texels [`TOP_GROUP`] × [`TOP_GROUP`] when it
+    /// is wide enough ([`BlockMoments::group`]).
+    fn levels(fine: LatLong, f: usize, radiance: Cow<'_, [[f32; 3]]>) -> (Arc<Coarse>, Option<Arc<Coarse>>) {
         let geometry = LatLong::new(fine.width / f, fine.height / f);
         let rows: Vec<RowFactors> = (0..fine.height).map(|y| RowFactors::of(fine, y)).collect();
         let columns: Vec<[f64; 4]> = (0..fine.width).map(|x| column_factors(fine, x)).collect();
-        // Each tile written once, in place (no page is read before it is written), beside its
-        // block's moments, which read the same texels while they are in cache.
-        let mut tiles = vec![[0.0f32; 3]; fine.width * fine.height];
+        // A strip of f rows (one row of coarse texels) at a time: its blocks' moments, then its
+        // tiles. Each tile is written once (no page is read before it is written): into a new
+        // buffer from a borrowed grid, or, from an owned one (a box filtering of the input),
+        // into its own buffer from a copy of the strip, so that no second grid is allocated.
+        let strip = f * fine.width;
+        let (mut tiles, borrowed) = match radiance {
+            Cow::Owned(pixels) => (pixels, None),
+            Cow::Borrowed(pixels) => (vec![[0.0f32; 3]; pixels.len()], Some(pixels)),
+        };
         let blocks: Vec<BlockMoments> = tiles
-            .par_chunks_mut(f * f)
+            .par_chunks_mut(strip)
             .enumerate()
-            .map(|(i, tile)| {
-                let (x, y) = (i % geometry.width, i / geometry.width);
-                for (row, fy) in tile.chunks_exact_mut(f).zip(f * y..f * (y + 1)) {
-                    row.copy_from_slice(&radiance[fy * fine.width + f * x..fy * fine.width + f * (x + 1)]);
+            .map_init(Vec::new, |scratch, (y, out)| {
+                let texels: &[[f32; 3]] = match borrowed {
+                    Some(pixels) => &pixels[y * strip..(y + 1) * strip],
+                    None => {
+                        scratch.clear();
+                        scratch.extend_from_slice(out);
+                        scratch
+                    }
+                };
+                let moments: Vec<BlockMoments> = (0..geometry.width)
+                    .map(|x| BlockMoments::of(fine, (texels, f * y), &rows, &columns, [x, y, f]))
+                    .collect();
+                for (x, tile) in out.chunks_exact_mut(f * f).enumerate() {
+                    for (r, row) in tile.chunks_exact_mut(f).enumerate() {
+                        row.copy_from_slice(&texels[r * fine.width + f * x..r * fine.width + f * (x + 1)]);
+                    }
                 }
-                BlockMoments::of(fine, radiance, &rows, &columns, [x, y, f])
+                moments
             })
+            .flatten_iter()
             .collect();
         let g = TOP_GROUP;
         let top = (geometry.width >= TOP_MIN_WIDTH && geometry.width % g == 0 && geometry.height % g == 0).then(|| {
@@ -1305,7 +1341,7 @@ impl Coarse {
                 .collect();
             Arc::new(Coarse::of_blocks(grid, f * g, &grouped, Vec::new()))
         });
-        Some((Arc::new(Coarse::of_blocks(geometry, f, &blocks, tiles)), top))
+        (Arc::new(Coarse::of_blocks(geometry, f, &blocks, tiles)), top)
     }
 
     /// A level of `factor` fine texels per edge from its blocks' moments.
@@ -1947,7 +1983,7 @@ mod tests {
         for (x0, y0) in [(3, 1), (200, 60), (511, 130), (77, 255)] {
             let mut map = vec![[0.0; 3]; w * h];
             map[y0 * w + x0] = [1.0, 2.0, 0.0];
-            let coarse = Coarse::levels(fine, &map).unwrap().0;
+            let coarse = Coarse::levels(fine, Coarse::factor(fine).unwrap(), Cow::Borrowed(&map)).0;
             let f = coarse.factor;
             let t = (y0 / f) * coarse.geometry.width + x0 / f;
             let texels =
@@ -1965,8 +2001,30 @@ mod tests {
             }
             assert!(coarse.moment[t][2].length() == 0.0 && (coarse.radiance[t][0] as f64 - mean).abs() < 1e-7);
         }
-        let flat = Coarse::levels(fine, &vec![[1.0; 3]; w * h]).unwrap().0;
+        let flat = Coarse::levels(fine, Coarse::factor(fine).unwrap(), Cow::Owned(vec![[1.0; 3]; w * h])).0;
         assert!(flat.moment.iter().all(|m| m[0].length() < 1e-15) && flat.deviation.iter().all(|d| d[0] < 1e-15));
+    }
+
+    /// The coarse level of an owned grid (its buffer turned into the tiles) is the one of the
+    /// same grid borrowed (copied into new tiles), and a tile row is the fine grid's row.
+    #[test]
+    fn owned_and_borrowed_grids_give_the_same_levels() {
+        let map = detailed(512, 256);
+        let (fine, pixels) = (LatLong::new(512, 256), &map.image().pixels);
+        let f = Coarse::factor(fine).unwrap();
+        let (borrowed, top) = Coarse::levels(fine, f, Cow::Borrowed(pixels));
+        let (owned, owned_top) = Coarse::levels(fine, f, Cow::Owned(pixels.clone()));
+        assert!(top.is_some() && owned_top.is_some());
+        assert_eq!(borrowed.tiles, owned.tiles);
+        assert!(
+            borrowed.moment == owned.moment
+                && borrowed.deviation == owned.deviation
+                && borrowed.radiance == owned.radiance
+        );
+        for (x, y) in [(0, 0), (3, 17), (fine.width / f - 1, fine.height - 1)] {
+            let row = &pixels[y * fine.width + f * x..y * fine.width + f * (x + 1)];
+            assert_eq!(owned.tile_row(x, y), row, "coarse column {x}, row {y}");
+        }
     }
 
     /// Blocks grouped from their moments ([`BlockMoments::group`]) have the mean and signed
@@ -1982,7 +2040,7 @@ mod tests {
         let (f, g) = (8, 4);
         let coarse = LatLong::new(512 / f, 256 / f);
         let blocks: Vec<BlockMoments> = (0..coarse.height * coarse.width)
-            .map(|i| BlockMoments::of(fine, radiance, &rows, &columns, [i % coarse.width, i / coarse.width, f]))
+            .map(|i| BlockMoments::of(fine, (radiance, 0), &rows, &columns, [i % coarse.width, i / coarse.width, f]))
             .collect();
         let directions: Vec<DVec3> = (0..16)
             .map(|k| {
@@ -1994,7 +2052,7 @@ mod tests {
         let (mut loosest, mut checked): (f64, usize) = (1.0, 0);
         for (x, y) in [(0, 0), (5, 1), (9, 3), (15, 7), (3, 4), (12, 2)] {
             let grouped = BlockMoments::group(coarse, &blocks, [x, y, g]);
-            let direct = BlockMoments::of(fine, radiance, &rows, &columns, [x, y, f * g]);
+            let direct = BlockMoments::of(fine, (radiance, 0), &rows, &columns, [x, y, f * g]);
             for c in 0..3 {
                 let scale = direct.mean[c].abs() * fine.row_solid_angle(128) * (f * g * f * g) as f64;
                 assert!((grouped.mean[c] - direct.mean[c]).abs() <= 1e-12 * direct.mean[c].abs(), "({x}, {y}) mean");
