@@ -83,30 +83,30 @@ pub struct Measured {
     pub reference_bound: f64,
 }
 
-/// The reference integrator over one lat-long environment (prtkit's frame).
-pub struct Reference {
+/// The reference integrator over one lat-long environment (prtkit's frame), which it borrows.
+pub struct Reference<'a> {
     /// The input, or its box filtering when it has more than the ceiling's texels.
-    grid: Grid,
+    grid: Grid<'a>,
     input: (usize, usize),
 }
 
 /// One box filtering of the input, ready for cone sums and for the bound.
-struct Grid {
+struct Grid<'a> {
     geometry: LatLong,
-    texels: Texels,
+    texels: Texels<'a>,
     /// What the box filtering changed, for the bound (none when the grid is the input).
     filtering: Option<Filtering>,
 }
 
 /// How a grid's radiance is kept for the sums (f32 as read: the sums read it once per texel
 /// and sample, so its size is what they wait on).
-enum Texels {
+enum Texels<'a> {
     /// Row by row, for a grid summed texel by texel.
     Rows(Arc<Vec<[f32; 3]>>),
     /// The grid box-filtered into a coarse level, for the two-level sum ([`LobeIntegral`]), which
-    /// keeps the fine texels in its tiles, and the coarse level's texels grouped
-    /// [`TOP_GROUP`] × [`TOP_GROUP`] above it.
-    Levels(Arc<Coarse>, Option<Arc<Coarse>>),
+    /// keeps the fine texels too, and the coarse level's texels grouped [`TOP_GROUP`] ×
+    /// [`TOP_GROUP`] above it.
+    Levels(Arc<Coarse<'a>>, Option<Arc<Coarse<'a>>>),
 }
 
 /// The directions a texel rule is chosen at: one on the equator, where lat-long texels are
@@ -256,15 +256,15 @@ impl Filtering {
     }
 }
 
-impl Reference {
+impl<'a> Reference<'a> {
     /// Prepares the input lat-long map: as it is up to [`REFERENCE_MAX_TEXELS`], else box-filtered
     /// by the smallest power of two that fits (or the largest that divides both edges).
-    pub fn new(latlong: &EnvMap) -> Result<Self, ReferenceError> {
+    pub fn new(latlong: &'a EnvMap) -> Result<Self, ReferenceError> {
         Self::with_max_texels(latlong, REFERENCE_MAX_TEXELS)
     }
 
     /// [`Reference::new`] with another ceiling on the texels summed.
-    pub fn with_max_texels(latlong: &EnvMap, max_texels: usize) -> Result<Self, ReferenceError> {
+    pub fn with_max_texels(latlong: &'a EnvMap, max_texels: usize) -> Result<Self, ReferenceError> {
         if latlong.layout() != crate::envmap::Layout::LatLong {
             return Err(ReferenceError::NotLatLong(latlong.layout().name()));
         }
@@ -321,7 +321,7 @@ impl Reference {
     }
 
     /// B(R) of `lobe` at any direction, with the texel rule fit for it on this grid chosen once.
-    pub fn lobe(&self, lobe: &SplitSumLobe) -> LobeIntegral {
+    pub fn lobe(&self, lobe: &SplitSumLobe) -> LobeIntegral<'a> {
         self.grid.lobe(lobe)
     }
 
@@ -415,11 +415,10 @@ fn length(v: [f64; 3]) -> f64 {
     v.iter().map(|c| c * c).sum::<f64>().sqrt()
 }
 
-impl Grid {
-    /// The input box-filtered by `factor` (1: as it is), with its texels' D_T.
-    fn new(input: &RgbImage, factor: usize) -> Grid {
-        // The texels row by row only where no coarse level keeps them: the input is not copied.
-        let texels = |geometry: LatLong, pixels: Cow<'_, [[f32; 3]]>| match Coarse::factor(geometry) {
+impl<'a> Grid<'a> {
+    /// The input box-filtered by `factor` (1: as it is, borrowed), with its texels' D_T.
+    fn new(input: &'a RgbImage, factor: usize) -> Grid<'a> {
+        let texels = |geometry: LatLong, pixels: Cow<'a, [[f32; 3]]>| match Coarse::factor(geometry) {
             Some(f) => {
                 let (coarse, top) = Coarse::levels(geometry, f, pixels);
                 Texels::Levels(coarse, top)
@@ -441,7 +440,7 @@ impl Grid {
     /// ([`choose_rule`]), seen from a direction on the equator (where lat-long texels are
     /// largest) and one at 45°; and, for grids of [`TWO_LEVEL_MIN_WIDTH`] columns or more, on
     /// the coarse level too ([`LobeIntegral`]).
-    fn lobe(&self, lobe: &SplitSumLobe) -> LobeIntegral {
+    fn lobe(&self, lobe: &SplitSumLobe) -> LobeIntegral<'a> {
         let grid = self.geometry;
         let curve = Curve::of(lobe);
         let fine = |rule: &TexelRule| ConeSum::new(grid, rule, lobe);
@@ -551,7 +550,7 @@ impl Grid {
 /// A coarse level's cone sum: the coarsest texel rule exact to [`REFERENCE_RULE_TOLERANCE`] on
 /// the texels the sum may take whole, those over which the kernel is smooth (the others are
 /// always refined), seen from the probe directions.
-fn level_sum(level: &Arc<Coarse>, lobe: &SplitSumLobe, curve: &Curve) -> (ConeSum, Arc<Coarse>) {
+fn level_sum<'a>(level: &Arc<Coarse<'a>>, lobe: &SplitSumLobe, curve: &Curve) -> (ConeSum, Arc<Coarse<'a>>) {
     let choice = choose_rule(REFERENCE_RULE_TOLERANCE, |rule| {
         let with = ConeSum::new(level.geometry, rule, lobe);
         let mut weights = Vec::new();
@@ -768,21 +767,21 @@ const COARSE_CURVATURE: f64 = 1.0;
 /// the tolerance, are opened into their coarse texels, and only those are visited on the coarse
 /// level. Far from a sharp lobe's peak, and inside the cosine lobe, a top texel stands for
 /// [`TOP_GROUP`]² coarse ones.
-pub struct LobeIntegral {
+pub struct LobeIntegral<'a> {
     fine: ConeSum,
-    sums: Sums,
+    sums: Sums<'a>,
     curve: Curve,
 }
 
 /// What a [`LobeIntegral`] sums besides its fine rule, by how its grid keeps its texels
 /// ([`Texels`]): the texels row by row, or the coarse level's cone sum (and the top level's).
 #[expect(clippy::large_enum_variant, reason = "one per lobe, made once and never moved in a loop")]
-enum Sums {
+enum Sums<'a> {
     Rows(Arc<Vec<[f32; 3]>>),
-    Levels { coarse: (ConeSum, Arc<Coarse>), top: Option<(ConeSum, Arc<Coarse>)> },
+    Levels { coarse: (ConeSum, Arc<Coarse<'a>>), top: Option<(ConeSum, Arc<Coarse<'a>>)> },
 }
 
-impl LobeIntegral {
+impl LobeIntegral<'_> {
     /// B(R) at the direction `axis` of prtkit's frame.
     pub fn at(&self, axis: DVec3) -> [f64; 3] {
         self.at_with_bound(axis).0
@@ -846,13 +845,10 @@ impl LobeIntegral {
         add(&whole);
         // The refined texels on the fine grid.
         refined.sort_unstable();
-        let f = coarse.factor;
         self.fine.within(coarse, &refined, axis, |y, columns, weights| {
             let mut run = [0.0; 3];
-            for (x, weights) in columns.step_by(f).zip(weights.chunks_exact(f)) {
-                for (l, k) in coarse.tile_row(x / f, y).iter().zip(weights) {
-                    (0..3).for_each(|c| run[c] += l[c] as f64 * k);
-                }
+            for (l, k) in coarse.fine_texels(y, columns).iter().zip(weights) {
+                (0..3).for_each(|c| run[c] += l[c] as f64 * k);
             }
             (0..3).for_each(|c| value[c] += run[c]);
         });
@@ -968,7 +964,7 @@ fn take_largest<T>(
     taken
 }
 
-impl LobeIntegral {
+impl LobeIntegral<'_> {
     /// Coarse texel `index` (in row `y`) taken whole, with K̂_T its coarse rule's kernel
     /// integral: its value and, per channel, the bound on how far that is from its fine texels'
     /// sum. Inside the support, L̄_T K̂_T plus the first- and second-order terms, the bound
@@ -1032,7 +1028,7 @@ impl LobeIntegral {
 /// A grid box-filtered by its factor (at least [`COARSE_FACTOR`]), with what the two-level sum
 /// needs of each coarse texel T: its mean radiance L̄_T, its spread D_T, its first and second
 /// moments M_T and Q_T, and the second moment A_T of |L_t − L̄_T| ([`LobeIntegral`]).
-struct Coarse {
+struct Coarse<'a> {
     geometry: LatLong,
     factor: usize,
     radiance: Vec<[f32; 3]>,
@@ -1047,10 +1043,10 @@ struct Coarse {
     /// Every texel's mean direction and mean ω ωᵀ, (∫_T ω dω)/Ω_T and (∫_T ω ωᵀ dω)/Ω_T: the
     /// mean of s = R·ω over the texel and of s² ([`LobeIntegral::taken_whole`]).
     mean_directions: Vec<(DVec3, Symmetric)>,
-    /// The fine grid's radiance texel by texel of each coarse texel in turn (its F rows of F),
-    /// so that the texels a refined coarse texel sums lie together in memory rather than F
-    /// rows of the map apart (empty on the top level, which refines into the coarse one).
-    tiles: Vec<[f32; 3]>,
+    /// The fine grid's radiance row by row: the input itself when it is the grid (borrowed, not
+    /// copied), else its box filtering. Empty on the top level, which refines into the coarse
+    /// one.
+    fine: Cow<'a, [[f32; 3]]>,
 }
 
 /// Where s = R·ω lies over a coarse texel: at its centre and its extremes.
@@ -1294,7 +1290,7 @@ fn outer(a: DVec3, b: DVec3) -> DMat3 {
     DMat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
-impl Coarse {
+impl<'a> Coarse<'a> {
     /// Fine texels per coarse texel edge for a fine grid, when it is wide enough for a coarse
     /// level and divides by the factor.
     fn factor(fine: LatLong) -> Option<usize> {
@@ -1303,44 +1299,20 @@ impl Coarse {
     }
 
     /// The coarse level of `f` × `f` texels ([`Coarse::factor`]) of a fine grid's `radiance`
-    /// (row-major), and the top level grouping its texels [`TOP_GROUP`] × [`TOP_GROUP`] when it
-    /// is wide enough ([`BlockMoments::group`]).
-    fn levels(fine: LatLong, f: usize, radiance: Cow<'_, [[f32; 3]]>) -> (Arc<Coarse>, Option<Arc<Coarse>>) {
+    /// (row-major), which it keeps, and the top level grouping its texels [`TOP_GROUP`] ×
+    /// [`TOP_GROUP`] when it is wide enough ([`BlockMoments::group`]).
+    fn levels(fine: LatLong, f: usize, radiance: Cow<'a, [[f32; 3]]>) -> (Arc<Coarse<'a>>, Option<Arc<Coarse<'a>>>) {
         let geometry = LatLong::new(fine.width / f, fine.height / f);
         let rows: Vec<RowFactors> = (0..fine.height).map(|y| RowFactors::of(fine, y)).collect();
         let columns: Vec<[f64; 4]> = (0..fine.width).map(|x| column_factors(fine, x)).collect();
-        // A strip of f rows (one row of coarse texels) at a time: its blocks' moments, then its
-        // tiles. Each tile is written once (no page is read before it is written): into a new
-        // buffer from a borrowed grid, or, from an owned one (a box filtering of the input),
-        // into its own buffer from a copy of the strip, so that no second grid is allocated.
-        let strip = f * fine.width;
-        let (mut tiles, borrowed) = match radiance {
-            Cow::Owned(pixels) => (pixels, None),
-            Cow::Borrowed(pixels) => (vec![[0.0f32; 3]; pixels.len()], Some(pixels)),
-        };
-        let blocks: Vec<BlockMoments> = tiles
-            .par_chunks_mut(strip)
+        // A strip of f rows (one row of coarse texels) at a time.
+        let blocks: Vec<BlockMoments> = radiance
+            .par_chunks(f * fine.width)
             .enumerate()
-            .map_init(Vec::new, |scratch, (y, out)| {
-                let texels: &[[f32; 3]] = match borrowed {
-                    Some(pixels) => &pixels[y * strip..(y + 1) * strip],
-                    None => {
-                        scratch.clear();
-                        scratch.extend_from_slice(out);
-                        scratch
-                    }
-                };
-                let moments: Vec<BlockMoments> = (0..geometry.width)
-                    .map(|x| BlockMoments::of(fine, (texels, f * y), &rows, &columns, [x, y, f]))
-                    .collect();
-                for (x, tile) in out.chunks_exact_mut(f * f).enumerate() {
-                    for (r, row) in tile.chunks_exact_mut(f).enumerate() {
-                        row.copy_from_slice(&texels[r * fine.width + f * x..r * fine.width + f * (x + 1)]);
-                    }
-                }
-                moments
+            .flat_map_iter(|(y, strip)| {
+                let (rows, columns) = (&rows, &columns);
+                (0..geometry.width).map(move |x| BlockMoments::of(fine, (strip, f * y), rows, columns, [x, y, f]))
             })
-            .flatten_iter()
             .collect();
         let g = TOP_GROUP;
         let top = (geometry.width >= TOP_MIN_WIDTH && geometry.width % g == 0 && geometry.height % g == 0).then(|| {
@@ -1349,13 +1321,13 @@ impl Coarse {
                 .into_par_iter()
                 .map(|i| BlockMoments::group(geometry, &blocks, [i % grid.width, i / grid.width, g]))
                 .collect();
-            Arc::new(Coarse::of_blocks(grid, f * g, &grouped, Vec::new()))
+            Arc::new(Coarse::of_blocks(grid, f * g, &grouped, Cow::Borrowed(&[])))
         });
-        (Arc::new(Coarse::of_blocks(geometry, f, &blocks, tiles)), top)
+        (Arc::new(Coarse::of_blocks(geometry, f, &blocks, radiance)), top)
     }
 
     /// A level of `factor` fine texels per edge from its blocks' moments.
-    fn of_blocks(geometry: LatLong, factor: usize, blocks: &[BlockMoments], tiles: Vec<[f32; 3]>) -> Coarse {
+    fn of_blocks(geometry: LatLong, factor: usize, blocks: &[BlockMoments], fine: Cow<'a, [[f32; 3]]>) -> Coarse<'a> {
         Coarse {
             geometry,
             factor,
@@ -1372,15 +1344,14 @@ impl Coarse {
                 .flat_map(|y| (0..geometry.width).map(move |x| texel_moments(geometry, x, y)))
                 .map(|(omega, first, second)| (first / omega, Symmetric::of(second / omega)))
                 .collect(),
-            tiles,
+            fine,
         }
     }
 
-    /// The fine texels of row `y` (fine) inside coarse column `x`.
-    fn tile_row(&self, x: usize, y: usize) -> &[[f32; 3]] {
-        let f = self.factor;
-        let start = ((y / f) * self.geometry.width + x) * f * f + (y % f) * f;
-        &self.tiles[start..start + f]
+    /// The fine texels `columns` of fine row `y`.
+    fn fine_texels(&self, y: usize, columns: std::ops::Range<usize>) -> &[[f32; 3]] {
+        let row = y * self.geometry.width * self.factor;
+        &self.fine[row + columns.start..row + columns.end]
     }
 
     /// s = R·ω over texel (x, y) ([`Span::about`] its centre, with the texel's angular radius);
@@ -2044,25 +2015,6 @@ mod tests {
         }
         let flat = Coarse::levels(fine, Coarse::factor(fine).unwrap(), Cow::Owned(vec![[1.0; 3]; w * h])).0;
         assert!(flat.moment.iter().all(|m| m[0].length() < 1e-15) && flat.deviation.iter().all(|d| d[0] < 1e-15));
-    }
-
-    /// The coarse level of an owned grid (its buffer turned into the tiles) is the one of the
-    /// same grid borrowed (copied into new tiles), and a tile row is the fine grid's row.
-    #[test]
-    fn owned_and_borrowed_grids_give_the_same_levels() {
-        let map = detailed(512, 256);
-        let (fine, pixels) = (LatLong::new(512, 256), &map.image().pixels);
-        let f = Coarse::factor(fine).unwrap();
-        let (borrowed, top) = Coarse::levels(fine, f, Cow::Borrowed(pixels));
-        let (owned, owned_top) = Coarse::levels(fine, f, Cow::Owned(pixels.clone()));
-        assert!(top.is_some() && owned_top.is_some());
-        assert_eq!(borrowed.tiles, owned.tiles);
-        assert!(borrowed.radiance == owned.radiance && borrowed.deviation == owned.deviation);
-        assert!(borrowed.moment == owned.moment && borrowed.second == owned.second && borrowed.spread == owned.spread);
-        for (x, y) in [(0, 0), (3, 17), (fine.width / f - 1, fine.height - 1)] {
-            let row = &pixels[y * fine.width + f * x..y * fine.width + f * (x + 1)];
-            assert_eq!(owned.tile_row(x, y), row, "coarse column {x}, row {y}");
-        }
     }
 
     /// Blocks grouped from their moments ([`BlockMoments::group`]) have the mean and signed

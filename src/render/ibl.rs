@@ -289,15 +289,15 @@ impl SplitSumLighting for IblBake {
 /// ([`crate::ibl::reference`]), remembered per direction: the renders of a grid ask for the same
 /// directions again (every metalness of one roughness, the irradiance of every cell), and each
 /// sum covers a hemisphere.
-pub struct ExactLobe {
-    integral: LobeIntegral,
+pub struct ExactLobe<'a> {
+    integral: LobeIntegral<'a>,
     memo: Mutex<HashMap<[u64; 3], [f64; 3]>>,
 }
 
-impl ExactLobe {
+impl<'a> ExactLobe<'a> {
     /// The lobe of perceptual roughness `roughness` over `reference`'s environment. At r = 1 GGX
     /// has D = 1/π, so the split-sum kernel is the clamped cosine over π and B(n) is E(n)/π.
-    pub fn new(reference: &Reference, roughness: f64) -> Result<Self, GgxError> {
+    pub fn new(reference: &Reference<'a>, roughness: f64) -> Result<Self, GgxError> {
         let lobe = SplitSumLobe::new(roughness)?;
         Ok(ExactLobe { integral: reference.lobe(&lobe), memo: Mutex::default() })
     }
@@ -320,9 +320,9 @@ impl ExactLobe {
 /// ([`ExactLobe`]), (A, B) by [`crate::ibl::dfg::split_sum_terms`]' quadrature.
 pub struct ExactSplitSum<'a> {
     /// The lobe of the material's roughness.
-    pub specular: &'a ExactLobe,
+    pub specular: &'a ExactLobe<'a>,
     /// The lobe of roughness 1: E/π.
-    pub irradiance: &'a ExactLobe,
+    pub irradiance: &'a ExactLobe<'a>,
 }
 
 impl SplitSumLighting for ExactSplitSum<'_> {
