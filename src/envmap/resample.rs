@@ -126,12 +126,19 @@ pub fn box_latlong(img: &RgbImage, width: usize, height: usize) -> RgbImage {
     pixels.par_chunks_mut(width.max(1)).zip(&sources).for_each(|(row, sources)| {
         let (mut out, mut wide) = (vec![[0.0f64; 3]; width], vec![[0.0f64; 3]; width]);
         for &(y_in, share) in sources {
-            wide.fill([0.0; 3]);
-            for &(x_out, x_in, len) in &columns {
-                let v = img.get(x_in, y_in);
-                for c in 0..3 {
-                    wide[x_out][c] += v[c] as f64 * len * width as f64;
+            let input = &img.pixels[y_in * w..(y_in + 1) * w];
+            // An output column's overlaps are consecutive in `columns`: its sum is kept in
+            // registers and stored once (a store per input texel made each add wait for the last).
+            let mut overlaps = columns.iter().peekable();
+            for (x_out, sum) in wide.iter_mut().enumerate() {
+                let mut acc = [0.0f64; 3];
+                while let Some(&(_, x_in, len)) = overlaps.next_if(|o| o.0 == x_out) {
+                    let v = input[x_in];
+                    for c in 0..3 {
+                        acc[c] += v[c] as f64 * len * width as f64;
+                    }
                 }
+                *sum = acc;
             }
             for (o, w) in out.iter_mut().zip(&wide) {
                 for c in 0..3 {
