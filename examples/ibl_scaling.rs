@@ -35,8 +35,8 @@ struct Run {
 
 /// Runs `program args` under `/usr/bin/time` (and `ulimit -v KB` when given), in a shell so the
 /// limit applies to the program alone. The wall time is this process's clock around the run, not
-/// `/usr/bin/time`'s `%e`: its 10 ms steps are 5 % of a 0.2 s bake, which a ratio of two such runs
-/// cannot afford (the shell and `time` add the same few milliseconds to both).
+/// `/usr/bin/time`'s `%e`, whose 10 ms steps are too coarse for the ratio of two sub-second bakes
+/// (the shell and `time` add the same few milliseconds to both runs).
 fn timed(program: &Path, args: &[String], limit_kb: Option<u64>) -> Run {
     let mut line = String::new();
     if let Some(kb) = limit_kb {

@@ -1070,7 +1070,7 @@ impl Span {
 }
 
 /// A symmetric 3 × 3 matrix Q by its six entries (xx, yy, zz, xy, xz, yz), for Rᵀ Q R.
-#[derive(Clone, Copy, PartialEq)]
+#[derive(Clone, Copy)]
 struct Symmetric([f64; 6]);
 
 /// The products of R's components that Rᵀ Q R weighs Q's entries by: x², y², z², 2xy, 2xz, 2yz.
@@ -1182,20 +1182,11 @@ impl BlockMoments {
         }
     }
 
-    /// The block of `f` × `f` texels at (x, y) of the grid they form, from `radiance`: the fine
-    /// grid's rows from `first_row` on.
-    fn of(
-        fine: LatLong,
-        (radiance, first_row): (&[[f32; 3]], usize),
-        rows: &[RowFactors],
-        columns: &[[f64; 4]],
-        block: [usize; 3],
-    ) -> Self {
+    /// The block of `f` × `f` texels at (x, y) of the grid they form, from the fine grid's
+    /// `radiance` (row-major).
+    fn of(fine: LatLong, radiance: &[[f32; 3]], rows: &[RowFactors], columns: &[[f64; 4]], block: [usize; 3]) -> Self {
         let [x, y, f] = block;
-        let texels = |fy: usize| {
-            let start = (fy - first_row) * fine.width + f * x;
-            &radiance[start..start + f]
-        };
+        let texels = |fy: usize| &radiance[fy * fine.width + f * x..fy * fine.width + f * (x + 1)];
         let centre = LatLong::new(fine.width / f, fine.height / f).texel_direction(x, y);
         let (mut energy, mut area) = ([0.0; 3], 0.0);
         for fy in f * y..f * (y + 1) {
@@ -1305,14 +1296,9 @@ impl<'a> Coarse<'a> {
         let geometry = LatLong::new(fine.width / f, fine.height / f);
         let rows: Vec<RowFactors> = (0..fine.height).map(|y| RowFactors::of(fine, y)).collect();
         let columns: Vec<[f64; 4]> = (0..fine.width).map(|x| column_factors(fine, x)).collect();
-        // A strip of f rows (one row of coarse texels) at a time.
-        let blocks: Vec<BlockMoments> = radiance
-            .par_chunks(f * fine.width)
-            .enumerate()
-            .flat_map_iter(|(y, strip)| {
-                let (rows, columns) = (&rows, &columns);
-                (0..geometry.width).map(move |x| BlockMoments::of(fine, (strip, f * y), rows, columns, [x, y, f]))
-            })
+        let blocks: Vec<BlockMoments> = (0..geometry.height * geometry.width)
+            .into_par_iter()
+            .map(|i| BlockMoments::of(fine, &radiance, &rows, &columns, [i % geometry.width, i / geometry.width, f]))
             .collect();
         let g = TOP_GROUP;
         let top = (geometry.width >= TOP_MIN_WIDTH && geometry.width % g == 0 && geometry.height % g == 0).then(|| {
@@ -2030,7 +2016,7 @@ mod tests {
         let (f, g) = (8, 4);
         let coarse = LatLong::new(512 / f, 256 / f);
         let blocks: Vec<BlockMoments> = (0..coarse.height * coarse.width)
-            .map(|i| BlockMoments::of(fine, (radiance, 0), &rows, &columns, [i % coarse.width, i / coarse.width, f]))
+            .map(|i| BlockMoments::of(fine, radiance, &rows, &columns, [i % coarse.width, i / coarse.width, f]))
             .collect();
         let directions: Vec<DVec3> = (0..16)
             .map(|k| {
@@ -2042,7 +2028,7 @@ mod tests {
         let (mut loosest, mut checked): (f64, usize) = (1.0, 0);
         for (x, y) in [(0, 0), (5, 1), (9, 3), (15, 7), (3, 4), (12, 2)] {
             let grouped = BlockMoments::group(coarse, &blocks, [x, y, g]);
-            let direct = BlockMoments::of(fine, (radiance, 0), &rows, &columns, [x, y, f * g]);
+            let direct = BlockMoments::of(fine, radiance, &rows, &columns, [x, y, f * g]);
             for c in 0..3 {
                 let scale = direct.mean[c].abs() * fine.row_solid_angle(128) * (f * g * f * g) as f64;
                 assert!((grouped.mean[c] - direct.mean[c]).abs() <= 1e-12 * direct.mean[c].abs(), "({x}, {y}) mean");
