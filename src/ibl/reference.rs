@@ -26,10 +26,12 @@
 //! by [`LevelError::pool`]: the relative error ‖a − r‖/‖r‖ over the texels whose reference is
 //! above 1 % of the sampled mean.
 //!
-//! **Large inputs, with a bound.** A texel-by-texel cone sum visits half the grid's texels per
-//! sampled direction, and even on two levels the texels summed one by one grow with the grid,
-//! so an 8192 × 4096 input would cost minutes. A map above
-//! [`REFERENCE_MAX_TEXELS`] is measured on its box filtering (f × f input texels to one, each
+//! **Large inputs, with a bound.** Summed as it is, an input costs one pass over its texels for
+//! the coarse levels' moments and, per sample, the fine texels of the coarse texels refined,
+//! whose number grows with the square of the grid's width (a coarse texel is always 1/128 of
+//! the width). Up to [`REFERENCE_MAX_INPUT_TEXELS`] that is the cheaper way, and its bound is
+//! the two-level sum's alone. A larger map is measured on its box filtering to at most
+//! [`REFERENCE_MAX_TEXELS`] (f × f input texels to one, each
 //! coarse texel T the solid-angle-weighted mean L̄_T of the block, so it keeps the block's
 //! energy), with a bound on what the filtering changes. Within T the input sums
 //! Σ_t L_t ∫_t k dω where the filtered grid sums Σ_t L̄_T ∫_t k dω; since Σ_t (L_t − L̄_T) Ω_t = 0,
@@ -65,8 +67,13 @@ use std::sync::Arc;
 /// Texel-rule tolerance of the reference (ten times stricter than the bake's).
 pub const REFERENCE_RULE_TOLERANCE: f64 = 1e-5;
 
-/// The largest lat-long grid [`Reference::lobe`] sums; larger inputs are box-filtered down to
-/// it, with the bound of the module docs.
+/// The largest input [`Reference::new`] sums as it is (4096 × 2048).
+pub const REFERENCE_MAX_INPUT_TEXELS: usize = 4096 * 2048;
+
+/// The largest grid a larger input is box-filtered to, with the bound of the module docs: the
+/// filtering's box, its deviations and the bound's blocks cost passes over the input besides
+/// the sums, and the bound's blocks opened per sample grow with the filtered grid, so a filtered
+/// grid is kept a quarter the size of an input summed as it is.
 pub const REFERENCE_MAX_TEXELS: usize = 2048 * 1024;
 
 /// Error of a level against the reference on sampled texels.
@@ -257,13 +264,16 @@ impl Filtering {
 }
 
 impl<'a> Reference<'a> {
-    /// Prepares the input lat-long map: as it is up to [`REFERENCE_MAX_TEXELS`], else box-filtered
-    /// by the smallest power of two that fits (or the largest that divides both edges).
+    /// Prepares the input lat-long map: as it is up to [`REFERENCE_MAX_INPUT_TEXELS`], else
+    /// box-filtered to at most [`REFERENCE_MAX_TEXELS`] ([`Reference::with_max_texels`]).
     pub fn new(latlong: &'a EnvMap) -> Result<Self, ReferenceError> {
-        Self::with_max_texels(latlong, REFERENCE_MAX_TEXELS)
+        let image = latlong.image();
+        let texels = image.width * image.height;
+        Self::with_max_texels(latlong, if texels <= REFERENCE_MAX_INPUT_TEXELS { texels } else { REFERENCE_MAX_TEXELS })
     }
 
-    /// [`Reference::new`] with another ceiling on the texels summed.
+    /// The input as it is up to `max_texels`, else box-filtered by the smallest power of two
+    /// that fits (or the largest that divides both edges).
     pub fn with_max_texels(latlong: &'a EnvMap, max_texels: usize) -> Result<Self, ReferenceError> {
         if latlong.layout() != crate::envmap::Layout::LatLong {
             return Err(ReferenceError::NotLatLong(latlong.layout().name()));
@@ -1790,6 +1800,20 @@ mod tests {
                 assert!(widest < vacuous, "{grid} r {r}: the bound is vacuous ({widest})");
             }
         }
+    }
+
+    /// An input up to 4096 × 2048 is summed as it is, with no filtering to bound; a larger one is
+    /// box-filtered to 2048 × 1024 or less, not to the largest grid summed as it is.
+    #[test]
+    fn inputs_up_to_4096_by_2048_are_summed_as_they_are() {
+        let flat = |w, h| EnvMap::latlong(RgbImage::from_fn(w, h, |_, _| [1.0, 1.0, 1.0])).unwrap();
+        let map = flat(4096, 2048);
+        let as_is = Reference::new(&map).unwrap();
+        assert!(!as_is.is_filtered(), "{}", as_is.describe());
+        assert!(as_is.describe().starts_with("the input, latlong 4096x2048"), "{}", as_is.describe());
+        let map = flat(8192, 2048);
+        let filtered = Reference::new(&map).unwrap();
+        assert!(filtered.describe().contains("8192x2048 box-filtered to 2048x512"), "{}", filtered.describe());
     }
 
     /// D_T is each block's Σ Ω_t |L_t − L̄_T| (summed here texel by texel), and the filtered grid

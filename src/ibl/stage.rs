@@ -362,10 +362,10 @@ impl Config {
 
     /// The memory a bake of an input of `input_texels` holds at its peak, planned before any of
     /// it is allocated: a working copy of the input (RGB f32, made only when it is clamped or
-    /// resampled), the measurement's grids beside the bake (at most RGB f32 per input texel:
-    /// the coarse level's tiles, or the box filtering of a large input with its deviations),
-    /// every specular level and the irradiance cube (RGB f32), and their files encoded
-    /// (`format`) while the values are still held.
+    /// resampled), the measurement's grids beside the bake (at most RGB f32 per input texel: a
+    /// copy of an input narrower than 512 columns, or the box filtering of a large one with its
+    /// deviations), every specular level and the irradiance cube (RGB f32), and their files
+    /// encoded (`format`) while the values are still held.
     pub fn planned_bytes(&self, input_texels: u64) -> u128 {
         let cube_texels: u128 = (0..self.levels()).map(|k| 6 * ((self.size >> k) as u128).pow(2)).sum::<u128>()
             + 6 * (self.irradiance_size as u128).pow(2);
