@@ -91,12 +91,18 @@ fn median(mut runs: Vec<Run>) -> Run {
     Run { wall, cpu, rss_mb, ..runs.swap_remove(0) }
 }
 
-/// Times each bake is run, alternating with the other, when the default run is quick: a short
-/// run's ratio moves with whatever else the shared machine is doing.
-const QUICK_REPEATS: usize = 9;
-
-/// The default run's wall seconds below which it is quick.
-const QUICK_SECONDS: f64 = 3.0;
+/// Times each bake is run, alternating with the other, by the default run's wall seconds: a
+/// run's ratio moves with whatever else the shared machine is doing, the more so the shorter it
+/// is (and the largest inputs' runs, paging in gigabytes, move by a second or two).
+fn repeats(wall: f64) -> usize {
+    if wall < 3.0 {
+        9
+    } else if wall < 10.0 {
+        3
+    } else {
+        1
+    }
+}
 
 /// The input MAP at `width` × `height`, written once into `work`.
 fn input(map: &prtkit::envmap::EnvMap, width: usize, work: &Path) -> PathBuf {
@@ -138,9 +144,9 @@ fn main() {
          --ibl-ld=DIR IN` beside it where it finishes in reasonable time (faces up to 512²). Timed side by side \
          by `/usr/bin/time`: CPU (user + system) seconds and peak resident memory, and wall seconds by the \
          script's clock around each run; the two `ibl` \
-         runs alternate nine times and each figure is their median where the default run takes under 3 s \
-         (a short run's ratio moves with whatever else the shared machine does), one run of each otherwise, \
-         and one cmgen run. The machine has 2 cores.\n\n\
+         runs alternate nine times and each figure is their median where the default run takes under 3 s, \
+         three times under 10 s (a run's ratio moves with whatever else the shared machine does), one run \
+         of each otherwise, and one cmgen run. The machine has 2 cores.\n\n\
          | input | faces | ibl wall s | ibl CPU s | ibl MB | `--samples 0` wall s | CPU s | MB | default / `--samples 0` (wall) | cmgen wall s | cmgen CPU s | cmgen MB | cmgen / ibl default (CPU) |\n\
          | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
@@ -160,9 +166,9 @@ fn main() {
             timed(&ibl, &a, None)
         };
         let (mut measured, mut plain) = (vec![bake(None)], vec![bake(Some("0"))]);
-        if measured[0].ok && plain[0].ok && measured[0].wall < QUICK_SECONDS {
+        if measured[0].ok && plain[0].ok {
             // Alternating, so that both see the same spells of load.
-            for _ in 1..QUICK_REPEATS {
+            for _ in 1..repeats(measured[0].wall) {
                 measured.push(bake(None));
                 plain.push(bake(Some("0")));
             }
