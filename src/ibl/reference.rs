@@ -28,12 +28,12 @@
 //!
 //! **Large inputs, with a bound.** Summed as it is, an input costs one pass over its texels for
 //! the coarse levels' moments and, per sample, the fine texels of the coarse texels refined,
-//! whose number grows with the square of the grid's width (a coarse texel is always 1/128 of
-//! the width). Up to [`REFERENCE_MAX_INPUT_TEXELS`] that is the cheaper way, and its bound is
-//! the two-level sum's alone. A larger map is measured on its box filtering to at most
-//! [`REFERENCE_MAX_TEXELS`] (f × f input texels to one, each
-//! coarse texel T the solid-angle-weighted mean L̄_T of the block, so it keeps the block's
-//! energy), with a bound on what the filtering changes. Within T the input sums
+//! whose number grows with the square of the grid's width (above 1024 columns a coarse texel
+//! is 1/128 of the width). Up to [`REFERENCE_MAX_INPUT_TEXELS`] that is the cheaper way, and
+//! its bound is the two-level sum's alone. A larger map is measured on its box filtering to at
+//! most [`REFERENCE_MAX_TEXELS`] (f × f input texels to one, each coarse texel T the
+//! solid-angle-weighted mean L̄_T of the block, so it keeps the block's energy), with a bound on
+//! what the filtering changes. Within T the input sums
 //! Σ_t L_t ∫_t k dω where the filtered grid sums Σ_t L̄_T ∫_t k dω; since Σ_t (L_t − L̄_T) Ω_t = 0,
 //! any constant m_T may be subtracted from the texel means k̄_t of the kernel, and with m_T the
 //! middle of k's range on T,
