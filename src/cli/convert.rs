@@ -1,4 +1,6 @@
 //! `convert`: clap arguments → [`envmap::stage::Config`] → one library call → outputs.
+//!
+//! [`envmap::stage::Config`]: crate::envmap::stage::Config
 
 mod args;
 

@@ -1,5 +1,7 @@
 //! `count-terms`: clap arguments → [`factor::count::CountConfig`] and the materials → one
 //! library call → the table, the plot and the check's exit status.
+//!
+//! [`factor::count::CountConfig`]: crate::factor::count::CountConfig
 
 mod args;
 

@@ -1,4 +1,6 @@
 //! `factor-brdf`: clap arguments → [`factor::stage::Config`] → one library call → outputs.
+//!
+//! [`factor::stage::Config`]: crate::factor::stage::Config
 
 mod args;
 

@@ -1,5 +1,7 @@
 //! `ibl`: clap arguments → [`ibl::stage::Config`] → one library call → the files of DIR, all or
 //! none.
+//!
+//! [`ibl::stage::Config`]: crate::ibl::stage::Config
 
 mod args;
 

@@ -1,4 +1,6 @@
 //! `prefilter`: clap arguments → [`prefilter::stage::Config`] → one library call → outputs.
+//!
+//! [`prefilter::stage::Config`]: crate::prefilter::stage::Config
 
 mod args;
 

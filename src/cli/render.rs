@@ -1,5 +1,7 @@
 //! `render`: clap arguments → [`render::stage::Config`] (reading the bakes it names) → one
 //! library call → outputs.
+//!
+//! [`render::stage::Config`]: crate::render::stage::Config
 
 mod args;
 

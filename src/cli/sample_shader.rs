@@ -1,4 +1,6 @@
 //! `sample-shader`: clap arguments → [`shader::stage::Config`] → one library call → outputs.
+//!
+//! [`shader::stage::Config`]: crate::shader::stage::Config
 
 mod args;
 

@@ -1,4 +1,6 @@
 //! `sh-project`: clap arguments → [`sh::stage::Config`] → one library call → outputs.
+//!
+//! [`sh::stage::Config`]: crate::sh::stage::Config
 
 mod args;
 

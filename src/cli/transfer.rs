@@ -1,4 +1,6 @@
 //! `transfer`: clap arguments → [`transfer::stage::Config`] → one library call → outputs.
+//!
+//! [`transfer::stage::Config`]: crate::transfer::stage::Config
 
 mod args;
 

@@ -9,7 +9,7 @@
 //!   its exact reference and the per-level error measurement.
 //! - [`frequency`]: the zonal (frequency-space) path of a level: row-pair FFTs on a lat-long
 //!   grid matched to the lobe, read back by direction.
-//! - [`reference`]: the angular integral of the input every level is measured against.
+//! - [`reference`](mod@reference): the angular integral of the input every level is measured against.
 //! - [`sh_irradiance`]: order-2 SH irradiance in the output frame and its shader snippets.
 //! - [`manifest`]: the `prtkit.ibl` manifest and the `prtkit.ibl-sh` document.
 //! - [`stage`]: the `ibl` stage as one library call.

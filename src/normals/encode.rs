@@ -26,7 +26,7 @@ pub struct Config {
     pub histogram_bins: usize,
     /// The files the report names (the library reads and writes none).
     pub files: Files,
-    /// The command line recorded in the report's provenance (argv, argv[0] included).
+    /// The command line recorded in the report's provenance (argv, argv\[0\] included).
     pub args: Vec<String>,
 }
 

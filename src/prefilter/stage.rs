@@ -141,7 +141,7 @@ pub struct Output {
     pub document: Document<ShrmBody>,
     /// The reflection maps, in the order of the config's requests.
     pub maps: Vec<RgbImage>,
-    /// The SHRM as named layers B<p><±q>, if asked.
+    /// The SHRM as named layers `B<p><±q>`, if asked.
     pub shrm_layers: Option<Vec<(String, RgbImage)>>,
     /// Kautz–McCool slices as named layers theta00…, if asked.
     pub kautz_mccool: Option<Vec<(String, RgbImage)>>,

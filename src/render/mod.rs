@@ -6,7 +6,7 @@
 //! - [`factored`]: the in-out factorization, B = Σ_k σ_k h_k(ω_o) Σ_i T_k(ω_i) L(ω_i) with
 //!   T_k = V g_k (n·ω_i) (Mahajan et al. 2008, eq. 3–4);
 //! - [`ibl`]: the split sum from an `ibl` bake's files, as a glTF/PBR engine shades;
-//! - [`reference`]: direct integration of environment × BRDF × cosine over every env texel.
+//! - [`reference`](mod@reference): direct integration of environment × BRDF × cosine over every env texel.
 //!
 //! [`grid`] lays the `ibl` shading out as a roughness × metalness grid above its references.
 //!

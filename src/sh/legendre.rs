@@ -162,7 +162,7 @@ impl LegendreTable {
     }
 
     /// The column of order m at many points at once: calls `visit(l, values)` for l = m..=order
-    /// in turn, with values[j] = P̄_l^m(cos θ_j), from P̄_m^m at each point (`diagonal`, a row of
+    /// in turn, with values\[j\] = P̄_l^m(cos θ_j), from P̄_m^m at each point (`diagonal`, a row of
     /// [`LegendreTable::diagonals`]). The recurrence's coefficients a_lm, b_lm are the same at
     /// every point, so the loop over points has no dependency chain and vectorizes: the
     /// separable projection and synthesis run one column over all of a map's rows this way.
@@ -212,7 +212,7 @@ impl LegendreTable {
     }
 }
 
-/// Σ_j values[j] · parts[q·n + j] for the first `kinds` of q < K (n = values.len(); the rest
+/// Σ_j values\[j\] · parts\[q·n + j\] for the first `kinds` of q < K (n = values.len(); the rest
 /// 0): a column's values against K weight vectors, as the projections sum them. Four
 /// interleaved partial sums per q combined in a fixed order: vectorizable, and the same bits on
 /// every run and thread count. When all K are asked for, the K sums advance together, four

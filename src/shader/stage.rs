@@ -25,7 +25,7 @@ pub struct Config {
     pub max_depth: Option<u32>,
     /// Raster size.
     pub resolution: (usize, usize),
-    /// A texture over [0,1]² or a lat-long map over directions.
+    /// A texture over \[0,1\]² or a lat-long map over directions.
     pub domain: Domain,
     /// The arithmetics to run: the first one's run gives the outputs; several make a comparison.
     pub arithmetics: Vec<Arith>,

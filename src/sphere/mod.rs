@@ -74,7 +74,7 @@ pub fn frame(theta: f64, phi: f64) -> DMat3 {
 /// one has exactly one. Shading frames of meshes use it (glossy transfer, the factored render),
 /// so that frames of neighbouring normals differ by small turns wherever the normal is not −Z.
 ///
-/// Written without angles: with v = +Z × d, the rotation is I + [v]× + [v]×²/(1 + d_z)
+/// Written without angles: with v = +Z × d, the rotation is I + \[v\]× + \[v\]×²/(1 + d_z)
 /// (Rodrigues), and x²/(1 + d_z) = cos²φ (1 − d_z) for unit `d`, which stays accurate where
 /// 1 + d_z cancels.
 #[inline]

@@ -8,7 +8,7 @@
 //! of its energy (ρ/π)² 2π/3 (Ramamoorthi & Hanrahan 2001, eq. 8–9: 37.5 %, 87.5 % and 99.2 %
 //! within 1, 2 and 3 bands); glossy, the lighting-side factors σ_k g_k(ω) [max(cos θ, 0)] on
 //! their grid, whose band energies are those of an unshadowed vertex's transfer rows (rotation
-//! keeps each band's energy) and whose whole energy is Σ_k σ_k² ∫ g_k² [cos²] dω.
+//! keeps each band's energy) and whose whole energy is Σ_k σ_k² ∫ g_k² \[cos²\] dω.
 
 use super::glossy::{Glossy, Visibility};
 use super::stage::{check_glossy, Error, GlossyConfig};

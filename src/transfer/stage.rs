@@ -741,7 +741,7 @@ fn refuse_atlas_jobs(config: &Config) -> Result<(), Error> {
     }
 }
 
-/// Runs job `job` of a `transfer` split into jobs ([`jobs`]): the per-vertex transfer of its
+/// Runs job `job` of a `transfer` split into jobs ([`super::jobs`]): the per-vertex transfer of its
 /// vertex range, as a part for [`run_joined`].
 pub fn run_job(config: &Config, mesh: &Mesh, job: Job, progress: &dyn Progress) -> Result<Part, Error> {
     refuse_atlas_jobs(config)?;
