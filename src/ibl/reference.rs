@@ -933,8 +933,9 @@ struct CoarsePass {
 }
 
 /// Takes out of `items` the largest (by `size`) until what is left sums to at most `target`,
-/// and returns their indices, largest first; the rest keep their order. Ties by `index`, so the
-/// same items on any machine. Only the largest few are ordered (a prefix selected, then sorted,
+/// and returns their indices, largest first; the rest keep their order. `index` names each item
+/// (no two alike: it also finds the taken ones among the rest); ties go by it, so the same items
+/// on any machine. Only the largest few are ordered (a prefix selected, then sorted,
 /// doubled until it is enough), as (size, index) pairs rather than the items themselves.
 fn take_largest<T>(
     items: &mut Vec<T>,
