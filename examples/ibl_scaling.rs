@@ -11,6 +11,8 @@
 //! The inputs are MAP resampled (bilinear) to each size and written as ZIP-compressed EXR.
 
 use prtkit::envmap::{resample, Layout, LoadOptions};
+use prtkit::ibl::manifest::{IblBody, FORMAT, VERSION};
+use prtkit::io::document::read_document;
 use prtkit::io::exr;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -104,6 +106,18 @@ fn repeats(wall: f64) -> usize {
     }
 }
 
+/// What the default run's manifest states its reference may be off by: the largest
+/// `reference_bound` of its levels (relative, like the errors); none when the input was summed
+/// texel by texel.
+fn stated_bound(manifest: &Path) -> String {
+    let body = read_document::<IblBody>(manifest, FORMAT, VERSION).unwrap_or_else(|e| fail(&e.to_string())).body;
+    let levels = body.specular.levels.iter().chain([&body.irradiance.level]);
+    match levels.filter_map(|l| l.reference_bound).reduce(f64::max) {
+        Some(bound) => format!("{:.3} %", 100.0 * bound),
+        None => "— (texel by texel)".into(),
+    }
+}
+
 /// The input MAP at `width` × `height`, written once into `work`.
 fn input(map: &prtkit::envmap::EnvMap, width: usize, work: &Path) -> PathBuf {
     let path = work.join(format!("map-{width}x{}.exr", width / 2));
@@ -146,9 +160,12 @@ fn main() {
          script's clock around each run; the two `ibl` \
          runs alternate nine times and each figure is their median where the default run takes under 3 s, \
          three times under 10 s (a run's ratio moves with whatever else the shared machine does), one run \
-         of each otherwise, and one cmgen run. The machine has 2 cores.\n\n\
-         | input | faces | ibl wall s | ibl CPU s | ibl MB | `--samples 0` wall s | CPU s | MB | default / `--samples 0` (wall) | cmgen wall s | cmgen CPU s | cmgen MB | cmgen / ibl default (CPU) |\n\
-         | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+         of each otherwise, and one cmgen run. The machine has 2 cores. The stated bound is the largest \
+         `reference_bound` in the default run's `ibl.json`: how far its reference may be from the texel-by-texel \
+         sum over the input, relative like the errors (inputs above 4096 × 2048 are measured on their box \
+         filtering, and the bound includes what that changes).\n\n\
+         | input | faces | ibl wall s | ibl CPU s | ibl MB | stated bound | `--samples 0` wall s | CPU s | MB | default / `--samples 0` (wall) | cmgen wall s | cmgen CPU s | cmgen MB | cmgen / ibl default (CPU) |\n\
+         | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for &(width, face) in &cases {
         let path = input(&map, width, &work);
@@ -165,7 +182,9 @@ fn main() {
             }
             timed(&ibl, &a, None)
         };
-        let (mut measured, mut plain) = (vec![bake(None)], vec![bake(Some("0"))]);
+        let first = bake(None);
+        let bound = stated_bound(&dir.join("ibl.json"));
+        let (mut measured, mut plain) = (vec![first], vec![bake(Some("0"))]);
         if measured[0].ok && plain[0].ok {
             // Alternating, so that both see the same spells of load.
             for _ in 1..repeats(measured[0].wall) {
@@ -177,7 +196,7 @@ fn main() {
         if !measured.ok || !plain.ok {
             let _ = writeln!(
                 md,
-                "| {width} × {} | {face}² | failed: {} | | | | | | | | | | |",
+                "| {width} × {} | {face}² | failed: {} | | | | | | | | | | | |",
                 width / 2,
                 if measured.ok { &plain.said } else { &measured.said }
             );
@@ -204,7 +223,7 @@ fn main() {
         };
         let _ = writeln!(
             md,
-            "| {width} × {} | {face}² | {:.2} | {:.2} | {:.0} | {:.2} | {:.2} | {:.0} | {:.2} | {peer} |",
+            "| {width} × {} | {face}² | {:.2} | {:.2} | {:.0} | {bound} | {:.2} | {:.2} | {:.0} | {:.2} | {peer} |",
             width / 2,
             measured.wall,
             measured.cpu,
