@@ -160,28 +160,46 @@ impl CubeMap {
     pub fn resample(env: &EnvMap, size: usize, supersample: usize, env_from_cube: DMat3) -> Result<Self, CubeError> {
         let mut cube = CubeMap::new(size)?;
         let k = supersample.max(1);
-        cube.data.par_chunks_mut(size * 3).enumerate().for_each(|(face_row, row)| {
-            let (face, r) = (FACES[face_row / size], face_row % size);
-            for (c, px) in row.chunks_exact_mut(3).enumerate() {
-                let (mut sum, mut weight) = ([0.0f64; 3], 0.0);
-                for j in 0..k {
-                    for i in 0..k {
-                        let s = 2.0 * (c as f64 + (i as f64 + 0.5) / k as f64) / size as f64 - 1.0;
-                        let t = 2.0 * (r as f64 + (j as f64 + 0.5) / k as f64) / size as f64 - 1.0;
-                        let q = 1.0 + s * s + t * t;
-                        let w = 1.0 / (q * q.sqrt());
-                        let v = env.lookup(env_from_cube * face_direction(face, s, t));
+        // Sub-sample (i, j) of column c sits at face coordinate 2(c + (i + ½)/k)/n − 1.
+        let sub = |texel: usize, i: usize| 2.0 * (texel as f64 + (i as f64 + 0.5) / k as f64) / size as f64 - 1.0;
+        cube.data.par_chunks_mut(size * 3).enumerate().for_each_init(
+            || (Vec::with_capacity(size * k * k), Vec::with_capacity(size * k * k), vec![[0.0f32; 3]; size * k * k]),
+            |(dirs, weights, values), (face_row, row)| {
+                let (face, r) = (FACES[face_row / size], face_row % size);
+                // The row's lookups at once (`EnvMap::lookup_many` runs them in SIMD lanes),
+                // texel by texel, k × k each. A face's directions are affine in (s, t).
+                let along_s = env_from_cube * (face_direction(face, 1.0, 0.0) - face_direction(face, 0.0, 0.0));
+                dirs.clear();
+                weights.clear();
+                for c in 0..size {
+                    for j in 0..k {
+                        let t = sub(r, j);
+                        let start = env_from_cube * face_direction(face, 0.0, t);
+                        for i in 0..k {
+                            let s = sub(c, i);
+                            let d = start + s * along_s;
+                            dirs.push([d.x as f32, d.y as f32, d.z as f32]);
+                            let q = 1.0 + s * s + t * t;
+                            weights.push(1.0 / (q * q.sqrt()));
+                        }
+                    }
+                }
+                env.lookup_many(dirs, values);
+                let texels = values.chunks_exact(k * k).zip(weights.chunks_exact(k * k));
+                for (px, (values, weights)) in row.chunks_exact_mut(3).zip(texels) {
+                    let (mut sum, mut weight) = ([0.0f64; 3], 0.0);
+                    for (v, &w) in values.iter().zip(weights.iter()) {
                         for ch in 0..3 {
                             sum[ch] += w * v[ch] as f64;
                         }
                         weight += w;
                     }
+                    for ch in 0..3 {
+                        px[ch] = (sum[ch] / weight) as f32;
+                    }
                 }
-                for ch in 0..3 {
-                    px[ch] = (sum[ch] / weight) as f32;
-                }
-            }
-        });
+            },
+        );
         Ok(cube)
     }
 

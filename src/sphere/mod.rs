@@ -51,6 +51,31 @@ pub fn angles(d: DVec3) -> (f64, f64) {
     (theta(d), phi(d))
 }
 
+/// atan2(y, x) in f32 without a branch on the data, so that a loop over lanes of it compiles to
+/// SIMD (the batched lat-long lookups, [`LatLong::taps_lanes`]): octant reduction to a ∈ [0, 1],
+/// then Cephes' `atanf` (a second reduction above tan(π/8), a degree-9 odd polynomial). Within
+/// 3·10⁻⁷ rad (1.25 f32 ulps of π) of the f64 atan2 (`atan2_f32_is_within_its_bound`), under
+/// a thousandth of a texel on a 16384-column map.
+#[inline(always)]
+pub fn atan2_f32(y: f32, x: f32) -> f32 {
+    use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+    // Comparisons rather than `f32::min`/`max` (whose NaN rules cost instructions per lane).
+    let (ax, ay) = (x.abs(), y.abs());
+    let steep = ay > ax;
+    let (lo, hi) = if steep { (ax, ay) } else { (ay, ax) };
+    let a = if hi > 0.0 { lo / hi } else { 0.0 };
+    // atan a = π/4 + atan((a − 1)/(a + 1)) keeps the polynomial's argument within tan(π/8).
+    let reduce = a > 0.414_213_57;
+    let t = if reduce { (a - 1.0) / (a + 1.0) } else { a };
+    let z = t * t;
+    let p = (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1) * z * t + t;
+    let r = if reduce { p + FRAC_PI_4 } else { p };
+    let r = if steep { FRAC_PI_2 - r } else { r };
+    // The sign bits, not comparisons, as IEEE atan2: atan2(±0, −0) = ±π.
+    let r = if x.is_sign_negative() { PI - r } else { r };
+    r.copysign(y)
+}
+
 /// The frame R_z(φ)·R_y(θ) of a unit direction's spherical angles: its third column is `d`,
 /// its first the direction of increasing θ. Smooth away from the poles. Ramamoorthi & Hanrahan
 /// 2002 (§3) use this frame R_{α,β} for reflection vectors; normals use it as their shading frame.
@@ -148,5 +173,32 @@ mod tests {
         let (a, b) =
             (shortest_arc_frame(direction(PI - 1e-6, 0.0)), shortest_arc_frame(direction(PI - 1e-6, PI / 2.0)));
         assert!((a * DVec3::X - b * DVec3::X).length() > 1.0);
+    }
+
+    #[test]
+    fn atan2_f32_is_within_its_bound() {
+        // Every angle on a fine circle at several radii, the axes, signed zeros and both octant
+        // boundaries of the reductions, against the f64 atan2 of the same f32 inputs.
+        let mut worst = 0.0f64;
+        let mut check = |y: f32, x: f32| {
+            let want = (y as f64).atan2(x as f64);
+            worst = worst.max((atan2_f32(y, x) as f64 - want).abs());
+        };
+        for k in 0..200_000 {
+            let a = TAU * k as f64 / 200_000.0 - PI;
+            for r in [1e-30, 1e-3, 1.0, 7.5, 1e30] {
+                check((r * a.sin()) as f32, (r * a.cos()) as f32);
+            }
+        }
+        let t8 = (PI / 8.0).tan() as f32;
+        for (y, x) in [(0.0, 1.0), (-0.0, 1.0), (1.0, 0.0), (-1.0, 0.0), (0.0, -1.0), (1.0, 1.0), (t8, 1.0), (1.0, t8)]
+        {
+            check(y, x);
+        }
+        assert!(worst < 3e-7, "worst {worst:e} rad");
+        assert_eq!(atan2_f32(0.0, 0.0), 0.0);
+        assert_eq!(atan2_f32(-0.0, -1.0), -std::f32::consts::PI);
+        assert_eq!(atan2_f32(-0.0, -0.0), -std::f32::consts::PI);
+        assert_eq!(atan2_f32(0.0, -0.0), std::f32::consts::PI);
     }
 }
