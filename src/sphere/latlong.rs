@@ -214,11 +214,18 @@ mod tests {
 
     #[test]
     fn lane_taps_are_the_f64_taps_within_two_thousandths_of_a_texel() {
-        // On the largest grid prtkit reads, random directions (any length) and the awkward
+        // On the largest grid prtkit reads, directions all round (any length) and the awkward
         // ones: the poles, the φ = 0 seam from both sides (signed zeros), the axes.
         let g = LatLong::new(16384, 8192);
-        let mut rng = crate::rng::SplitMix64::new(7);
-        let mut dirs: Vec<DVec3> = (0..20_000).map(|_| rng.direction() * (0.5 + rng.next_f64())).collect();
+        // A Fibonacci spiral, with lengths from 0.5 to 1.5.
+        let n = 20_000;
+        let mut dirs: Vec<DVec3> = (0..n)
+            .map(|i| {
+                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                let length = 0.5 + (i as f64 * 0.618_034).fract();
+                direction(z.acos(), 2.399_963 * i as f64) * length
+            })
+            .collect();
         for d in [
             DVec3::Z,
             -DVec3::Z,
