@@ -2211,9 +2211,6 @@ mod tests {
         }
     }
 
-    /// take_largest takes what a full sort takes: the largest by size (ties by index) until the
-    /// rest sums to at most the target, largest first, and leaves the rest in their order; past
-    /// the first prefix of 64 too, and with ties and zeros.
     #[test]
     fn weighted_radiance_is_the_plain_sum() {
         // Every length around the four lanes (the tail alone, whole blocks, both), against the
@@ -2232,6 +2229,9 @@ mod tests {
         }
     }
 
+    /// take_largest takes what a full sort takes: the largest by size (ties by index) until the
+    /// rest sums to at most the target, largest first, and leaves the rest in their order; past
+    /// the first prefix of 64 too, and with ties and zeros.
     #[test]
     fn take_largest_takes_what_a_full_sort_takes() {
         let mut state = 12345u64;
